@@ -1,0 +1,77 @@
+#pragma once
+// The wrapper every tool's main() goes through: CLI11 with the standard options, logging to stderr
+// prefixed with the tool name, input/output checks before any heavy work, provenance, and the
+// mapping of errors to exit codes (0 ok, 1 data error, 2 usage error, 130 interrupted).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "graintwin/cli/progress.hpp"
+#include "graintwin/io/h5file.hpp"
+
+namespace graintwin::cli {
+
+/// What a tool's body sees: the standard options' values, progress, and provenance.
+class RunContext {
+ public:
+  const std::string& tool_name() const { return name_; }
+  bool force() const { return force_; }
+  bool quiet() const { return quiet_; }
+  /// Worker threads in use (OpenMP is set to this).
+  int threads() const { return threads_; }
+  /// A progress display for `total` units, silent with -q.
+  std::unique_ptr<Progress> progress(const std::string& label, std::size_t total) const;
+
+  /// Merges an input file's /provenance/history into this run's history.
+  void add_input_history(const io::H5File& input);
+  /// Input histories followed by this run's own line.
+  std::vector<std::string> history() const;
+  /// This run's line: quoted command line, then "(graintwin <version>, git <rev>, <UTC>)".
+  const std::string& history_line() const { return line_; }
+
+ private:
+  friend class Tool;
+  std::string name_;
+  bool force_ = false;
+  bool quiet_ = false;
+  int threads_ = 1;
+  std::vector<std::string> inputs_history_;
+  std::string line_;
+};
+
+class Tool {
+ public:
+  Tool(std::string name, std::string description);
+  CLI::App& cli() { return app_; }
+
+  /// A positional input that must exist before the body runs (exit 2 naming it otherwise). With
+  /// `must_exist` false the tool checks it itself (globs, optional inputs).
+  CLI::Option* add_input(const std::string& name, std::filesystem::path& target,
+                         const std::string& description, bool must_exist = true);
+  /// A positional output; an existing one is refused unless --force, before the body runs.
+  CLI::Option* add_output(const std::string& name, std::filesystem::path& target,
+                          const std::string& description);
+  /// Example lines shown under "Examples:" at the end of --help, plus the docs pointer.
+  void set_examples(const std::vector<std::string>& examples);
+
+  /// Parses, sets up logging and threads, checks inputs and outputs, runs `body`, and returns the
+  /// exit code. Never throws.
+  int run(int argc, char** argv, const std::function<void(RunContext&)>& body);
+
+ private:
+  std::string name_;
+  CLI::App app_;
+  int verbosity_ = 0;
+  bool quiet_ = false;
+  bool force_ = false;
+  int threads_ = 0;
+  std::vector<std::filesystem::path*> inputs_;
+  std::vector<std::filesystem::path*> outputs_;
+};
+
+}  // namespace graintwin::cli

@@ -1,0 +1,133 @@
+#include "graintwin/cli/tool.hpp"
+
+#include <omp.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <iostream>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/core/strings.hpp"
+#include "graintwin/io/atomic_output.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/version.hpp"
+
+namespace graintwin::cli {
+
+namespace fs = std::filesystem;
+
+std::unique_ptr<Progress> RunContext::progress(const std::string& label, std::size_t total) const {
+  return std::make_unique<Progress>(name_ + ": " + label, total, !quiet_);
+}
+
+void RunContext::add_input_history(const io::H5File& input) {
+  io::merge_history(inputs_history_, io::read_history(input));
+}
+
+std::vector<std::string> RunContext::history() const {
+  std::vector<std::string> h = inputs_history_;
+  h.push_back(line_);
+  return h;
+}
+
+Tool::Tool(std::string name, std::string description) : name_(std::move(name)), app_(description, name_) {
+  app_.set_help_flag("-h,--help", "Print this help and exit");
+  app_.set_version_flag("--version", std::string(name_) + " (graintwin " + graintwin::version + ", git " +
+                                         graintwin::git_revision + ")");
+  app_.add_flag("-q,--quiet", quiet_, "Errors only: no progress, no information messages");
+  app_.add_flag("-v,--verbose", verbosity_, "More messages (repeat for debug output)");
+  app_.add_flag("-f,--force", force_, "Overwrite existing outputs");
+  app_.add_option("-j,--threads", threads_, "Worker threads (0 = all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app_.set_config("--config", "", "Read options from a TOML file (keys = long option names)");
+  app_.get_formatter()->column_width(34);
+}
+
+CLI::Option* Tool::add_input(const std::string& name, fs::path& target, const std::string& description,
+                             bool must_exist) {
+  if (must_exist) inputs_.push_back(&target);
+  return app_.add_option(name, target, description)->required();
+}
+
+CLI::Option* Tool::add_output(const std::string& name, fs::path& target, const std::string& description) {
+  outputs_.push_back(&target);
+  return app_.add_option(name, target, description)->required();
+}
+
+void Tool::set_examples(const std::vector<std::string>& examples) {
+  std::string footer = "\nExamples:\n";
+  for (const auto& e : examples) footer += "  " + e + "\n";
+  footer += "\nExit codes: 0 ok, 1 data error, 2 usage error, 130 interrupted.\nDocs: docs/tools/" + name_ + ".md";
+  app_.footer(footer);
+}
+
+namespace {
+void print_error(spdlog::logger& log, const Error& e) {
+  log.error("{}", e.message());
+  for (const auto& c : e.context()) log.error("  {}", c);
+}
+}  // namespace
+
+int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& body) {
+  auto sink = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  if (std::getenv("NO_COLOR")) sink->set_color_mode(spdlog::color_mode::never);
+  auto log = std::make_shared<spdlog::logger>(name_, sink);
+  log->set_pattern("%n: [%l] %v");
+  spdlog::set_default_logger(log);
+
+  try {
+    app_.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app_.exit(e);  // prints help/version to stdout, errors to stderr
+    return rc == 0 ? 0 : static_cast<int>(ExitCode::usage_error);
+  }
+  log->set_level(quiet_ ? spdlog::level::err
+                        : verbosity_ >= 2 ? spdlog::level::trace
+                        : verbosity_ == 1 ? spdlog::level::debug
+                                          : spdlog::level::info);
+  RunContext ctx;
+  ctx.name_ = name_;
+  ctx.force_ = force_;
+  ctx.quiet_ = quiet_;
+  ctx.threads_ = threads_ > 0 ? threads_ : omp_get_num_procs();
+  omp_set_num_threads(ctx.threads_);
+  std::string cmd = name_;
+  for (int i = 1; i < argc; ++i) cmd += " " + shell_quote(argv[i]);
+  ctx.line_ = cmd + "  (graintwin " + graintwin::version + ", git " + graintwin::git_revision + ", " +
+              utc_now_iso8601() + ")";
+  install_interrupt_handlers();
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    // Validate before heavy work (PDAL style): inputs exist, outputs may be written.
+    for (const fs::path* in : inputs_) {
+      std::error_code ec;
+      if (!fs::exists(*in, ec)) throw UsageError("input " + in->string() + " does not exist; check the path");
+    }
+    for (const fs::path* out : outputs_) io::check_output_allowed(*out, force_);
+    log->info("{}", ctx.line_);
+    body(ctx);
+    throw_if_interrupted();
+  } catch (const InterruptedError& e) {
+    log->error("interrupted; no output was written");
+    return static_cast<int>(e.exit_code());
+  } catch (const Error& e) {
+    print_error(*log, e);
+    return static_cast<int>(e.exit_code());
+  } catch (const CLI::Error& e) {
+    log->error("{}", e.what());
+    return static_cast<int>(ExitCode::usage_error);
+  } catch (const std::bad_alloc&) {
+    log->error("out of memory; process a smaller crop (volconvert --crop) or a downsampled volume");
+    return static_cast<int>(ExitCode::data_error);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return static_cast<int>(ExitCode::data_error);
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  log->info("done in {:.2f} s", secs);
+  return 0;
+}
+
+}  // namespace graintwin::cli
