@@ -152,8 +152,13 @@ Volume<T> read_pages(TIFF* t, const PageFormat& first, int pages, const std::fil
 AnyVolume read_tiff(const std::filesystem::path& path) {
   TiffPtr t(TIFFOpen(path.c_str(), "rm"));  // m: no memory mapping, so truncation is an error, not SIGBUS
   if (!t) throw DataError(path.string() + " is not a readable TIFF file" + libtiff_says());
+  tiff_last_error.clear();
   const int pages = TIFFNumberOfDirectories(t.get());
   if (pages <= 0) throw DataError(path.string() + " holds no image");
+  // libtiff stops counting at a directory it cannot read: a truncated stack would lose slices silently.
+  if (!tiff_last_error.empty())
+    throw DataError(path.string() + " is truncated or damaged after page " + std::to_string(pages - 1) +
+                    libtiff_says() + "; re-export the stack");
   const PageFormat first = page_format(t.get(), path, 0);
 
   std::optional<Vec3> voxel, origin;

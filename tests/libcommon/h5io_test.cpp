@@ -1,0 +1,156 @@
+// HDF5 layer: datasets, attributes, compression, strings, provenance, kind checks, atomic output.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/atomic_output.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "support/fixtures.hpp"
+#include "support/run_tool.hpp"
+
+using namespace graintwin;
+using namespace graintwin::io;
+
+TEST(H5File, RoundTripsTablesAttributesAndStrings) {
+  test::TempDir dir;
+  const auto path = dir / "t.h5";
+  {
+    H5File f = H5File::create(path);
+    write_root_attrs(f, schema::kind::labels);
+    std::vector<double> centroid{1, 2, 3, 4, 5, 6};
+    DatasetOptions opt;
+    opt.units = "m";
+    f.write("/grains/centroid", centroid.data(), {2, 3}, opt);
+    f.write("/grains/label", std::vector<std::uint32_t>{7, 9});
+    f.set_attr("/grains", "note", std::string("two grains"));
+    f.write_strings("/text", {"alpha", "béta"});
+  }
+  const H5File f = H5File::open(path);
+  EXPECT_EQ(file_kind(f), "labels");
+  EXPECT_EQ(f.attr_int("/", "schema_version"), schema::version);
+  std::vector<hsize_t> dims;
+  EXPECT_EQ(f.read<double>("/grains/centroid", &dims), (std::vector<double>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(dims, (std::vector<hsize_t>{2, 3}));
+  EXPECT_EQ(f.attr_string("/grains/centroid", "units"), "m");
+  EXPECT_EQ(f.attr_string("/grains", "note"), "two grains");
+  EXPECT_EQ(f.read<std::uint32_t>("/grains/label"), (std::vector<std::uint32_t>{7, 9}));
+  EXPECT_EQ(f.read_strings("/text"), (std::vector<std::string>{"alpha", "béta"}));
+  EXPECT_EQ(f.list("/grains"), (std::vector<std::string>{"centroid", "label"}));
+  EXPECT_FALSE(f.exists("/nothing/here"));
+}
+
+TEST(H5File, ImagesAreChunkedCompressedAndCarryGeometry) {
+  test::TempDir dir;
+  auto v = test::ramp_volume<std::uint16_t>({20, 30, 40}, {3e-5, 2e-5, 1e-5});
+  v.set_origin({1e-3, 2e-3, 3e-3});
+  write_volume_file(dir / "v.h5", v, {"line one"});
+  const H5File f = open_kind(dir / "v.h5", schema::kind::volume);
+  H5Id ds(H5Dopen2(f.id(), "/volume", H5P_DEFAULT), H5Dclose);
+  H5Id plist(H5Dget_create_plist(ds.get()), H5Pclose);
+  EXPECT_EQ(H5Pget_layout(plist.get()), H5D_CHUNKED);
+  EXPECT_GE(H5Pget_nfilters(plist.get()), 2);  // shuffle + deflate
+  const ImageHeader h = read_image_header(f, "/volume");
+  EXPECT_EQ(h.shape, (Shape3{20, 30, 40}));
+  EXPECT_EQ(h.voxel_size, (Vec3{3e-5, 2e-5, 1e-5}));
+  EXPECT_EQ(h.origin, (Vec3{1e-3, 2e-3, 3e-3}));
+  EXPECT_EQ(f.attr_string("/volume", "axis_order"), "zyx");
+  const auto back = read_image_as<std::uint16_t>(f, "/volume");
+  EXPECT_EQ(back.values(), v.values());
+  EXPECT_EQ(read_history(f), (std::vector<std::string>{"line one"}));
+}
+
+TEST(H5File, ReadBoxReadsASubVolume) {
+  test::TempDir dir;
+  auto v = test::ramp_volume<float>({6, 7, 8});
+  write_volume_file(dir / "v.h5", v, {});
+  const H5File f = H5File::open(dir / "v.h5");
+  std::vector<float> box(2 * 3 * 4);
+  f.read_box("/volume", {1, 2, 3}, {2, 3, 4}, box.data());
+  EXPECT_EQ(box[0], v(1, 2, 3));
+  EXPECT_EQ(box.back(), v(2, 4, 6));
+}
+
+TEST(KindCheck, NamesWhatWasFoundAndWhatToDo) {
+  test::TempDir dir;
+  write_volume_file(dir / "v.h5", test::ramp_volume<std::uint8_t>({2, 2, 2}), {});
+  try {
+    open_kind(dir / "v.h5", schema::kind::labels, "pass the output of ct2labels");
+    FAIL() << "expected UsageError";
+  } catch (const UsageError& e) {
+    EXPECT_NE(e.message().find("kind=volume"), std::string::npos);
+    EXPECT_NE(e.message().find("expected kind=labels"), std::string::npos);
+    EXPECT_NE(e.message().find("ct2labels"), std::string::npos);
+  }
+}
+
+TEST(KindCheck, RejectsNewerSchemaAndMissingKind) {
+  test::TempDir dir;
+  {
+    H5File f = H5File::create(dir / "new.h5");
+    f.set_attr("/", "kind", std::string("volume"));
+    f.set_attr("/", "schema_version", 99LL);
+    H5File g = H5File::create(dir / "bare.h5");
+    g.write("/x", std::vector<double>{1.0});
+  }
+  EXPECT_THROW(open_kind(dir / "new.h5", "volume"), UsageError);
+  EXPECT_THROW(open_kind(dir / "bare.h5", "volume"), UsageError);
+}
+
+TEST(KindCheck, NonHdf5FileIsAUsageError) {
+  test::TempDir dir;
+  std::ofstream(dir / "fake.h5") << "this is not HDF5";
+  try {
+    H5File::open(dir / "fake.h5");
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_NE(e.message().find("not an HDF5 file"), std::string::npos);
+  }
+  EXPECT_THROW(H5File::open(dir / "missing.h5"), UsageError);
+}
+
+TEST(Provenance, MergeSkipsLinesAlreadyPresent) {
+  std::vector<std::string> h{"a", "b"};
+  merge_history(h, {"b", "c"});
+  EXPECT_EQ(h, (std::vector<std::string>{"a", "b", "c"}));
+}
+
+TEST(AtomicOutput, RenamesOnCommitOnly) {
+  test::TempDir dir;
+  const auto final_path = dir / "out.h5";
+  {
+    AtomicOutput out(final_path, false);
+    std::ofstream(out.temp_path()) << "partial";
+    EXPECT_FALSE(std::filesystem::exists(final_path));
+  }  // not committed: the temporary disappears
+  EXPECT_TRUE(test::list_dir(dir.path()).empty());
+  {
+    AtomicOutput out(final_path, false);
+    std::ofstream(out.temp_path()) << "complete";
+    out.commit();
+  }
+  EXPECT_EQ(test::list_dir(dir.path()), (std::vector<std::string>{"out.h5"}));
+  EXPECT_THROW(AtomicOutput(final_path, false), UsageError);
+  EXPECT_NO_THROW(AtomicOutput(final_path, true));
+}
+
+TEST(AtomicOutput, WorksForDirectories) {
+  test::TempDir dir;
+  const auto final_path = dir / "series";
+  std::filesystem::create_directory(final_path);
+  std::ofstream(final_path / "old.txt") << "old";
+  {
+    AtomicOutput out(final_path, true);
+    std::filesystem::create_directory(out.temp_path());
+    std::ofstream(out.temp_path() / "new.txt") << "new";
+    out.commit();
+  }
+  EXPECT_EQ(test::list_dir(final_path), (std::vector<std::string>{"new.txt"}));
+}
+
+TEST(AtomicOutput, RefusesAMissingFolder) {
+  test::TempDir dir;
+  EXPECT_THROW(AtomicOutput(dir / "no" / "such" / "out.h5", false), UsageError);
+}

@@ -1,0 +1,25 @@
+#pragma once
+// The CLI contract every tool keeps (docs/conventions.md): help exits 0 and shows the standard
+// options, a bad option exits 2, --version names the tool. Each tool test instantiates it.
+#include <gtest/gtest.h>
+
+#include "support/run_tool.hpp"
+
+namespace graintwin::test {
+
+inline void expect_standard_cli(const std::string& tool) {
+  const ToolResult help = run_tool(tool, {"--help"});
+  EXPECT_EQ(help.exit_code, 0) << help.err;
+  for (const char* opt : {"--help", "--version", "--quiet", "--verbose", "--force", "--threads", "--config", "Examples:"})
+    EXPECT_NE(help.out.find(opt), std::string::npos) << tool << " --help lacks " << opt;
+  const ToolResult bad = run_tool(tool, {"--no-such-option"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_FALSE(bad.err.empty());
+  const ToolResult ver = run_tool(tool, {"--version"});
+  EXPECT_EQ(ver.exit_code, 0);
+  EXPECT_NE(ver.out.find(tool), std::string::npos);
+  const ToolResult none = run_tool(tool, {});
+  EXPECT_EQ(none.exit_code, 2) << "missing positional arguments must be a usage error";
+}
+
+}  // namespace graintwin::test
