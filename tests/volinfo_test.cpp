@@ -57,3 +57,13 @@ TEST(Volinfo, RejectsNonGrainTwinFiles) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("missing.h5"), std::string::npos);
 }
+
+TEST(Volinfo, ReadsOptionsFromATomlConfig) {
+  test::TempDir dir;
+  io::write_volume_file(dir / "v.h5", test::ramp_volume<std::uint8_t>({2, 3, 4}), {});
+  std::ofstream(dir / "volinfo.toml") << "json = true\nquiet = true\n";
+  const auto r = run_tool("volinfo", {(dir / "v.h5").string(), "--config", (dir / "volinfo.toml").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["kind"], "volume");
+  EXPECT_TRUE(r.err.empty()) << r.err;
+}

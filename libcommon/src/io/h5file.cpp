@@ -164,7 +164,9 @@ void H5File::ensure_group(const std::string& group) {
       partial = group.substr(0, i);
       if (partial.empty() || partial == "/") continue;
       if (!exists(partial)) {
-        H5Id g(H5Gcreate2(file_.get(), partial.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+        H5Id gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
+        H5Pset_obj_track_times(gcpl.get(), false);
+        H5Id g(H5Gcreate2(file_.get(), partial.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT), H5Gclose);
         if (!g.valid()) throw DataError(where(partial) + ": cannot create group" + hdf5_detail());
       }
     }
@@ -262,6 +264,7 @@ void H5File::write(const std::string& path, const T* data, const std::vector<hsi
   if (exists(path)) H5Ldelete(file_.get(), path.c_str(), H5P_DEFAULT);
   H5Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
   H5Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  H5Pset_obj_track_times(dcpl.get(), false);  // same data, same bytes: no modification times
   const hsize_t n = std::accumulate(dims.begin(), dims.end(), hsize_t{1}, std::multiplies<>());
   if (opt.compress && n >= 1024 && H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0) {
     const auto chunk = opt.chunk.empty() ? auto_chunk(dims, sizeof(T)) : opt.chunk;
@@ -282,7 +285,9 @@ void H5File::write_strings(const std::string& path, const std::vector<std::strin
   const hsize_t n = lines.size();
   H5Id space(H5Screate_simple(1, &n, nullptr), H5Sclose);
   H5Id t = string_type();
-  H5Id ds(H5Dcreate2(file_.get(), path.c_str(), t.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+  H5Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  H5Pset_obj_track_times(dcpl.get(), false);
+  H5Id ds(H5Dcreate2(file_.get(), path.c_str(), t.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose);
   if (!ds.valid()) throw DataError(where(path) + ": cannot create dataset" + hdf5_detail());
   std::vector<const char*> ptrs;
   for (const auto& l : lines) ptrs.push_back(l.c_str());
