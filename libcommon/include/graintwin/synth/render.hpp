@@ -1,0 +1,77 @@
+#pragma once
+// Rendering of synthetic CT scans: exact-as-asked partial-volume fractions of star-shaped grains
+// and of a membrane shell, the ground-truth label image, and the scanner model (grey levels,
+// point-spread blur, ring artifacts, beam-hardening cupping, Poisson and Gaussian noise).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "graintwin/core/volume.hpp"
+#include "graintwin/shape/radial_table.hpp"
+
+namespace graintwin::synth {
+
+/// A grain at its pose: body origin (= centroid) at `position` (m, x y z), body -> world rotation.
+struct PlacedGrain {
+  const shape::RadialTable* shape = nullptr;
+  Eigen::Vector3d position{0.0, 0.0, 0.0};
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  std::uint32_t label = 0;  ///< > 0
+};
+
+struct RenderParams {
+  /// Sub-samples per voxel edge for voxels the surface may cross (k^3 samples); voxels whose centre
+  /// is farther than half a voxel diagonal (times a per-grain slope factor) from the surface are
+  /// classified whole. The fidelity knob charted in docs/benchmarks.md (ctsynth_bench).
+  int supersample = 4;
+};
+
+/// Grain fraction per voxel (0..1) and the label of the grain containing each voxel centre (0 =
+/// none). Geometry is that of `like` (shape, voxel size, origin); `progress` gets fractions done.
+struct GrainImages {
+  Volume<float> fraction;
+  Volume<std::uint32_t> labels;
+};
+GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& shape, const Vec3& voxel_size,
+                          const Vec3& origin, const RenderParams& params,
+                          const std::function<void(double)>& progress = {});
+
+/// A cylindrical shell around the z axis through (centre_x, centre_y): inner radius r(z) given by
+/// `inner_radius` (lets the membrane follow a bulging sample), constant thickness, between z0 and z1.
+struct Shell {
+  double centre_x = 0.0, centre_y = 0.0;
+  std::function<double(double z)> inner_radius;
+  double thickness = 0.0;
+  double z0 = 0.0, z1 = 0.0;
+};
+/// Fraction of each voxel inside the shell (supersampled like the grains).
+Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& voxel_size, const Vec3& origin,
+                           int supersample);
+
+/// The scanner: grey = void + (grain - void) f_grain + (membrane - void) f_membrane, then cupping,
+/// rings, blur, noise, and the map to uint16.
+struct ScannerParams {
+  double grey_void = 0.10;       ///< air and pore space, in units of the grain grey level scale
+  double grey_grain = 0.75;
+  double grey_membrane = 0.35;
+  double blur_sigma_vox = 0.8;   ///< Gaussian point-spread sigma (voxels); 0 = none
+  double noise = 0.05;           ///< Gaussian noise sigma as a fraction of (grain - void) contrast
+  double photons = 0.0;          ///< mean photon count at grain grey for Poisson noise; 0 = none
+  double ring_amplitude = 0.0;   ///< ring artifact amplitude (fraction of contrast); 0 = none
+  double beam_hardening = 0.0;   ///< cupping depth (fraction of grain grey at the axis); 0 = none
+  double axis_x = 0.0, axis_y = 0.0;  ///< rotation axis (m) for rings and cupping
+  double field_radius = 1.0;     ///< radius (m) over which cupping acts
+  double uint16_scale = 50000.0; ///< uint16 value = grey * scale + offset (clamped)
+  double uint16_offset = 5000.0;
+  std::uint64_t seed = 1;        ///< noise and ring seed; per-voxel noise is hashed, so thread count
+                                 ///< does not change the bytes
+};
+Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,
+                                    const ScannerParams& params);
+
+/// Separable Gaussian blur in voxel units (edges clamped), in place.
+void gaussian_blur(Volume<float>& v, double sigma_vox);
+
+}  // namespace graintwin::synth

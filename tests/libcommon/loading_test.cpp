@@ -1,0 +1,85 @@
+// Grading curves and prescribed triaxial kinematics of synthetic series.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/synth/loading.hpp"
+#include "graintwin/synth/psd.hpp"
+
+using namespace graintwin;
+using namespace graintwin::synth;
+
+TEST(Psd, OttawaSamplesHaveTheRightBoundsAndMassMedian) {
+  Psd psd;
+  std::mt19937_64 rng(3);
+  const auto d = sample_diameters(psd, 5e-6, rng);  // about 50 000 grains
+  ASSERT_GT(d.size(), 10000u);
+  for (double x : d) {
+    ASSERT_GE(x, psd.d_min);
+    ASSERT_LE(x, psd.d_max);
+  }
+  EXPECT_NEAR(volume_median_diameter(d) / psd.d50, 1.0, 0.02);
+  EXPECT_NEAR(psd.percent_passing(psd.d50), 50.0, 1.0);
+  EXPECT_DOUBLE_EQ(psd.percent_passing(0.2e-3), 0.0);
+  EXPECT_DOUBLE_EQ(psd.percent_passing(2e-3), 100.0);
+}
+
+TEST(Psd, RejectsInconsistentSizes) {
+  Psd psd;
+  psd.d50 = 2e-3;
+  EXPECT_THROW(psd.validate(), UsageError);
+}
+
+namespace {
+LoadingParams sample() {
+  LoadingParams p;
+  p.height = 10e-3;
+  p.radius = 3e-3;
+  p.band_width = 5e-3;
+  return p;
+}
+}  // namespace
+
+TEST(Loading, AffinePartCompressesAndBulges) {
+  LoadingParams p = sample();
+  p.band = ShearBand::none;
+  const double eps = 0.02;
+  // Top platen centre moves down by eps H; the base does not move.
+  EXPECT_NEAR(smooth_displacement(p, {0, 0, p.height}, eps).z(), -eps * p.height, 1e-15);
+  EXPECT_NEAR(smooth_displacement(p, {0, 0, 0}, eps).norm(), 0.0, 1e-15);
+  // At mid-height the membrane bulges by 1.5 * bulge * eps (barrel profile with mean 1).
+  EXPECT_NEAR(smooth_displacement(p, {p.radius, 0, 0.5 * p.height}, eps).x(), p.radius * 1.5 * 0.5 * eps, 1e-15);
+  EXPECT_NEAR(sample_radius_at(p, 0.5 * p.height * (1 - eps), eps), p.radius * (1 + 0.75 * eps), 1e-12);
+}
+
+TEST(Loading, BandSlipsTheUpperBlockDownTheDip) {
+  LoadingParams p = sample();
+  p.bulge = 0.0;
+  p.band_width = 1e-3;  // narrow enough that both test points are outside the band
+  const double eps = 0.05;
+  const Eigen::Vector3d above(0, 0, 0.95 * p.height), below(0, 0, 0.05 * p.height);
+  const Eigen::Vector3d jump = (smooth_displacement(p, above, eps) + Eigen::Vector3d(0, 0, eps * above.z())) -
+                               (smooth_displacement(p, below, eps) + Eigen::Vector3d(0, 0, eps * below.z()));
+  EXPECT_NEAR(jump.norm(), p.band_slip * eps * p.height, 1e-3 * p.band_slip * eps * p.height);
+  EXPECT_LT(jump.z(), 0.0);  // the upper block goes down
+  EXPECT_NEAR(std::atan2(-jump.z(), -jump.x()) * 180 / M_PI, p.band_angle_deg, 1e-6);
+  EXPECT_GT(local_shear(p, {0, 0, 0.5 * p.height}, eps), 5 * local_shear(p, below, eps));
+}
+
+TEST(Loading, StatesAreCumulativeAndDeterministic) {
+  LoadingParams p = sample();
+  std::vector<Pose> ref(50);
+  for (std::size_t i = 0; i < ref.size(); ++i) ref[i].position = Eigen::Vector3d(1e-4 * (i % 20), 0.0, 2e-4 * i);
+  const auto a = loading_states(p, ref, {0.0, 0.01, 0.02});
+  const auto b = loading_states(p, ref, {0.0, 0.01, 0.02});
+  ASSERT_EQ(a.size(), 3u);
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    EXPECT_EQ(a[0][i].position, ref[i].position);  // state 0 at zero strain is the reference
+    EXPECT_EQ(a[2][i].position, b[2][i].position);
+    EXPECT_TRUE(a[2][i].orientation.isApprox(b[2][i].orientation));
+  }
+  EXPECT_FALSE(a[1][10].orientation.isApprox(Eigen::Quaterniond::Identity()));
+  p.band_width = 0.0;
+  EXPECT_THROW(loading_states(p, ref, {0.0, 0.01}), UsageError);
+}
