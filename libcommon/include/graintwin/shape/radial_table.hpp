@@ -41,7 +41,9 @@ class RadialTable {
 
   /// Outward unit normal (body frame) of the surface at radius(dir) * dir. Uses tangential
   /// derivatives of r from central differences at the nodes, interpolated bilinearly, so the
-  /// normal field is continuous (the bilinear surface itself has kinks along cell edges).
+  /// normal field is continuous (the bilinear surface itself has kinks along cell edges). Same
+  /// preconditions as radius(); error O(h^2): 0.34 degree worst for a 1.5:1:0.6 ellipsoid at
+  /// n = 64.
   Eigen::Vector3d surface_normal(const Eigen::Vector3d& unit_dir) const;
 
   /// Smallest / largest tabulated radius (metres) over the face nodes.
