@@ -1,0 +1,62 @@
+#pragma once
+// The sample region of a triaxial scan: the cylinder (axis along z) that holds the grains, found
+// from the solid mask or given, and the void ratio e = V_void / V_solid inside it.
+#include <cstdint>
+#include <limits>
+
+#include "graintwin/core/volume.hpp"
+
+namespace graintwin::segment {
+
+/// A cylinder with its axis along z. Lengths in metres; x and y are physical coordinates.
+struct Cylinder {
+  double centre_x = 0.0, centre_y = 0.0;
+  double radius = 0.0;
+  /// Axial extent (default: unbounded, i.e. the whole height of the volume).
+  double z_min = -std::numeric_limits<double>::infinity(), z_max = std::numeric_limits<double>::infinity();
+  /// True if the centre of voxel (z, y, x) of `v` lies inside.
+  template <class T>
+  bool contains(const Volume<T>& v, std::size_t z, std::size_t y, std::size_t x) const {
+    const Vec3 p = v.position_xyz(static_cast<double>(z), static_cast<double>(y), static_cast<double>(x));
+    const double dx = p[0] - centre_x, dy = p[1] - centre_y;
+    return p[2] >= z_min && p[2] <= z_max && dx * dx + dy * dy <= radius * radius;
+  }
+};
+
+/// Grey values of the membrane (inclusive), for fit_sample_cylinder.
+struct GreyBand {
+  double lo = 0.0, hi = 0.0;
+};
+
+/// Finds the sample cylinder from the solid mask (nz, ny, nx), over the whole height.
+///
+/// Rule: the xy occupancy O(y, x) is the fraction of z slices in which the column is solid. The
+/// centre is the occupancy-weighted centroid of the columns. The radial profile of O (mean over
+/// rings one voxel wide) has an interior level L (the median of the profile inside half the
+/// equal-area radius r_a of the occupied columns); going outwards from r_a / 2, the radius is the
+/// outer edge of the last ring before the profile first leaves [L / 2, (1 + L) / 2]: below, the air
+/// around the sample; above, a membrane classified as solid (a vertical shell is solid in every
+/// slice, O ~ 1).
+/// Grains touch a confining wall only at points, so the fitted radius lies a little inside it
+/// (about 2 voxels for 9-voxel spheres against a rigid wall); give the cylinder when the membrane's
+/// position is known. Throws DataError if the mask holds no solid.
+Cylinder fit_sample_cylinder(const Volume<std::uint8_t>& solid);
+
+/// The same with the membrane's grey band: voxels whose grey value lies in the band do not count as
+/// solid, so a membrane that the threshold made solid cannot widen the cylinder. grey and solid
+/// must have the same shape.
+template <class T>
+Cylinder fit_sample_cylinder(const Volume<std::uint8_t>& solid, const Volume<T>& grey, GreyBand membrane);
+
+/// Volumes inside a region and the void ratio.
+struct VoidRatio {
+  double solid_m3 = 0.0;
+  double void_m3 = 0.0;
+  double e = 0.0;  ///< void_m3 / solid_m3
+};
+
+/// Counts solid (mask != 0) and void voxels whose centres lie inside `region`; e = V_void / V_solid.
+/// Throws DataError if the region holds no solid voxel. Parallel over z, exact integer counts.
+VoidRatio void_ratio(const Volume<std::uint8_t>& solid, const Cylinder& region);
+
+}  // namespace graintwin::segment
