@@ -69,7 +69,7 @@ TEST(Loading, BandSlipsTheUpperBlockDownTheDip) {
 
 TEST(Loading, StatesAreCumulativeAndDeterministic) {
   LoadingParams p = sample();
-  std::vector<Pose> ref(50);
+  std::vector<PackedGrain> ref(50);
   for (std::size_t i = 0; i < ref.size(); ++i) ref[i].position = Eigen::Vector3d(1e-4 * (i % 20), 0.0, 2e-4 * i);
   const auto a = loading_states(p, ref, {0.0, 0.01, 0.02});
   const auto b = loading_states(p, ref, {0.0, 0.01, 0.02});

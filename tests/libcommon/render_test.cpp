@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/filters.hpp"
 #include "graintwin/shape/sand_shape.hpp"
 #include "graintwin/synth/render.hpp"
 

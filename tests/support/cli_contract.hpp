@@ -7,10 +7,13 @@
 
 namespace graintwin::test {
 
-inline void expect_standard_cli(const std::string& tool) {
+/// `config` is the name of the configuration option: "--config", or a positional such as ctsynth's "scene".
+inline void expect_standard_cli(const std::string& tool, const std::string& config = "--config") {
   const ToolResult help = run_tool(tool, {"--help"});
   EXPECT_EQ(help.exit_code, 0) << help.err;
-  for (const char* opt : {"--help", "--version", "--quiet", "--verbose", "--force", "--threads", "--config", "Examples:"})
+  for (const std::string& opt : {std::string("--help"), std::string("--version"), std::string("--quiet"),
+                                 std::string("--verbose"), std::string("--force"), std::string("--threads"),
+                                 std::string("Examples:"), config})
     EXPECT_NE(help.out.find(opt), std::string::npos) << tool << " --help lacks " << opt;
   const ToolResult bad = run_tool(tool, {"--no-such-option"});
   EXPECT_EQ(bad.exit_code, 2);

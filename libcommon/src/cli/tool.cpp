@@ -42,6 +42,7 @@ Tool::Tool(std::string name, std::string description) : name_(std::move(name)), 
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app_.set_config("--config", "", "Read options from a TOML file (keys = long option names)");
+  app_.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key must not pass silently
   app_.get_formatter()->column_width(34);
 }
 
@@ -54,6 +55,12 @@ CLI::Option* Tool::add_input(const std::string& name, fs::path& target, const st
 CLI::Option* Tool::add_output(const std::string& name, fs::path& target, const std::string& description) {
   outputs_.push_back(&target);
   return app_.add_option(name, target, description)->required();
+}
+
+void Tool::use_positional_config(const std::string& name, fs::path& target, const std::string& description) {
+  config_positional_ = app_.set_config(name, "", description, true);
+  config_target_ = &target;
+  inputs_.push_back(&target);
 }
 
 void Tool::set_examples(const std::vector<std::string>& examples) {
@@ -83,6 +90,7 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
     const int rc = app_.exit(e);  // prints help/version to stdout, errors to stderr
     return rc == 0 ? 0 : static_cast<int>(ExitCode::usage_error);
   }
+  if (config_positional_) *config_target_ = config_positional_->as<std::string>();
   log->set_level(quiet_ ? spdlog::level::err
                         : verbosity_ >= 2 ? spdlog::level::trace
                         : verbosity_ == 1 ? spdlog::level::debug

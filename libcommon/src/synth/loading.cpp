@@ -78,10 +78,10 @@ double sample_radius_at(const LoadingParams& p, double z_deformed, double eps) {
   return p.radius * (1.0 + p.bulge * eps * barrel(zeta));
 }
 
-std::vector<std::vector<Pose>> loading_states(const LoadingParams& p, const std::vector<Pose>& reference,
-                                              const std::vector<double>& strains) {
+std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, const std::vector<PackedGrain>& reference,
+                                                     const std::vector<double>& strains) {
   validate(p);
-  std::vector<std::vector<Pose>> states;
+  std::vector<std::vector<PackedGrain>> states;
   std::vector<Eigen::Vector3d> walk(reference.size(), Eigen::Vector3d::Zero());
   std::vector<Eigen::Quaterniond> spin(reference.size(), Eigen::Quaterniond::Identity());
   double prev = 0.0;
@@ -89,7 +89,7 @@ std::vector<std::vector<Pose>> loading_states(const LoadingParams& p, const std:
     const double eps = strains[k];
     if (!(eps >= 0.0 && eps < 0.5)) throw UsageError("axial strains must lie in [0, 0.5)");
     const double deps = eps - prev;
-    std::vector<Pose> state(reference.size());
+    std::vector<PackedGrain> state(reference.size());
     for (std::size_t i = 0; i < reference.size(); ++i) {
       const Eigen::Vector3d& x = reference[i].position;
       if (k > 0 && deps != 0.0) {

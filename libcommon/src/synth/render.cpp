@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/filters.hpp"
 
 namespace graintwin::synth {
 
@@ -208,41 +209,6 @@ Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& 
     }
   }
   return out;
-}
-
-void gaussian_blur(Volume<float>& v, double sigma_vox) {
-  if (sigma_vox <= 0.0) return;
-  const int radius = static_cast<int>(std::ceil(3.0 * sigma_vox));
-  std::vector<double> w(2 * radius + 1);
-  double sum = 0.0;
-  for (int k = -radius; k <= radius; ++k) sum += w[k + radius] = std::exp(-0.5 * k * k / (sigma_vox * sigma_vox));
-  for (auto& x : w) x /= sum;
-  const Shape3 s = v.shape();
-  const std::size_t strides[3] = {s[1] * s[2], s[2], 1};
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::size_t n = s[axis];
-    if (n < 2) continue;
-    const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-    const std::size_t lines = s[a1] * s[a2];
-#pragma omp parallel
-    {
-      std::vector<float> line(n), blurred(n);
-#pragma omp for schedule(static)
-      for (std::size_t l = 0; l < lines; ++l) {
-        const std::size_t base = (l / s[a2]) * strides[a1] + (l % s[a2]) * strides[a2];
-        for (std::size_t i = 0; i < n; ++i) line[i] = v.values()[base + i * strides[axis]];
-        for (std::size_t i = 0; i < n; ++i) {
-          double acc = 0.0;
-          for (int k = -radius; k <= radius; ++k) {
-            const long j = std::clamp(static_cast<long>(i) + k, 0L, static_cast<long>(n) - 1);
-            acc += w[k + radius] * line[static_cast<std::size_t>(j)];
-          }
-          blurred[i] = static_cast<float>(acc);
-        }
-        for (std::size_t i = 0; i < n; ++i) v.values()[base + i * strides[axis]] = blurred[i];
-      }
-    }
-  }
 }
 
 Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,

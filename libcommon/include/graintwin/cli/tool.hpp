@@ -56,6 +56,10 @@ class Tool {
   /// A positional output; an existing one is refused unless --force, before the body runs.
   CLI::Option* add_output(const std::string& name, std::filesystem::path& target,
                           const std::string& description);
+  /// Makes a positional argument the tool's configuration file (e.g. ctsynth's SCENE.toml) in
+  /// place of --config: its keys are option names, and options given on the command line win.
+  void use_positional_config(const std::string& name, std::filesystem::path& target,
+                             const std::string& description);
   /// Example lines shown under "Examples:" at the end of --help, plus the docs pointer.
   void set_examples(const std::vector<std::string>& examples);
 
@@ -72,6 +76,8 @@ class Tool {
   int threads_ = 0;
   std::vector<std::filesystem::path*> inputs_;
   std::vector<std::filesystem::path*> outputs_;
+  CLI::Option* config_positional_ = nullptr;
+  std::filesystem::path* config_target_ = nullptr;
 };
 
 }  // namespace graintwin::cli

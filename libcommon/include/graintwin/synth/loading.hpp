@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "graintwin/synth/packing.hpp"
+
 namespace graintwin::synth {
 
 enum class ShearBand { none, single, crossed };
@@ -39,12 +41,8 @@ double local_shear(const LoadingParams& p, const Eigen::Vector3d& x, double eps)
 
 /// Poses of all grains at each strain of `strains` (first entry usually 0), from their reference
 /// poses. Element [k][i] is grain i at state k. Positions are centroids.
-struct Pose {
-  Eigen::Vector3d position{0.0, 0.0, 0.0};
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-};
-std::vector<std::vector<Pose>> loading_states(const LoadingParams& p, const std::vector<Pose>& reference,
-                                              const std::vector<double>& strains);
+std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, const std::vector<PackedGrain>& reference,
+                                                     const std::vector<double>& strains);
 
 /// Inner radius of the (bulged) membrane at height z of the deformed sample for strain eps.
 double sample_radius_at(const LoadingParams& p, double z_deformed, double eps);

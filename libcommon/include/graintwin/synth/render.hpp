@@ -71,7 +71,4 @@ struct ScannerParams {
 Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,
                                     const ScannerParams& params);
 
-/// Separable Gaussian blur in voxel units (edges clamped), in place.
-void gaussian_blur(Volume<float>& v, double sigma_vox);
-
 }  // namespace graintwin::synth

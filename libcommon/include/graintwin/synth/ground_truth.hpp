@@ -1,0 +1,57 @@
+#pragma once
+// Exact answers of a synthetic scan (kind=ground_truth): the label image, every grain's pose, size,
+// SH shape and invariants, every contact or near-contact with its normal, point and overlap/gap,
+// and the applied strain. Grain i has label i + 1 in every scan of a series, which is the true
+// identity across scans. Layout: docs/formats.md.
+#include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "graintwin/core/volume.hpp"
+#include "graintwin/shape/radial_table.hpp"
+#include "graintwin/synth/packing.hpp"
+
+namespace graintwin::synth {
+
+/// A true contact or near-contact between grains with labels low < high.
+struct TrueContact {
+  std::uint32_t low = 0, high = 0;
+  double overlap = 0.0;               ///< m; > 0 interpenetration, < 0 gap
+  Eigen::Vector3d point{0, 0, 0};     ///< m, world
+  Eigen::Vector3d normal{0, 0, 0};    ///< unit, from low to high
+  bool touching = false;              ///< |overlap| <= the packing tolerance
+};
+
+/// Every pair closer than `search_gap` (m), found through a cell grid (never all pairs).
+/// Labels are index + 1. Parallel and deterministic (sorted by (low, high)).
+std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
+                                       const std::vector<PackedGrain>& poses, double search_gap,
+                                       double tolerance);
+
+/// Everything written to one truth_NNN.h5.
+struct GroundTruth {
+  int scan_index = 0;
+  double axial_strain = 0.0;                 ///< nominal, compression positive
+  double sample_height = 0.0;                ///< m, platen to platen
+  double sample_radius = 0.0;                ///< m, initial (membrane inner radius before bulging)
+  double solid_fraction = 0.0;               ///< grain volume / sample volume
+  double void_ratio = 0.0;                   ///< void / solid inside the sample
+  double contact_tolerance = 0.0;            ///< m
+  Volume<std::uint32_t> labels;              ///< label of the grain containing each voxel centre
+  std::vector<PackedGrain> poses;            ///< per grain
+  std::vector<double> volume;                ///< m^3 per grain
+  std::vector<double> equivalent_diameter;   ///< m
+  std::vector<double> sphericity, aspect_ratio;
+  int sh_degree = 0;
+  Eigen::MatrixXd sh_coeffs;                 ///< N x (L+1)^2, world frame, about the centroid
+  Eigen::MatrixXd sh_coeffs_body;            ///< N x (L+1)^2, body frame
+  Eigen::MatrixXd sh_invariants;             ///< N x (L+1)
+  std::vector<TrueContact> contacts;
+};
+
+void write_ground_truth(const std::filesystem::path& path, const GroundTruth& truth,
+                        const std::vector<std::string>& history);
+
+}  // namespace graintwin::synth

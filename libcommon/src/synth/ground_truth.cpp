@@ -1,0 +1,141 @@
+#include "graintwin/synth/ground_truth.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+
+namespace graintwin::synth {
+
+std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
+                                       const std::vector<PackedGrain>& poses, double search_gap, double tolerance) {
+  const std::size_t n = shapes.size();
+  double rmax = 0.0;
+  for (const auto* s : shapes) rmax = std::max(rmax, s->max_radius());
+  const double cell = 2.0 * rmax + search_gap;
+  using Key = std::tuple<long, long, long>;
+  std::map<Key, std::vector<std::uint32_t>> grid;
+  auto key_of = [&](const Eigen::Vector3d& x) {
+    return Key{static_cast<long>(std::floor(x.x() / cell)), static_cast<long>(std::floor(x.y() / cell)),
+               static_cast<long>(std::floor(x.z() / cell))};
+  };
+  for (std::uint32_t i = 0; i < n; ++i) grid[key_of(poses[i].position)].push_back(i);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> candidates;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const auto [cx, cy, cz] = key_of(poses[i].position);
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find(Key{cx + dx, cy + dy, cz + dz});
+          if (it == grid.end()) continue;
+          for (std::uint32_t j : it->second) {
+            if (j <= i) continue;
+            const double reach = shapes[i]->max_radius() + shapes[j]->max_radius() + search_gap;
+            if ((poses[i].position - poses[j].position).squaredNorm() <= reach * reach) candidates.emplace_back(i, j);
+          }
+        }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<std::optional<TrueContact>> found(candidates.size());
+#pragma omp parallel for schedule(dynamic, 16)
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const auto [i, j] = candidates[k];
+    const auto c = pair_contact(*shapes[i], poses[i], *shapes[j], poses[j], search_gap);
+    if (!c) continue;
+    TrueContact t;
+    t.low = i + 1;
+    t.high = j + 1;
+    t.overlap = c->overlap;
+    t.point = c->point;
+    t.normal = c->normal;
+    t.touching = std::abs(c->overlap) <= tolerance;
+    found[k] = t;
+  }
+  std::vector<TrueContact> out;
+  for (auto& f : found)
+    if (f) out.push_back(*f);
+  return out;
+}
+
+namespace {
+// N x k row-major copy of per-grain vectors.
+template <class F>
+std::vector<double> rows(std::size_t n, int k, F&& get) {
+  std::vector<double> out(n * static_cast<std::size_t>(k));
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < k; ++c) out[i * k + c] = get(i, c);
+  return out;
+}
+}  // namespace
+
+void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
+                        const std::vector<std::string>& history) {
+  using io::DatasetOptions;
+  auto with_units = [](const char* u) {
+    DatasetOptions o;
+    o.units = u;
+    return o;
+  };
+  io::H5File f = io::H5File::create(path);
+  io::write_root_attrs(f, schema::kind::ground_truth);
+  f.set_attr("/", "scan_index", static_cast<long long>(t.scan_index));
+  f.set_attr("/", "axial_strain", t.axial_strain);
+  f.set_attr("/", "sample_height", t.sample_height);
+  f.set_attr("/", "sample_radius", t.sample_radius);
+  f.set_attr("/", "solid_fraction", t.solid_fraction);
+  f.set_attr("/", "void_ratio", t.void_ratio);
+  f.set_attr("/", "contact_tolerance", t.contact_tolerance);
+  io::write_image(f, schema::path::labels, t.labels, "1");
+
+  const std::size_t n = t.poses.size();
+  std::vector<std::uint32_t> label(n);
+  for (std::size_t i = 0; i < n; ++i) label[i] = static_cast<std::uint32_t>(i + 1);
+  f.write("/grains/label", label);
+  const auto& P = t.poses;
+  f.write("/grains/centroid", rows(n, 3, [&](std::size_t i, int c) { return P[i].position[c]; }).data(), {n, 3},
+          with_units("m"));
+  f.write("/grains/orientation",
+          rows(n, 4, [&](std::size_t i, int c) { return c == 0 ? P[i].orientation.w() : P[i].orientation.vec()[c - 1]; })
+              .data(),
+          {n, 4}, with_units("1"));
+  f.set_attr("/grains/orientation", "convention", std::string("unit quaternion (w, x, y, z), body to world"));
+  f.write("/grains/volume", t.volume, with_units("m^3"));
+  f.write("/grains/equivalent_diameter", t.equivalent_diameter, with_units("m"));
+  f.write("/grains/sphericity", t.sphericity, with_units("1"));
+  f.write("/grains/aspect_ratio", t.aspect_ratio, with_units("1"));
+  const hsize_t ncoef = static_cast<hsize_t>(t.sh_coeffs.cols());
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> cw = t.sh_coeffs, cb = t.sh_coeffs_body,
+                                                                               inv = t.sh_invariants;
+  f.write("/sh/coeffs", cw.data(), {n, ncoef}, with_units("m"));
+  f.write("/sh/coeffs_body", cb.data(), {n, ncoef}, with_units("m"));
+  f.write("/sh/invariants", inv.data(), {n, static_cast<hsize_t>(inv.cols())}, with_units("m"));
+  f.set_attr("/sh/coeffs", "degree", static_cast<long long>(t.sh_degree));
+  f.set_attr("/sh/coeffs", "basis",
+             std::string("real orthonormal, index n*n+n+m, no Condon-Shortley phase (graintwin/shape/sh_basis.hpp)"));
+
+  const std::size_t m = t.contacts.size();
+  std::vector<std::uint32_t> pair(2 * m);
+  std::vector<std::uint8_t> touching(m);
+  std::vector<double> overlap(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    pair[2 * k] = t.contacts[k].low;
+    pair[2 * k + 1] = t.contacts[k].high;
+    touching[k] = t.contacts[k].touching;
+    overlap[k] = t.contacts[k].overlap;
+  }
+  f.write("/contacts/pair", pair.data(), {m, 2});
+  f.write("/contacts/normal", rows(m, 3, [&](std::size_t k, int c) { return t.contacts[k].normal[c]; }).data(), {m, 3},
+          with_units("1"));
+  f.write("/contacts/point", rows(m, 3, [&](std::size_t k, int c) { return t.contacts[k].point[c]; }).data(), {m, 3},
+          with_units("m"));
+  f.write("/contacts/overlap", overlap, with_units("m"));
+  f.write("/contacts/touching", touching);
+  io::write_history(f, history);
+}
+
+}  // namespace graintwin::synth
