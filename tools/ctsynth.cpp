@@ -44,6 +44,7 @@ struct Options {
   int supersample = 4;
   double blur = 0.8, noise = 0.05, photons = 0.0, rings = 0.0, beam_hardening = 0.0;
   double grey_void = 0.10, grey_grain = 0.75, grey_membrane = 0.35;
+  double grey_scale = 50000.0, grey_offset = 5000.0;
   std::vector<double> strains{0.0, 0.02, 0.04};
   double bulge = 0.5;
   std::string band = "single";
@@ -108,6 +109,9 @@ int main(int argc, char** argv) {
   app.add_option("--grey-void", o.grey_void, "Grey level of air and pores")->capture_default_str();
   app.add_option("--grey-grain", o.grey_grain, "Grey level of grains")->capture_default_str();
   app.add_option("--grey-membrane", o.grey_membrane, "Grey level of the membrane")->capture_default_str();
+  app.add_option("--grey-scale", o.grey_scale, "uint16 value per unit grey (smaller: fewer levels, smaller files)")
+      ->capture_default_str();
+  app.add_option("--grey-offset", o.grey_offset, "uint16 value of grey 0")->capture_default_str();
   app.add_option("--strains", o.strains, "Nominal axial strain of each scan (compression positive)")
       ->delimiter(',')->capture_default_str();
   app.add_option("--bulge", o.bulge, "Mean lateral strain / axial strain (0.5 keeps the volume)")->capture_default_str();
@@ -298,6 +302,8 @@ int main(int argc, char** argv) {
       sp.axis_y = lp.centre_y;
       sp.field_radius = cyl ? hi[0] : 0.5 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
       sp.seed = o.seed * 1000003ull + k;
+      sp.uint16_scale = o.grey_scale;
+      sp.uint16_offset = o.grey_offset;
       if (membrane_t > 0.0) {
         Shell shell;
         shell.inner_radius = [&](double z) { return sample_radius_at(lp, z, eps); };
