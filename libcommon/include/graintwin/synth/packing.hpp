@@ -1,0 +1,163 @@
+#pragma once
+// Dense random packing of star-shaped grains (shape::RadialTable) in a cylinder or a box, for
+// synthetic CT scans with exact ground truth (ctsynth), and the pair geometry (penetration depth,
+// contact point, normal) shared by the packer and the ground-truth contact list.
+//
+// Method (growth with overlap relaxation, Lubachevsky-Stillinger-like; details in packing.cpp):
+//  1. Every grain is shrunk by a common factor s0 (0.55, lower for elongated shapes) and placed at
+//     a random position and orientation without bounding-sphere overlap (random sequential
+//     addition, largest grains first).
+//  2. Sweeps: the common scale s grows toward 1 at an adaptive rate that keeps the mean overlap
+//     near 1.5 % of the mean grain radius (quasi-static compression); each sweep finds the
+//     overlapping pairs (Verlet list built on a cell grid, never all pairs) and the grains that
+//     cross a wall, and moves every grain by one FIRE step (a damped-dynamics energy minimiser)
+//     on the overlap energy: forces along the contact normals, and torques from off-centre
+//     contacts so that elongated grains turn into the gaps.
+//  3. At full size the steps go on until every pair and wall overlap is within the tolerance.
+// Contacts are evaluated in parallel into per-pair slots and summed per grain in a fixed order,
+// so the result depends only on the inputs and the seed (bit-identical for any thread count).
+// Cost: 2000 grains in 5-10 s on one core; 15 961 ellipsoids (the reference sample) in ~50 s on
+// two cores.
+//
+// Walls and density: a hard wall leaves a looser layer about half a grain thick beside it, so
+// the solid fraction over the whole container is lower than in the bulk of the packing, the more
+// so the fewer grains fit across it. Measured with the Ottawa-sand size spread (d50 0.551 mm) in
+// a cylinder with height = diameter: spheres jam at about 0.57 over the container with 300 grains
+// (0.63-0.64 in the core) and reach 0.60 with 2000; 1.3:1 ellipsoids reach 0.63 with 300.
+// PackingReport::core_solid_fraction gives the bulk value, away from the walls.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "graintwin/shape/radial_table.hpp"
+
+namespace graintwin::synth {
+
+/// The rigid container. Cylinder: axis z, base at z = 0, top at z = height, centred on x = y = 0.
+/// Box: from (0, 0, 0) to box_size. Metres.
+struct Container {
+  enum class Kind { cylinder, box } kind = Kind::cylinder;
+  double radius = 0.0;                          ///< cylinder radius (m)
+  double height = 0.0;                          ///< cylinder height (m)
+  Eigen::Vector3d box_size{0.0, 0.0, 0.0};      ///< box edge lengths (m)
+
+  /// Inner volume (m^3).
+  double volume() const;
+};
+
+/// Pose of one grain: position of the body origin (the grain centroid) in the world frame, and the
+/// body -> world rotation.
+struct PackedGrain {
+  Eigen::Vector3d position{0.0, 0.0, 0.0};
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+struct PackingParams {
+  /// Seed of the random start (positions, orientations). Same seed + same inputs -> same packing.
+  std::uint64_t seed = 1;
+  /// Largest allowed interpenetration depth of two grains (and of a grain into a wall), as a
+  /// FRACTION of the smallest grain's equivalent-sphere radius (3V/4pi)^(1/3). Pairs whose gap or
+  /// overlap is within the same distance count as touching. 0.005 is 0.75 um for a 0.30 mm grain,
+  /// far below a CT voxel.
+  double contact_tolerance = 0.005;
+  /// Upper bound on relaxation sweeps (growth + final relaxation) before giving up with DataError.
+  int max_sweeps = 20000;
+  /// Initial common scale of the grains (0 = automatic: 0.55 for compact shapes, smaller when the
+  /// bounding spheres fill much more than the grains, e.g. for elongated grains).
+  double initial_scale = 0.0;
+};
+
+struct PackingReport {
+  double solid_fraction = 0.0;      ///< total grain volume / container volume
+  double max_overlap = 0.0;         ///< largest pair interpenetration depth (m), 0 if none
+  double mean_overlap = 0.0;        ///< mean depth (m) over the pairs that interpenetrate
+  int sweeps = 0;                   ///< relaxation sweeps done (growth + final)
+  std::size_t touching_pairs = 0;   ///< pairs with |gap or overlap| <= tolerance
+  // Additions beyond the minimum:
+  double max_wall_overlap = 0.0;    ///< largest penetration of a grain into a wall (m), 0 if none
+  std::size_t wall_contacts = 0;    ///< grain-wall pairs within the tolerance
+  double tolerance = 0.0;           ///< the absolute tolerance used (m)
+  double initial_scale = 0.0;       ///< scale the grains started from
+  /// Solid fraction of the core of the container: the container shrunk by core_margin on every
+  /// side (see core_solid_fraction()); NaN if the container is too small to have a core.
+  double core_solid_fraction = 0.0;
+  double core_margin = 0.0;         ///< d50 of the grains (volume-weighted median diameter, m)
+  double seconds = 0.0;             ///< wall-clock time of pack_grains
+};
+
+/// Places grains (shapes[i] scaled to their final size, body origin = centroid) inside the
+/// container without interpenetration beyond the tolerance, densely: every pair overlaps by at most
+/// the tolerance, and every grain surface lies inside the container within the tolerance. The
+/// solid fraction is the total grain volume over the container volume, so the container sets the
+/// density: choose it for the density wanted, below the jamming limit of the shapes, size spread
+/// and grain count (see the note on walls above).
+/// Throws UsageError for empty/invalid shapes or container, DataError when the grains cannot fit
+/// (over 0.74 of the container, a grain larger than the container, or no convergence: jammed
+/// before full size or overlaps not relaxed within max_sweeps). `progress` (optional) is called
+/// from the calling thread with the fraction done in [0, 1].
+std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*>& shapes,
+                                     const Container& c, const PackingParams& p,
+                                     PackingReport* report = nullptr,
+                                     const std::function<void(double fraction_done)>& progress = {});
+
+/// Removes the overlaps of grains at given poses (e.g. after prescribed loading kinematics),
+/// without growth: the relaxation of pack_grains() at full size inside the container, until every
+/// pair and wall overlap is within the tolerance. `poses` is updated in place (on success only).
+/// Grains that start outside the walls are pushed in. Returns the report (sweeps counts only the
+/// relaxation; initial_scale is 1). Throws as pack_grains() does; p.seed and p.initial_scale are
+/// not used.
+PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
+                           std::vector<PackedGrain>& poses, const Container& c,
+                           const PackingParams& p,
+                           const std::function<void(double fraction_done)>& progress = {});
+
+/// Geometry of a grain pair. overlap > 0: interpenetration depth (m); < 0: gap (m). point: world
+/// contact point (midway between the two surfaces at the deepest point). normal: unit vector from
+/// a to b (the outward surface normal of a at the contact, in the limit of touching grains).
+struct PairContact {
+  double overlap = 0.0;
+  Eigen::Vector3d point{0.0, 0.0, 0.0};
+  Eigen::Vector3d normal{0.0, 0.0, 0.0};
+};
+
+/// Pair geometry of grains a and b at their poses; nullopt when they are separated by more than
+/// `search_gap` (m). Method: surface points of each grain at Fibonacci directions facing the other
+/// grain are tested against the other's radius function (radial depth), the deepest is refined by a
+/// local search on the unit sphere (to ~0.03 degree), and the depth is measured along the other
+/// grain's surface normal there; both ways, the deeper wins. Accurate for |overlap| much smaller
+/// than the grain radii (the use case: touching grains); deep overlaps are detected but their depth
+/// is only approximate. Thread-safe.
+std::optional<PairContact> pair_contact(const shape::RadialTable& a, const PackedGrain& ga,
+                                        const shape::RadialTable& b, const PackedGrain& gb,
+                                        double search_gap);
+
+/// A contact of grains a < b (indices into the grain list).
+struct GrainContact {
+  std::size_t a = 0, b = 0;
+  PairContact contact;
+};
+
+/// Every pair of grains separated by at most `search_gap` (m), overlapping pairs included, as
+/// pair_contact() sees them; sorted by (a, b). Candidate pairs come from a cell grid of the
+/// bounding spheres (never all pairs); parallel and deterministic. For ground-truth contact lists.
+std::vector<GrainContact> find_contacts(const std::vector<const shape::RadialTable*>& shapes,
+                                        const std::vector<PackedGrain>& grains, double search_gap);
+
+/// Fraction of the container's core (the container shrunk by `margin` metres from every wall)
+/// that lies inside some grain, counted at deterministic quasi-random points (R3 low-discrepancy
+/// sequence, about 64 per mean grain volume, between 10^4 and 4 10^6; error about 0.005 for a
+/// few hundred grains). NaN when the core is empty. Throws UsageError if shapes and grains differ
+/// in length.
+double core_solid_fraction(const std::vector<const shape::RadialTable*>& shapes,
+                           const std::vector<PackedGrain>& grains, const Container& c,
+                           double margin);
+
+/// Largest penetration depth (m) of the grain's surface through the container walls (negative: the
+/// smallest clearance to the nearest wall). Same sampling + refinement as pair_contact().
+double wall_penetration(const shape::RadialTable& a, const PackedGrain& ga, const Container& c);
+
+}  // namespace graintwin::synth

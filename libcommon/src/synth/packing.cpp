@@ -1,0 +1,1082 @@
+// Dense packing of star-shaped grains by growth with overlap relaxation.
+//
+// 1. Start: all grains at a common scale s0 (0.55, or less when the bounding spheres would fill
+//    more than 25 % of the container), random orientation, random position by random sequential
+//    addition of the bounding spheres, largest grains first.
+// 2. Sweeps. Each sweep grows s by a factor 1 + g (unless held), evaluates every candidate pair
+//    (Verlet list from a cell grid, rebuilt when grains have moved by half the skin) and every
+//    grain near a wall, then moves the grains by one FIRE step (Bitzek et al., PRL 97, 170201,
+//    2006) on the overlap energy E = 1/2 sum (depth + eps)^2 over pair and wall contacts (unit
+//    stiffness, unit masses, rotations in arc-length units so that an off-centre contact turns
+//    the grain). The growth rate g adapts so that the mean depth of the overlapping pairs stays
+//    near 1.5 % of the mean grain radius: the packing is compressed quasi-statically, which is
+//    what lets it become dense (a fast compression jams early and loose).
+// 3. At full size the FIRE steps go on until every pair and wall depth is within the tolerance;
+//    the state is then checked once more with every candidate pair evaluated afresh.
+// A packing that stops growing (2000 sweeps without 0.1 % growth) or, at full size, stops
+// relaxing (3000 sweeps without a 1 % smaller worst overlap) is jammed: DataError.
+//
+// Determinism: the random start comes from a seeded mt19937_64 with our own conversion to doubles;
+// parallel loops write per-pair or per-grain slots and every sum runs in a fixed order, so the
+// result does not depend on the thread count.
+#include "graintwin/synth/packing.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <random>
+#include <string>
+#include <cstdlib>
+#include <cstdlib>
+
+#include "graintwin/core/error.hpp"
+#include "packing_geometry.hpp"
+
+namespace graintwin::synth {
+
+double Container::volume() const {
+  if (kind == Kind::cylinder) return M_PI * radius * radius * height;
+  return box_size.x() * box_size.y() * box_size.z();
+}
+
+namespace {
+
+using detail::Frame;
+using detail::PairEval;
+using detail::SurfaceView;
+using detail::WallHit;
+
+// Constants of the method (dimensionless), chosen on packings of spheres and of 1.3:1 ellipsoids
+// with an Ottawa-sand size spread (tests/libcommon/packing_test.cpp).
+struct Tune {
+  double max_fill = 0.74;           // densest packing of equal spheres: refuse anything denser
+  double default_s0 = 0.55;         // initial scale for compact grains ...
+  double s0_bounding_fill = 0.25;   // ... lowered so that bounding spheres fill at most this
+  double rotation_gain = 0.5;       // weight of torques against forces (0: grains never turn)
+  double max_rotation = 0.05;       // rad per sweep
+  double max_step = 0.2;            // of the grain's equivalent radius per sweep
+  double fire_dt_start = 0.1;       // FIRE time step (unit stiffness and masses) ...
+  double fire_dt_max = 0.5;         // ... its cap (stable for ~12 contacts per grain) ...
+  double fire_dt_min = 0.01;        // ... and floor
+  double target_gap = 0.2;          // contacts push until this gap, in tolerances
+  double growth_overlap = 0.015;    // mean overlap while growing, of the mean equivalent radius
+  double growth_first = 0.02;       // first relative growth per sweep
+  double growth_max = 0.05;
+  double growth_min = 1e-6;
+  double skin = 0.3;                // Verlet skin, of the mean bounding radius
+  double refine_step = 0.008;       // final angular step of the deepest-point search (rad):
+                                    // depth error ~ r h^2 / 100, far below the tolerance
+  double exact_refine_step = 5e-4;  // the same for pair_contact() and wall_penetration()
+  int full_every = 8;               // pairs in contact are sampled afresh every so many sweeps ...
+  double warm_motion = 0.05;        // ... or once both grains moved this much (of the smaller
+                                    // bounding radius); in between the last contact seeds them
+  int rsa_attempts = 2000;          // random placements per grain before shrinking the start
+  int stall_sweeps = 2000;          // sweeps without 0.1 % growth: jammed before full size
+  int settle_sweeps = 3000;         // sweeps at full size without 1 % less overlap: jammed
+  double core_points_per_grain = 64.0;  // point density of core_solid_fraction()
+};
+constexpr Tune kTune{};
+
+// Loops run in parallel only above these sizes: each parallel region costs a barrier, which on a
+// busy machine (more threads than free cores) can cost a scheduler time slice, far more than the
+// work of a small packing.
+constexpr std::size_t kParallelPairs = 1000;
+constexpr std::size_t kParallelGrains = 1000;
+
+// Uniform doubles from a 64-bit Mersenne twister, defined here (not by the standard library's
+// distributions) so that the start is the same on every platform.
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : g_(seed) {}
+  double uniform() { return static_cast<double>(g_() >> 11) * 0x1.0p-53; }
+
+ private:
+  std::mt19937_64 g_;
+};
+
+// Uniformly random rotation (Shoemake 1992).
+Eigen::Quaterniond random_rotation(Rng& rng) {
+  const double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
+  Eigen::Quaterniond q(b * std::cos(2.0 * M_PI * u3), a * std::sin(2.0 * M_PI * u2),
+                       a * std::cos(2.0 * M_PI * u2), b * std::sin(2.0 * M_PI * u3));
+  q.normalize();
+  return q;
+}
+
+std::string fmt_num(double v, int digits = 2) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+std::string fmt_um(double metres) { return fmt_num(metres * 1e6, 2) + " um"; }
+
+const char* kind_name(const Container& c) {
+  return c.kind == Container::Kind::cylinder ? "cylinder" : "box";
+}
+
+// Cells per axis of a grid over [lo, hi] whose cells are at least min_cell wide (so that
+// neighbours within min_cell are in adjacent cells), widened if needed to keep the number of
+// cells below about 8 per item (a sparse scene must not allocate a huge grid).
+Eigen::Vector3i grid_dims(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double min_cell,
+                          std::size_t items) {
+  double cell = min_cell;
+  Eigen::Vector3i dims;
+  for (;;) {
+    for (int k = 0; k < 3; ++k) {
+      dims[k] = std::max(1, static_cast<int>(std::min((hi[k] - lo[k]) / cell, 1e6)));
+    }
+    if (static_cast<double>(dims.x()) * dims.y() * dims.z() <= 8.0 * items + 64.0) return dims;
+    cell *= 1.26;
+  }
+}
+
+// Per distinct shape: the kernel's view (lattice radii and roughness slack, computed once).
+struct ShapeData {
+  const shape::RadialTable* table = nullptr;
+  detail::ShapeSampling sampling;
+  double max_radius = 0.0;
+  double volume = 0.0;
+  SurfaceView view() const { return detail::view_of(*table, sampling); }
+};
+
+// The distinct shapes of a grain list (by pointer) and each grain's index into them; the lattice
+// radii are computed in parallel.
+void index_shapes(const std::vector<const shape::RadialTable*>& shapes,
+                  std::vector<ShapeData>& data, std::vector<int>& grain_shape) {
+  std::map<const shape::RadialTable*, int> index;
+  grain_shape.resize(shapes.size());
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    auto [it, added] = index.emplace(shapes[i], static_cast<int>(data.size()));
+    if (added) {
+      ShapeData d;
+      d.table = shapes[i];
+      d.max_radius = shapes[i]->max_radius();
+      d.volume = shapes[i]->volume();
+      data.push_back(std::move(d));
+    }
+    grain_shape[i] = it->second;
+  }
+#pragma omp parallel for schedule(dynamic, 1) if (data.size() > 8)
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    data[k].sampling = detail::sample_shape(*data[k].table);
+  }
+}
+
+struct PairSlot {
+  int a = 0, b = 0;
+  PairEval eval;
+  double travel_a = 0.0, travel_b = 0.0;  // travel counters when `bound` was taken
+  double bound = -HUGE_VAL;               // lower bound of the gap at that time
+};
+
+// Volume-weighted median of the equivalent-sphere diameters (the d50 of a sieve curve).
+double d50_of_volumes(const std::vector<double>& volumes) {
+  std::vector<double> v = volumes;
+  std::sort(v.begin(), v.end());
+  const double total = std::accumulate(v.begin(), v.end(), 0.0);
+  double acc = 0.0;
+  for (double x : v) {
+    acc += x;
+    if (acc >= 0.5 * total) return std::cbrt(6.0 * x / M_PI);
+  }
+  return v.empty() ? 0.0 : std::cbrt(6.0 * v.back() / M_PI);
+}
+
+class Packer {
+ public:
+  Packer(const std::vector<const shape::RadialTable*>& shapes, const Container& c,
+         const PackingParams& p)
+      : c_(c), p_(p), n_(shapes.size()), shapes_(shapes) {
+    validate(shapes);
+    index_shapes(shapes, shape_data_, grain_shape_);
+    rmax_.resize(n_);
+    vol_.resize(n_);
+    req_.resize(n_);
+    double vsum = 0.0, rmin_eq = HUGE_VAL, req_sum = 0.0, rmax_sum = 0.0;
+    for (std::size_t i = 0; i < n_; ++i) {
+      const ShapeData& d = shape_data_[grain_shape_[i]];
+      rmax_[i] = d.max_radius;
+      vol_[i] = d.volume;
+      req_[i] = std::cbrt(3.0 * d.volume / (4.0 * M_PI));
+      vsum += d.volume;
+      rmin_eq = std::min(rmin_eq, req_[i]);
+      req_sum += req_[i];
+      rmax_sum += rmax_[i];
+    }
+    rmax_max_ = *std::max_element(rmax_.begin(), rmax_.end());
+    req_mean_ = req_sum / n_;
+    rmax_mean_ = rmax_sum / n_;
+    tol_ = p.contact_tolerance * rmin_eq;
+    fill_ = vsum / c.volume();
+    check_fit();
+  }
+
+  // pack_grains(): random start at a reduced scale, growth, relaxation.
+  std::vector<PackedGrain> pack(PackingReport* report, const std::function<void(double)>& progress) {
+    const auto t0 = std::chrono::steady_clock::now();
+    place_initial();
+    relax(progress);
+    return finish_run(report, progress, t0);
+  }
+
+  // relax_grains(): the given poses at full size, relaxation only.
+  std::vector<PackedGrain> relax_from(const std::vector<PackedGrain>& poses, PackingReport* report,
+                                      const std::function<void(double)>& progress) {
+    const auto t0 = std::chrono::steady_clock::now();
+    x_.resize(n_);
+    q_.resize(n_);
+    R_.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!poses[i].position.allFinite() || !poses[i].orientation.coeffs().allFinite() ||
+          poses[i].orientation.norm() == 0.0) {
+        throw UsageError("relax_grains: pose " + std::to_string(i) +
+                         " is not finite or has a zero quaternion");
+      }
+      x_[i] = poses[i].position;
+      q_[i] = poses[i].orientation.normalized();
+      R_[i] = q_[i].toRotationMatrix();
+    }
+    s_ = s0_ = 1.0;
+    relax(progress);
+    return finish_run(report, progress, t0);
+  }
+
+ private:
+  std::vector<PackedGrain> finish_run(PackingReport* report,
+                                      const std::function<void(double)>& progress,
+                                      std::chrono::steady_clock::time_point t0) {
+    std::vector<PackedGrain> out(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      out[i].position = x_[i];
+      out[i].orientation = q_[i];
+    }
+    if (report) {
+      *report = final_report_;
+      report->core_margin = d50_of_volumes(vol_);
+      report->core_solid_fraction = core_solid_fraction(shapes_, out, c_, report->core_margin);
+      report->seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    if (progress) progress(1.0);
+    return out;
+  }
+
+  void validate(const std::vector<const shape::RadialTable*>& shapes) const {
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      if (shapes[i] == nullptr || shapes[i]->empty()) {
+        throw UsageError("pack_grains: shape " + std::to_string(i) +
+                         " is null or empty; pass one tabulated shape per grain");
+      }
+    }
+    const bool cyl = c_.kind == Container::Kind::cylinder;
+    const bool ok = cyl ? (std::isfinite(c_.radius) && std::isfinite(c_.height) &&
+                           c_.radius > 0.0 && c_.height > 0.0)
+                        : (c_.box_size.allFinite() && c_.box_size.minCoeff() > 0.0);
+    if (!ok) {
+      throw UsageError(std::string("pack_grains: the ") + kind_name(c_) +
+                       " needs finite, positive dimensions (metres)");
+    }
+    if (!std::isfinite(p_.contact_tolerance) || p_.contact_tolerance <= 0.0 ||
+        p_.contact_tolerance >= 0.5) {
+      throw UsageError("pack_grains: contact_tolerance must be in (0, 0.5) (a fraction of the "
+                       "smallest grain radius), got " + std::to_string(p_.contact_tolerance));
+    }
+    if (p_.max_sweeps < 1) throw UsageError("pack_grains: max_sweeps must be at least 1");
+    if (!(p_.initial_scale >= 0.0 && p_.initial_scale < 1.0)) {
+      throw UsageError("pack_grains: initial_scale must be in [0, 1) (0 = automatic)");
+    }
+  }
+
+  void check_fit() const {
+    if (fill_ > kTune.max_fill) {
+      throw DataError("scene: grains fill " + fmt_num(fill_) + " of the " + kind_name(c_) +
+                      ", above the 0.74 that any packing allows; enlarge the container or lower "
+                      "the grain count");
+    }
+    const double room = c_.kind == Container::Kind::cylinder
+                            ? std::min(2.0 * c_.radius, c_.height)
+                            : c_.box_size.minCoeff();
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double rmin = shape_data_[grain_shape_[i]].table->min_radius();
+      if (2.0 * rmin >= room) {
+        throw DataError("scene: grain " + std::to_string(i) + " is at least " +
+                        fmt_num(2e3 * rmin, 3) + " mm wide but the " + kind_name(c_) +
+                        " is only " + fmt_num(1e3 * room, 3) +
+                        " mm across; enlarge the container or use smaller grains");
+      }
+    }
+  }
+
+  Frame frame(std::size_t i) const {
+    Frame f;
+    f.x = x_[i];
+    f.R = R_[i];
+    f.s = s_;
+    return f;
+  }
+  SurfaceView view(std::size_t i) const { return shape_data_[grain_shape_[i]].view(); }
+
+  // Container bounding box.
+  Eigen::Vector3d box_lo() const {
+    if (c_.kind == Container::Kind::box) return Eigen::Vector3d::Zero();
+    return {-c_.radius, -c_.radius, 0.0};
+  }
+  Eigen::Vector3d box_hi() const {
+    if (c_.kind == Container::Kind::box) return c_.box_size;
+    return {c_.radius, c_.radius, c_.height};
+  }
+
+  // Random sequential addition of the bounding spheres at scale s0, largest grains first; the
+  // start shrinks by 10 % whenever some grain finds no room.
+  void place_initial() {
+    double bounding = 0.0;
+    for (std::size_t i = 0; i < n_; ++i) bounding += 4.0 / 3.0 * M_PI * std::pow(rmax_[i], 3);
+    bounding /= c_.volume();
+    double s0 = p_.initial_scale > 0.0
+                    ? p_.initial_scale
+                    : std::min(kTune.default_s0, std::cbrt(kTune.s0_bounding_fill / bounding));
+    std::vector<std::size_t> order(n_);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return rmax_[a] > rmax_[b]; });
+    Rng rng(p_.seed);
+    x_.assign(n_, Eigen::Vector3d::Zero());
+    q_.assign(n_, Eigen::Quaterniond::Identity());
+    R_.assign(n_, Eigen::Matrix3d::Identity());
+    for (;;) {
+      if (try_rsa(s0, order, rng)) break;
+      s0 *= 0.9;
+      if (s0 < 0.15) {
+        throw DataError("scene: could not place the grains even at " + fmt_num(s0 / 0.9) +
+                        " of their size in the " + kind_name(c_) +
+                        "; enlarge the container or lower the grain count");
+      }
+    }
+    s_ = s0;
+    s0_ = s0;
+    for (std::size_t i = 0; i < n_; ++i) R_[i] = q_[i].toRotationMatrix();
+  }
+
+  bool try_rsa(double s0, const std::vector<std::size_t>& order, Rng& rng) {
+    const Eigen::Vector3d lo = box_lo(), hi = box_hi();
+    const Eigen::Vector3i dims = grid_dims(lo, hi, 2.0 * s0 * rmax_max_, n_);
+    std::vector<std::vector<int>> grid(static_cast<std::size_t>(dims.prod()));
+    auto cell_of = [&](const Eigen::Vector3d& x) {
+      Eigen::Vector3i c;
+      for (int k = 0; k < 3; ++k) {
+        c[k] = std::clamp(static_cast<int>((x[k] - lo[k]) / (hi[k] - lo[k]) * dims[k]), 0,
+                          dims[k] - 1);
+      }
+      return c;
+    };
+    for (std::size_t i : order) {
+      const double r = s0 * rmax_[i];
+      bool placed = false;
+      for (int attempt = 0; attempt < kTune.rsa_attempts && !placed; ++attempt) {
+        Eigen::Vector3d x;
+        if (c_.kind == Container::Kind::cylinder) {
+          const double rr = c_.radius - r;
+          if (rr <= 0.0 || c_.height <= 2.0 * r) return false;
+          const double rad = rr * std::sqrt(rng.uniform());
+          const double ang = 2.0 * M_PI * rng.uniform();
+          x = {rad * std::cos(ang), rad * std::sin(ang), r + (c_.height - 2.0 * r) * rng.uniform()};
+        } else {
+          for (int k = 0; k < 3; ++k) {
+            if (c_.box_size[k] <= 2.0 * r) return false;
+            x[k] = r + (c_.box_size[k] - 2.0 * r) * rng.uniform();
+          }
+        }
+        const Eigen::Vector3i ci = cell_of(x);
+        bool free = true;
+        for (int dz = -1; dz <= 1 && free; ++dz) {
+          for (int dy = -1; dy <= 1 && free; ++dy) {
+            for (int dx = -1; dx <= 1 && free; ++dx) {
+              const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
+              if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
+              for (int j : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
+                const double rs = r + s0 * rmax_[j];
+                if ((x_[j] - x).squaredNorm() < rs * rs) {
+                  free = false;
+                  break;
+                }
+              }
+            }
+          }
+        }
+        if (free) {
+          x_[i] = x;
+          q_[i] = random_rotation(rng);
+          grid[(ci.z() * dims.y() + ci.y()) * dims.x() + ci.x()].push_back(static_cast<int>(i));
+          placed = true;
+        }
+      }
+      if (!placed) return false;
+    }
+    return true;
+  }
+
+  // Verlet list of candidate pairs (bounding spheres within the skin) from a cell grid.
+  void build_pairs() {
+    skin_ = kTune.skin * s_ * rmax_mean_;
+    const Eigen::Vector3d pad = Eigen::Vector3d::Constant(s_ * rmax_max_);
+    const Eigen::Vector3d lo = box_lo() - pad, hi = box_hi() + pad;
+    const Eigen::Vector3i dims = grid_dims(lo, hi, 2.0 * s_ * rmax_max_ + skin_, n_);
+    const std::size_t ncell = static_cast<std::size_t>(dims.prod());
+    std::vector<int> cell_of(n_);
+    std::vector<int> start(ncell + 1, 0);
+    for (std::size_t i = 0; i < n_; ++i) {
+      Eigen::Vector3i c;
+      for (int k = 0; k < 3; ++k) {
+        c[k] = std::clamp(static_cast<int>((x_[i][k] - lo[k]) / (hi[k] - lo[k]) * dims[k]), 0,
+                          dims[k] - 1);
+      }
+      cell_of[i] = (c.z() * dims.y() + c.y()) * dims.x() + c.x();
+      ++start[cell_of[i] + 1];
+    }
+    for (std::size_t k = 0; k < ncell; ++k) start[k + 1] += start[k];
+    std::vector<int> members(n_);
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (std::size_t i = 0; i < n_; ++i) members[fill[cell_of[i]]++] = static_cast<int>(i);
+    }
+    std::vector<std::vector<int>> near(n_);
+#pragma omp parallel for schedule(dynamic, 64) if (n_ > kParallelGrains)
+    for (std::size_t i = 0; i < n_; ++i) {
+      const int ci = cell_of[i];
+      const int cx = ci % dims.x(), cy = (ci / dims.x()) % dims.y(), cz = ci / (dims.x() * dims.y());
+      std::vector<int>& mine = near[i];
+      for (int dz = -1; dz <= 1; ++dz) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int x = cx + dx, y = cy + dy, z = cz + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= dims.x() || y >= dims.y() || z >= dims.z()) {
+              continue;
+            }
+            const int cj = (z * dims.y() + y) * dims.x() + x;
+            for (int m = start[cj]; m < start[cj + 1]; ++m) {
+              const int j = members[m];
+              if (j <= static_cast<int>(i)) continue;
+              const double reach = s_ * (rmax_[i] + rmax_[j]) + skin_;
+              if ((x_[j] - x_[i]).squaredNorm() < reach * reach) mine.push_back(j);
+            }
+          }
+        }
+      }
+      std::sort(mine.begin(), mine.end());
+    }
+    pairs_.clear();
+    for (std::size_t i = 0; i < n_; ++i) {
+      for (int j : near[i]) {
+        PairSlot slot;
+        slot.a = static_cast<int>(i);
+        slot.b = j;
+        pairs_.push_back(slot);
+      }
+    }
+    adj_start_.assign(n_ + 1, 0);
+    for (const PairSlot& pr : pairs_) {
+      ++adj_start_[pr.a + 1];
+      ++adj_start_[pr.b + 1];
+    }
+    for (std::size_t i = 0; i < n_; ++i) adj_start_[i + 1] += adj_start_[i];
+    adj_.assign(adj_start_[n_], 0);
+    std::vector<int> fill(adj_start_.begin(), adj_start_.end() - 1);
+    for (std::size_t k = 0; k < pairs_.size(); ++k) {
+      adj_[fill[pairs_[k].a]++] = static_cast<int>(k);
+      adj_[fill[pairs_[k].b]++] = static_cast<int>(k);
+    }
+    x_build_ = x_;
+    s_build_ = s_;
+  }
+
+  bool pairs_stale() const {
+    double dmax = 0.0;
+    for (std::size_t i = 0; i < n_; ++i) dmax = std::max(dmax, (x_[i] - x_build_[i]).norm());
+    return 2.0 * dmax + 2.0 * (s_ - s_build_) * rmax_max_ > skin_;
+  }
+
+  // Evaluates every candidate pair (skipping, unless `all`, those whose last gap bound still
+  // exceeds `gap` after the distance both grains have travelled since) and every grain's walls;
+  // h_min: final angular step of the deepest-point search.
+  double t_pairs_ = 0, t_walls_ = 0;
+ public: ~Packer() { if (std::getenv("GT_TIME")) std::fprintf(stderr, "pairs %.2f s walls %.2f s\n", t_pairs_, t_walls_); }
+ private:
+  void evaluate(double gap, bool all, double h_min) {
+    auto te0 = std::chrono::steady_clock::now();
+#pragma omp parallel for schedule(dynamic, 32) if (pairs_.size() > kParallelPairs)
+    for (std::size_t k = 0; k < pairs_.size(); ++k) {
+      PairSlot& pr = pairs_[k];
+      if (!all && pr.bound - (travel_[pr.a] - pr.travel_a) - (travel_[pr.b] - pr.travel_b) > gap) {
+        pr.eval.found = false;
+        continue;
+      }
+      // Warm start from the last result while both grains have moved little since, except on
+      // every full_every-th sweep (staggered over the pairs) and in the final check.
+      const double moved = (travel_[pr.a] - pr.travel_a) + (travel_[pr.b] - pr.travel_b);
+      static const int fe = std::getenv("GT_FE") ? std::atoi(std::getenv("GT_FE")) : kTune.full_every;
+      static const double wm = std::getenv("GT_WM") ? std::atof(std::getenv("GT_WM")) : kTune.warm_motion;
+      const bool warm = !all && (pr.eval.ab.peaks > 0 || pr.eval.ba.peaks > 0) &&
+                        (k + sweep_) % fe != 0 &&
+                        moved < wm * s_ * std::min(rmax_[pr.a], rmax_[pr.b]);
+      const PairEval last = pr.eval;
+      pr.eval = detail::evaluate_pair(view(pr.a), frame(pr.a), view(pr.b), frame(pr.b), gap, h_min,
+                                      warm ? &last : nullptr);
+      pr.bound = pr.eval.found ? -HUGE_VAL : pr.eval.gap_bound;  // -inf after a warm start
+      pr.travel_a = travel_[pr.a];
+      pr.travel_b = travel_[pr.b];
+    }
+    auto tw0 = std::chrono::steady_clock::now();
+    t_pairs_ += std::chrono::duration<double>(tw0 - te0).count();
+#pragma omp parallel for schedule(dynamic, 64) if (n_ > kParallelGrains)
+    for (std::size_t i = 0; i < n_; ++i) {
+      wall_count_[i] = detail::evaluate_walls(view(i), frame(i), c_, gap, h_min, &walls_[detail::kMaxWallHits * i]);
+    }
+    t_walls_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - tw0).count();
+  }
+
+  struct Stats {
+    double max_pair = 0.0, max_wall = 0.0, sum_pair = 0.0;
+    std::size_t overlapping = 0, touching = 0, wall_touching = 0;
+    double worst() const { return std::max(max_pair, max_wall); }
+    double mean() const { return overlapping ? sum_pair / overlapping : 0.0; }
+  };
+  Stats stats() const {
+    Stats st;
+    for (const PairSlot& pr : pairs_) {
+      if (!pr.eval.found) continue;
+      const double d = pr.eval.side.depth;
+      if (d > 0.0) {
+        st.max_pair = std::max(st.max_pair, d);
+        st.sum_pair += d;
+        ++st.overlapping;
+      }
+      if (std::abs(d) <= tol_) ++st.touching;
+    }
+    for (std::size_t i = 0; i < n_; ++i) {
+      for (int w = 0; w < wall_count_[i]; ++w) {
+        const double d = walls_[detail::kMaxWallHits * i + w].depth;
+        st.max_wall = std::max(st.max_wall, d);
+        if (std::abs(d) <= tol_) ++st.wall_touching;
+      }
+    }
+    return st;
+  }
+
+  // Contact forces of the overlap energy (unit stiffness, metres): F_i sums (depth + eps) n over
+  // the grain's contacts, G_i sums arm x F / L_i, the generalised force of the arc-length rotation
+  // coordinate phi = theta L_i (L_i = s r_eq,i); pairs in the grain's list order, then walls.
+  void compute_forces() {
+    const double eps = kTune.target_gap * tol_;
+#pragma omp parallel for schedule(static) if (n_ > 4 * kParallelGrains)
+    for (std::size_t i = 0; i < n_; ++i) {
+      Eigen::Vector3d f = Eigen::Vector3d::Zero(), tq = Eigen::Vector3d::Zero();
+      auto add = [&](const Eigen::Vector3d& force, const Eigen::Vector3d& at) {
+        f += force;
+        tq += (at - x_[i]).cross(force);
+      };
+      for (int m = adj_start_[i]; m < adj_start_[i + 1]; ++m) {
+        const PairSlot& pr = pairs_[adj_[m]];
+        if (!pr.eval.found) continue;
+        // Every contact region, seen from either grain, with half weight: a convex pair's single
+        // contact (seen from both sides) gets full weight, and rough grains touching at several
+        // bumps feel all of them, so the force does not jump when the deepest bump changes.
+        const double sign = pr.a == static_cast<int>(i) ? -0.5 : 0.5;
+        for (const detail::SideSet* set : {&pr.eval.ab, &pr.eval.ba}) {
+          for (int r = 0; r < set->n; ++r) {
+            const detail::Side& sd = set->side[r];
+            if (sd.depth <= -eps) continue;
+            add((sign * (sd.depth + eps)) * sd.normal, sd.point);
+          }
+        }
+      }
+      for (int k = 0; k < wall_count_[i]; ++k) {
+        const WallHit& h = walls_[detail::kMaxWallHits * i + k];
+        if (h.depth <= -eps) continue;
+        add((h.depth + eps) * h.normal, h.point);
+      }
+      force_[i] = f;
+      torque_[i] = kTune.rotation_gain * tq / (s_ * req_[i]);
+    }
+  }
+
+  // One FIRE step: velocity mixing toward the force, time step up while the power F.v stays
+  // non-negative, full stop and smaller step when it turns negative; semi-implicit Euler update.
+  void fire_step() {
+    compute_forces();
+    double power = 0.0, fnorm2 = 0.0, vnorm2 = 0.0;
+    for (std::size_t i = 0; i < n_; ++i) {
+      power += force_[i].dot(vel_[i]) + torque_[i].dot(spin_[i]);
+      fnorm2 += force_[i].squaredNorm() + torque_[i].squaredNorm();
+      vnorm2 += vel_[i].squaredNorm() + spin_[i].squaredNorm();
+    }
+    if (fnorm2 == 0.0) {  // nothing touches: nothing moves, and the step keeps its size
+      std::fill(vel_.begin(), vel_.end(), Eigen::Vector3d::Zero());
+      std::fill(spin_.begin(), spin_.end(), Eigen::Vector3d::Zero());
+      return;
+    }
+    if (power >= 0.0) {
+      const double mix = fire_alpha_ * std::sqrt(vnorm2 / fnorm2);
+      for (std::size_t i = 0; i < n_; ++i) {
+        vel_[i] = (1.0 - fire_alpha_) * vel_[i] + mix * force_[i];
+        spin_[i] = (1.0 - fire_alpha_) * spin_[i] + mix * torque_[i];
+      }
+      if (++fire_positive_ > 5) {
+        fire_dt_ = std::min(fire_dt_ * 1.1, kTune.fire_dt_max);
+        fire_alpha_ *= 0.99;
+      }
+    } else {
+      std::fill(vel_.begin(), vel_.end(), Eigen::Vector3d::Zero());
+      std::fill(spin_.begin(), spin_.end(), Eigen::Vector3d::Zero());
+      fire_dt_ = std::max(0.5 * fire_dt_, kTune.fire_dt_min);
+      fire_alpha_ = 0.1;
+      fire_positive_ = 0;
+    }
+    const double dt = fire_dt_;
+#pragma omp parallel for schedule(static) if (n_ > 4 * kParallelGrains)
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (force_[i].squaredNorm() == 0.0 && torque_[i].squaredNorm() == 0.0) {
+        // No contact, no motion: a grain does not fly on through free space on its momentum
+        // (that would turn a local relaxation into a rearrangement).
+        vel_[i].setZero();
+        spin_[i].setZero();
+        continue;
+      }
+      vel_[i] += dt * force_[i];
+      spin_[i] += dt * torque_[i];
+      Eigen::Vector3d dx = dt * vel_[i];
+      const double max_dx = kTune.max_step * s_ * req_[i];
+      const double ndx = dx.norm();
+      if (ndx > max_dx) dx *= max_dx / ndx;
+      Eigen::Vector3d th = dt * spin_[i] / (s_ * req_[i]);
+      double nth = th.norm();
+      if (nth > kTune.max_rotation) {
+        th *= kTune.max_rotation / nth;
+        nth = kTune.max_rotation;
+      }
+      x_[i] += dx;
+      if (nth > 0.0) {
+        q_[i] = Eigen::Quaterniond(Eigen::AngleAxisd(nth, th / nth)) * q_[i];
+        q_[i].normalize();
+        R_[i] = q_[i].toRotationMatrix();
+      }
+      travel_[i] += dx.norm() + nth * s_ * rmax_[i];
+    }
+  }
+
+  void grow(double s_new) {
+    const double ds = s_new - s_;
+    for (std::size_t i = 0; i < n_; ++i) travel_[i] += ds * rmax_[i];
+    s_ = s_new;
+  }
+
+  void relax(const std::function<void(double)>& progress) {
+    travel_.assign(n_, 0.0);
+    vel_.assign(n_, Eigen::Vector3d::Zero());
+    spin_.assign(n_, Eigen::Vector3d::Zero());
+    force_.assign(n_, Eigen::Vector3d::Zero());
+    torque_.assign(n_, Eigen::Vector3d::Zero());
+    walls_.assign(detail::kMaxWallHits * n_, WallHit{});
+    wall_count_.assign(n_, 0);
+    fire_dt_ = kTune.fire_dt_start;
+    build_pairs();
+    const double allow_growing = (std::getenv("GT_GO") ? std::atof(std::getenv("GT_GO")) : kTune.growth_overlap) * req_mean_;
+    // Progress: growth (log of the scale) up to 0.9, then the fall of the worst overlap (log)
+    // toward the tolerance; a pure relaxation spends the whole range on the latter.
+    const bool grows = s0_ < 1.0;
+    const double log_range = grows ? std::log(1.0 / s0_) : 1.0;
+    const double settle_base = grows ? 0.9 : 0.0;
+    double worst_start = 0.0;
+    double shown = 0.0;
+    double g = kTune.growth_first;
+    bool hold = false;
+    int sweep = 0;
+    int last_growth = 0;          // sweep of the last 0.1 % growth
+    double s_mark = s_;
+    int last_settle = 0;          // sweep of the last 1 % drop of the worst overlap at full size
+    double worst_mark = HUGE_VAL;
+    for (;;) {
+      if (sweep >= p_.max_sweeps) fail_converge(sweep);
+      sweep_ = ++sweep;
+      if (s_ < 1.0 && !hold) grow(std::min(1.0, s_ * (1.0 + g)));
+      if (s_ >= s_mark * 1.001 || s_ >= 1.0) {
+        s_mark = s_;
+        last_growth = sweep;
+      }
+      if (s_ < 1.0 && sweep - last_growth > kTune.stall_sweeps) fail_jammed();
+      if (pairs_stale()) build_pairs();
+      const bool full = s_ >= 1.0;
+      evaluate(tol_, false, kTune.refine_step);
+      Stats st = stats();
+      last_worst_ = st.worst();
+      if (full) {
+        if (st.worst() <= tol_) {
+          // Confirm with every candidate pair evaluated afresh, as precisely as pair_contact()
+          // and wall_penetration() do, so that the report agrees with find_contacts().
+          evaluate(tol_, true, kTune.exact_refine_step);
+          st = stats();
+          if (st.worst() <= tol_) {
+            finish(st, sweep);
+            return;
+          }
+        }
+        if (st.worst() < 0.99 * worst_mark) {
+          worst_mark = st.worst();
+          last_settle = sweep;
+        } else if (sweep - last_settle > kTune.settle_sweeps) {
+          fail_jammed();
+        }
+      } else {
+        hold = st.mean() > allow_growing;
+        if (hold) {
+          g = std::max(g * 0.7, kTune.growth_min);
+        } else if (st.mean() < 0.5 * allow_growing) {
+          g = std::min(g * 1.15, kTune.growth_max);
+        }
+      }
+      if (std::getenv("GT_DBG") && sweep % std::atoi(std::getenv("GT_DBG")) == 0) std::fprintf(stderr, "sweep %d s %.4f g %.2e worst %.3g pair %.3g wall %.3g mean %.3g ov %zu dt %.3g a %.3g\n", sweep, s_, g, st.worst()*1e6, st.max_pair*1e6, st.max_wall*1e6, st.mean()*1e6, st.overlapping, fire_dt_, fire_alpha_);
+      if (std::getenv("GT_PDBG") && full && sweep > 5000 && sweep < 5016) {
+        std::size_t wk = 0; double wd = -1; for (std::size_t k = 0; k < pairs_.size(); ++k) if (pairs_[k].eval.found && pairs_[k].eval.side.depth > wd) { wd = pairs_[k].eval.side.depth; wk = k; }
+        const PairSlot& pr = pairs_[wk];
+        std::fprintf(stderr, "sweep %d pair %d-%d depth %.3f | ab:", sweep, pr.a, pr.b, wd*1e6);
+        for (int r = 0; r < pr.eval.ab.n; ++r) std::fprintf(stderr, " [%.3f n=(%.3f %.3f %.3f)]", pr.eval.ab.side[r].depth*1e6, pr.eval.ab.side[r].normal.x(), pr.eval.ab.side[r].normal.y(), pr.eval.ab.side[r].normal.z());
+        std::fprintf(stderr, " | ba:");
+        for (int r = 0; r < pr.eval.ba.n; ++r) std::fprintf(stderr, " [%.3f n=(%.3f %.3f %.3f)]", pr.eval.ba.side[r].depth*1e6, pr.eval.ba.side[r].normal.x(), pr.eval.ba.side[r].normal.y(), pr.eval.ba.side[r].normal.z());
+        std::fprintf(stderr, " | Fa=(%.3f %.3f %.3f) Fb=(%.3f %.3f %.3f) dt %.3g\n", force_[pr.a].x()*1e6, force_[pr.a].y()*1e6, force_[pr.a].z()*1e6, force_[pr.b].x()*1e6, force_[pr.b].y()*1e6, force_[pr.b].z()*1e6, fire_dt_);
+      }
+      if (std::getenv("GT_GDBG") && full && sweep > 2720 && sweep < 2745) { std::size_t i = std::atoi(std::getenv("GT_GDBG")); std::fprintf(stderr, "sweep %d grain %zu x=(%.9f %.9f %.9f) q=(%.9f %.9f %.9f %.9f) walls %d:", sweep, i, x_[i].x()*1e3, x_[i].y()*1e3, x_[i].z()*1e3, q_[i].w(), q_[i].x(), q_[i].y(), q_[i].z(), wall_count_[i]); for (int k = 0; k < wall_count_[i]; ++k) std::fprintf(stderr, " %.3f", walls_[detail::kMaxWallHits * i + k].depth*1e6); std::fprintf(stderr, "\n"); }
+      if (std::getenv("GT_WDBG") && full && st.max_wall > 2 * tol_) {
+        for (std::size_t i = 0; i < n_; ++i) for (int w = 0; w < wall_count_[i]; ++w) { const auto& h = walls_[detail::kMaxWallHits * i + w]; if (h.depth > 2 * tol_) { std::fprintf(stderr, "sweep %d grain %zu hits %d:", sweep, i, wall_count_[i]); for (int k = 0; k < wall_count_[i]; ++k) { const auto& hh = walls_[detail::kMaxWallHits * i + k]; std::fprintf(stderr, " [%.2f um n=(%.2f %.2f %.2f) p-x=(%.0f %.0f %.0f)um]", hh.depth*1e6, hh.normal.x(), hh.normal.y(), hh.normal.z(), (hh.point-x_[i]).x()*1e6, (hh.point-x_[i]).y()*1e6, (hh.point-x_[i]).z()*1e6); } std::fprintf(stderr, " F=(%.2f %.2f %.2f) um T=(%.2f %.2f %.2f)\n", force_[i].x()*1e6, force_[i].y()*1e6, force_[i].z()*1e6, torque_[i].x()*1e6, torque_[i].y()*1e6, torque_[i].z()*1e6); break; } }
+      }
+      fire_step();
+      if (progress) {
+        double f = 0.9 * std::log(s_ / s0_) / log_range;
+        if (full) {
+          if (worst_start == 0.0) worst_start = std::max(st.worst(), 2.0 * tol_);
+          const double settled = std::log(worst_start / std::max(st.worst(), tol_)) /
+                                 std::log(worst_start / tol_);
+          f = settle_base + (1.0 - settle_base) * std::clamp(settled, 0.0, 0.99);
+        }
+        shown = std::max(shown, f);  // never backwards, though the worst overlap may rise
+        progress(shown);
+      }
+    }
+  }
+
+  void finish(const Stats& st, int sweep) {
+    PackingReport& r = final_report_;
+    r.solid_fraction = fill_;
+    r.max_overlap = st.max_pair;
+    r.mean_overlap = st.mean();
+    r.sweeps = sweep;
+    r.touching_pairs = st.touching;
+    r.max_wall_overlap = st.max_wall;
+    r.wall_contacts = st.wall_touching;
+    r.tolerance = tol_;
+    r.initial_scale = s0_;
+  }
+
+  [[noreturn]] void fail_jammed() const {
+    if (s_ < 1.0) {
+      throw DataError("scene: the grains jam at solid fraction " + fmt_num(fill_ * s_ * s_ * s_) +
+                      " (" + fmt_num(100.0 * s_, 1) + " % of full size), below the requested " +
+                      fmt_num(fill_) + " in the " + kind_name(c_) +
+                      "; enlarge the container or lower the grain count");
+    }
+    throw DataError("scene: the grains jam at full size: overlaps stop decreasing at " +
+                    fmt_um(last_worst_) + " (tolerance " + fmt_um(tol_) +
+                    ") at solid fraction " + fmt_num(fill_) + " in the " + kind_name(c_) +
+                    "; enlarge the container, lower the grain count or raise contact_tolerance");
+  }
+
+  [[noreturn]] void fail_converge(int sweeps) const {
+    if (s_ < 1.0) {
+      throw DataError("scene: after " + std::to_string(sweeps) + " sweeps the grains are at " +
+                      fmt_num(100.0 * s_, 1) + " % of full size (solid fraction " +
+                      fmt_num(fill_ * s_ * s_ * s_) + " of the requested " + fmt_num(fill_) +
+                      "); enlarge the container, lower the grain count or raise max_sweeps");
+    }
+    throw DataError("scene: overlaps still reach " + fmt_um(last_worst_) + " (tolerance " +
+                    fmt_um(tol_) + ") after " + std::to_string(sweeps) +
+                    " sweeps at solid fraction " + fmt_num(fill_) +
+                    "; raise max_sweeps or contact_tolerance, or enlarge the container");
+  }
+
+  const Container c_;
+  const PackingParams p_;
+  const std::size_t n_;
+  const std::vector<const shape::RadialTable*>& shapes_;
+  std::vector<ShapeData> shape_data_;
+  std::vector<int> grain_shape_;
+  std::vector<double> rmax_, vol_, req_;
+  double rmax_max_ = 0.0, rmax_mean_ = 0.0, req_mean_ = 0.0;
+  double tol_ = 0.0, fill_ = 0.0;
+  double s_ = 1.0, s0_ = 1.0, s_build_ = 1.0, skin_ = 0.0;
+  double last_worst_ = 0.0;
+  int sweep_ = 0;
+  // Grain state: position, orientation (and its matrix), FIRE velocities, forces, travel counters.
+  std::vector<Eigen::Vector3d> x_, x_build_;
+  std::vector<Eigen::Quaterniond> q_;
+  std::vector<Eigen::Matrix3d> R_;
+  std::vector<Eigen::Vector3d> vel_, spin_, force_, torque_;
+  std::vector<double> travel_;
+  double fire_dt_ = 0.1, fire_alpha_ = 0.1;
+  int fire_positive_ = 0;
+  // Candidate pairs, each grain's pairs (CSR), wall hits (kMaxWallHits slots per grain).
+  std::vector<PairSlot> pairs_;
+  std::vector<int> adj_start_, adj_;
+  std::vector<WallHit> walls_;
+  std::vector<int> wall_count_;
+  PackingReport final_report_;
+};
+
+// A point is inside grain i if it lies within the grain's radius along its body-frame direction.
+bool inside_grain(const shape::RadialTable& t, const PackedGrain& g, const Eigen::Matrix3d& Rt,
+                  const Eigen::Vector3d& p) {
+  const Eigen::Vector3d q = Rt * (p - g.position);
+  const double rho = q.norm();
+  return rho == 0.0 || rho < t.radius(q / rho);
+}
+
+}  // namespace
+
+std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*>& shapes,
+                                     const Container& c, const PackingParams& p,
+                                     PackingReport* report,
+                                     const std::function<void(double)>& progress) {
+  if (shapes.empty()) {
+    if (report) *report = PackingReport{};
+    return {};
+  }
+  Packer packer(shapes, c, p);
+  return packer.pack(report, progress);
+}
+
+PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
+                           std::vector<PackedGrain>& poses, const Container& c,
+                           const PackingParams& p, const std::function<void(double)>& progress) {
+  if (shapes.size() != poses.size()) {
+    throw UsageError("relax_grains: " + std::to_string(shapes.size()) + " shapes but " +
+                     std::to_string(poses.size()) + " poses; pass one pose per grain");
+  }
+  PackingReport report;
+  if (shapes.empty()) return report;
+  Packer packer(shapes, c, p);
+  poses = packer.relax_from(poses, &report, progress);
+  return report;
+}
+
+std::optional<PairContact> pair_contact(const shape::RadialTable& a, const PackedGrain& ga,
+                                        const shape::RadialTable& b, const PackedGrain& gb,
+                                        double search_gap) {
+  const detail::ShapeSampling sa = detail::sample_shape(a), sb = detail::sample_shape(b);
+  const SurfaceView va = detail::view_of(a, sa), vb = detail::view_of(b, sb);
+  Frame fa, fb;
+  fa.x = ga.position;
+  fa.R = ga.orientation.normalized().toRotationMatrix();
+  fb.x = gb.position;
+  fb.R = gb.orientation.normalized().toRotationMatrix();
+  const PairEval e =
+      detail::evaluate_pair(va, fa, vb, fb, std::max(search_gap, 0.0), kTune.exact_refine_step);
+  if (!e.found) return std::nullopt;
+  return PairContact{e.side.depth, e.side.point, e.side.normal};
+}
+
+std::vector<GrainContact> find_contacts(const std::vector<const shape::RadialTable*>& shapes,
+                                        const std::vector<PackedGrain>& grains, double search_gap) {
+  if (shapes.size() != grains.size()) {
+    throw UsageError("find_contacts: " + std::to_string(shapes.size()) + " shapes but " +
+                     std::to_string(grains.size()) + " grains; pass one shape per grain");
+  }
+  const std::size_t n = grains.size();
+  if (n == 0) return {};
+  double rmax = 0.0;
+  Eigen::Vector3d lo = grains[0].position, hi = grains[0].position;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (shapes[i] == nullptr || shapes[i]->empty()) {
+      throw UsageError("find_contacts: shape " + std::to_string(i) + " is null or empty");
+    }
+    rmax = std::max(rmax, shapes[i]->max_radius());
+    lo = lo.cwiseMin(grains[i].position);
+    hi = hi.cwiseMax(grains[i].position);
+  }
+  const double gap = std::max(search_gap, 0.0);
+  const Eigen::Vector3i dims = grid_dims(lo, hi, 2.0 * rmax + gap, n);
+  auto cell_of = [&](const Eigen::Vector3d& x) {
+    Eigen::Vector3i c;
+    for (int k = 0; k < 3; ++k) {
+      const double span = std::max(hi[k] - lo[k], 1e-300);
+      c[k] = std::clamp(static_cast<int>((x[k] - lo[k]) / span * dims[k]), 0, dims[k] - 1);
+    }
+    return c;
+  };
+  std::vector<std::vector<int>> grid(static_cast<std::size_t>(dims.prod()));
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3i c = cell_of(grains[i].position);
+    grid[(c.z() * dims.y() + c.y()) * dims.x() + c.x()].push_back(static_cast<int>(i));
+  }
+  std::vector<ShapeData> data;
+  std::vector<int> grain_shape;
+  index_shapes(shapes, data, grain_shape);
+  std::vector<Frame> frames(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    frames[i].x = grains[i].position;
+    frames[i].R = grains[i].orientation.normalized().toRotationMatrix();
+  }
+  std::vector<std::vector<GrainContact>> found(n);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3i ci = cell_of(grains[i].position);
+    std::vector<int> near;
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
+          if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
+          for (int j : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
+            if (j <= static_cast<int>(i)) continue;
+            const double reach = shapes[i]->max_radius() + shapes[j]->max_radius() + gap;
+            if ((grains[j].position - grains[i].position).squaredNorm() <= reach * reach) {
+              near.push_back(j);
+            }
+          }
+        }
+      }
+    }
+    std::sort(near.begin(), near.end());
+    const SurfaceView vi = data[grain_shape[i]].view();
+    for (int j : near) {
+      const PairEval e = detail::evaluate_pair(vi, frames[i], data[grain_shape[j]].view(),
+                                               frames[j], gap, kTune.exact_refine_step);
+      if (e.found) {
+        found[i].push_back(GrainContact{i, static_cast<std::size_t>(j),
+                                        PairContact{e.side.depth, e.side.point, e.side.normal}});
+      }
+    }
+  }
+  std::vector<GrainContact> out;
+  for (auto& f : found) out.insert(out.end(), f.begin(), f.end());
+  return out;
+}
+
+double wall_penetration(const shape::RadialTable& a, const PackedGrain& ga, const Container& c) {
+  const detail::ShapeSampling sa = detail::sample_shape(a);
+  const SurfaceView va = detail::view_of(a, sa);
+  Frame fa;
+  fa.x = ga.position;
+  fa.R = ga.orientation.normalized().toRotationMatrix();
+  WallHit hits[detail::kMaxWallHits];
+  // A search gap beyond the container size makes every wall report its depth or clearance.
+  const double everywhere = 4.0 * a.max_radius() + 2.0 * (c.radius + c.height) + c.box_size.sum() +
+                            ga.position.norm();
+  const int n = detail::evaluate_walls(va, fa, c, everywhere, kTune.exact_refine_step, hits);
+  double worst = -HUGE_VAL;
+  for (int k = 0; k < n; ++k) worst = std::max(worst, hits[k].depth);
+  return worst;
+}
+
+double core_solid_fraction(const std::vector<const shape::RadialTable*>& shapes,
+                           const std::vector<PackedGrain>& grains, const Container& c,
+                           double margin) {
+  if (shapes.size() != grains.size()) {
+    throw UsageError("core_solid_fraction: " + std::to_string(shapes.size()) + " shapes but " +
+                     std::to_string(grains.size()) + " grains; pass one shape per grain");
+  }
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    if (shapes[i] == nullptr || shapes[i]->empty()) {
+      throw UsageError("core_solid_fraction: shape " + std::to_string(i) + " is null or empty");
+    }
+  }
+  const bool cyl = c.kind == Container::Kind::cylinder;
+  Eigen::Vector3d lo, hi;
+  if (cyl) {
+    const double r = c.radius - margin;
+    lo = {-r, -r, margin};
+    hi = {r, r, c.height - margin};
+  } else {
+    lo = Eigen::Vector3d::Constant(margin);
+    hi = c.box_size - Eigen::Vector3d::Constant(margin);
+  }
+  if (grains.empty() || !(margin >= 0.0) || (hi - lo).minCoeff() <= 0.0) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  // Quasi-random points (the R3 low-discrepancy sequence of Roberts, 2018: x_k = frac(0.5 + k a),
+  // a = (1/g, 1/g^2, 1/g^3), g^4 = g + 1) in the core's bounding box, about
+  // kTune.core_points_per_grain per mean grain volume and 4 million at most. Unlike a lattice
+  // they cannot alias with a regular arrangement of grains.
+  double vmean = 0.0, rmax = 0.0;
+  for (const shape::RadialTable* s : shapes) {
+    vmean += s->volume();
+    rmax = std::max(rmax, s->max_radius());
+  }
+  vmean /= static_cast<double>(shapes.size());
+  const double box_volume = (hi - lo).prod();
+  const long long count = static_cast<long long>(
+      std::clamp(box_volume / vmean * kTune.core_points_per_grain, 1e4, 4e6));
+  const double g3 = 1.2207440846057594;
+  const Eigen::Vector3d step(1.0 / g3, 1.0 / (g3 * g3), 1.0 / (g3 * g3 * g3));
+  // Cell grid of the grain origins (cell >= twice the largest bounding radius).
+  const Eigen::Vector3d glo = lo - Eigen::Vector3d::Constant(2.0 * rmax);
+  const Eigen::Vector3d ghi = hi + Eigen::Vector3d::Constant(2.0 * rmax);
+  const Eigen::Vector3i dims = grid_dims(glo, ghi, 2.0 * rmax, grains.size());
+  auto cell_index = [&](const Eigen::Vector3d& x, Eigen::Vector3i& ci) {
+    for (int k = 0; k < 3; ++k) {
+      ci[k] = static_cast<int>(std::floor((x[k] - glo[k]) / (ghi[k] - glo[k]) * dims[k]));
+      if (ci[k] < 0 || ci[k] >= dims[k]) return false;
+    }
+    return true;
+  };
+  std::vector<std::vector<int>> grid(static_cast<std::size_t>(dims.prod()));
+  std::vector<Eigen::Matrix3d> rt(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    rt[i] = grains[i].orientation.normalized().toRotationMatrix().transpose();
+    Eigen::Vector3i ci;
+    if (cell_index(grains[i].position, ci)) {
+      grid[(ci.z() * dims.y() + ci.y()) * dims.x() + ci.x()].push_back(static_cast<int>(i));
+    }
+  }
+  const long long chunk = 4096;
+  const long long chunks = (count + chunk - 1) / chunk;
+  std::vector<long long> solid(chunks, 0), total(chunks, 0);
+#pragma omp parallel for schedule(dynamic, 4)
+  for (long long ch = 0; ch < chunks; ++ch) {
+    for (long long k = ch * chunk; k < std::min(count, (ch + 1) * chunk); ++k) {
+      Eigen::Vector3d f = Eigen::Vector3d::Constant(0.5) + static_cast<double>(k) * step;
+      f = f.array() - f.array().floor();
+      const Eigen::Vector3d p = lo.array() + f.array() * (hi - lo).array();
+      if (cyl && p.x() * p.x() + p.y() * p.y() > hi.x() * hi.x()) continue;
+      ++total[ch];
+      Eigen::Vector3i ci;
+      if (!cell_index(p, ci)) continue;
+      bool in = false;
+      for (int dz = -1; dz <= 1 && !in; ++dz) {
+        for (int dy = -1; dy <= 1 && !in; ++dy) {
+          for (int dx = -1; dx <= 1 && !in; ++dx) {
+            const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
+            if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
+            for (int i : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
+              const double r = shapes[i]->max_radius();
+              if ((p - grains[i].position).squaredNorm() >= r * r) continue;
+              if (inside_grain(*shapes[i], grains[i], rt[i], p)) {
+                in = true;
+                break;
+              }
+            }
+          }
+        }
+      }
+      if (in) ++solid[ch];
+    }
+  }
+  const long long s = std::accumulate(solid.begin(), solid.end(), 0LL);
+  const long long t = std::accumulate(total.begin(), total.end(), 0LL);
+  return t > 0 ? static_cast<double>(s) / static_cast<double>(t)
+               : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace graintwin::synth
