@@ -184,15 +184,7 @@ int main(int argc, char** argv) {
     gp.aspect_ratio = o.aspect_ratio;
     gp.voxel_size = voxel;
     gp.seed = o.seed;
-    GrainSet grains;
-    {
-      auto bar = ctx.progress("grain shapes", 1000);
-      std::size_t shown = 0;
-      grains = make_grains(gp, diameters, [&](double f) {
-        const auto now = static_cast<std::size_t>(f * 1000);
-        if (now > shown) bar->advance(now - shown), shown = now;
-      });
-    }
+    const GrainSet grains = make_grains(gp, diameters, ctx.progress_callback("grain shapes"));
     cli::throw_if_interrupted();
     const auto tables = grains.table_pointers();
 
@@ -201,15 +193,7 @@ int main(int argc, char** argv) {
     pp.seed = o.seed;
     pp.contact_tolerance = o.contact_tolerance;
     PackingReport report;
-    std::vector<PackedGrain> packed;
-    {
-      auto bar = ctx.progress("packing", 1000);
-      std::size_t shown = 0;
-      packed = pack_grains(tables, container, pp, &report, [&](double f) {
-        const auto now = static_cast<std::size_t>(f * 1000);
-        if (now > shown) bar->advance(now - shown), shown = now;
-      });
-    }
+    const std::vector<PackedGrain> packed = pack_grains(tables, container, pp, &report, ctx.progress_callback("packing"));
     spdlog::info("packed: solid fraction {:.4f}, max overlap {:.3g} um (tolerance {:.3g} um), {} touching pairs, {:.1f} s",
                  report.solid_fraction, report.max_overlap * 1e6, report.tolerance * 1e6, report.touching_pairs,
                  report.seconds);
@@ -280,15 +264,8 @@ int main(int argc, char** argv) {
       std::vector<PlacedGrain> placed(poses.size());
       for (std::size_t i = 0; i < poses.size(); ++i)
         placed[i] = {tables[i], poses[i].position, poses[i].orientation, static_cast<std::uint32_t>(i + 1)};
-      GrainImages images;
-      {
-        auto bar = ctx.progress("render scan " + std::to_string(k), 1000);
-        std::size_t shown = 0;
-        images = render_grains(placed, shape, vs, origin, RenderParams{o.supersample}, [&](double f) {
-          const auto now = static_cast<std::size_t>(f * 1000);
-          if (now > shown) bar->advance(now - shown), shown = now;
-        });
-      }
+      GrainImages images = render_grains(placed, shape, vs, origin, RenderParams{o.supersample},
+                                         ctx.progress_callback("render scan " + std::to_string(k)));
       cli::throw_if_interrupted();
       Volume<float> membrane;
       ScannerParams sp;

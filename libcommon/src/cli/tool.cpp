@@ -3,6 +3,7 @@
 #include <omp.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
@@ -19,6 +20,19 @@ namespace fs = std::filesystem;
 
 std::unique_ptr<Progress> RunContext::progress(const std::string& label, std::size_t total) const {
   return std::make_unique<Progress>(name_ + ": " + label, total, !quiet_);
+}
+
+std::function<void(double)> RunContext::progress_callback(const std::string& label) const {
+  constexpr std::size_t steps = 1000;
+  auto bar = std::shared_ptr<Progress>(progress(label, steps));
+  auto shown = std::make_shared<std::size_t>(0);
+  return [bar, shown](double fraction) {
+    const auto now = static_cast<std::size_t>(std::clamp(fraction, 0.0, 1.0) * steps);
+    if (now > *shown) {
+      bar->advance(now - *shown);
+      *shown = now;
+    }
+  };
 }
 
 void RunContext::add_input_history(const io::H5File& input) {

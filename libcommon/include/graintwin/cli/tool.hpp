@@ -26,6 +26,9 @@ class RunContext {
   int threads() const { return threads_; }
   /// A progress display for `total` units, silent with -q.
   std::unique_ptr<Progress> progress(const std::string& label, std::size_t total) const;
+  /// The same display driven by a fraction done in [0, 1], for library functions that report
+  /// progress that way; the display ends when the last copy of the callback is destroyed.
+  std::function<void(double)> progress_callback(const std::string& label) const;
 
   /// Merges an input file's /provenance/history into this run's history.
   void add_input_history(const io::H5File& input);
