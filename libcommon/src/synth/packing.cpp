@@ -6,15 +6,22 @@
 // 2. Sweeps. Each sweep grows s by a factor 1 + g (unless held), evaluates every candidate pair
 //    (Verlet list from a cell grid, rebuilt when grains have moved by half the skin) and every
 //    grain near a wall, then moves the grains by one FIRE step (Bitzek et al., PRL 97, 170201,
-//    2006) on the overlap energy E = 1/2 sum (depth + eps)^2 over pair and wall contacts (unit
-//    stiffness, unit masses, rotations in arc-length units so that an off-centre contact turns
-//    the grain). The growth rate g adapts so that the mean depth of the overlapping pairs stays
-//    near 1.5 % of the mean grain radius: the packing is compressed quasi-statically, which is
-//    what lets it become dense (a fast compression jams early and loose).
+//    2006) on the overlap energy E = 1/2 sum w (depth + eps)^2 (unit stiffness, unit masses,
+//    rotations in arc-length units so that an off-centre contact turns the grain). The sum runs
+//    over the contact regions of every pair (a rough grain can touch another at several bumps;
+//    each region seen from either grain, w = 1/2, so a convex contact seen from both counts once)
+//    and over the wall contacts (w = 1). The growth rate g adapts so that the mean depth of the
+//    overlapping pairs stays near 1 % of the mean grain radius: the packing is compressed
+//    quasi-statically, which is what lets it become dense (a fast compression jams early, loose).
 // 3. At full size the FIRE steps go on until every pair and wall depth is within the tolerance;
-//    the state is then checked once more with every candidate pair evaluated afresh.
+//    the state is then checked once more with every candidate pair evaluated afresh, as precisely
+//    as pair_contact() does.
 // A packing that stops growing (2000 sweeps without 0.1 % growth) or, at full size, stops
 // relaxing (3000 sweeps without a 1 % smaller worst overlap) is jammed: DataError.
+//
+// Cost: a pair in contact is re-sampled every 8th sweep (or once its grains have moved 5 % of a
+// radius) and otherwise warm-started from its last contact points; a pair known to be apart is
+// skipped until the grains have travelled the gap.
 //
 // Determinism: the random start comes from a seeded mt19937_64 with our own conversion to doubles;
 // parallel loops write per-pair or per-grain slots and every sum runs in a fixed order, so the
@@ -30,8 +37,6 @@
 #include <numeric>
 #include <random>
 #include <string>
-#include <cstdlib>
-#include <cstdlib>
 
 #include "graintwin/core/error.hpp"
 #include "packing_geometry.hpp"
@@ -63,7 +68,7 @@ struct Tune {
   double fire_dt_max = 0.5;         // ... its cap (stable for ~12 contacts per grain) ...
   double fire_dt_min = 0.01;        // ... and floor
   double target_gap = 0.2;          // contacts push until this gap, in tolerances
-  double growth_overlap = 0.015;    // mean overlap while growing, of the mean equivalent radius
+  double growth_overlap = 0.01;     // mean overlap while growing, of the mean equivalent radius
   double growth_first = 0.02;       // first relative growth per sweep
   double growth_max = 0.05;
   double growth_min = 1e-6;
@@ -504,11 +509,7 @@ class Packer {
   // Evaluates every candidate pair (skipping, unless `all`, those whose last gap bound still
   // exceeds `gap` after the distance both grains have travelled since) and every grain's walls;
   // h_min: final angular step of the deepest-point search.
-  double t_pairs_ = 0, t_walls_ = 0;
- public: ~Packer() { if (std::getenv("GT_TIME")) std::fprintf(stderr, "pairs %.2f s walls %.2f s\n", t_pairs_, t_walls_); }
- private:
   void evaluate(double gap, bool all, double h_min) {
-    auto te0 = std::chrono::steady_clock::now();
 #pragma omp parallel for schedule(dynamic, 32) if (pairs_.size() > kParallelPairs)
     for (std::size_t k = 0; k < pairs_.size(); ++k) {
       PairSlot& pr = pairs_[k];
@@ -519,11 +520,9 @@ class Packer {
       // Warm start from the last result while both grains have moved little since, except on
       // every full_every-th sweep (staggered over the pairs) and in the final check.
       const double moved = (travel_[pr.a] - pr.travel_a) + (travel_[pr.b] - pr.travel_b);
-      static const int fe = std::getenv("GT_FE") ? std::atoi(std::getenv("GT_FE")) : kTune.full_every;
-      static const double wm = std::getenv("GT_WM") ? std::atof(std::getenv("GT_WM")) : kTune.warm_motion;
       const bool warm = !all && (pr.eval.ab.peaks > 0 || pr.eval.ba.peaks > 0) &&
-                        (k + sweep_) % fe != 0 &&
-                        moved < wm * s_ * std::min(rmax_[pr.a], rmax_[pr.b]);
+                        (k + sweep_) % kTune.full_every != 0 &&
+                        moved < kTune.warm_motion * s_ * std::min(rmax_[pr.a], rmax_[pr.b]);
       const PairEval last = pr.eval;
       pr.eval = detail::evaluate_pair(view(pr.a), frame(pr.a), view(pr.b), frame(pr.b), gap, h_min,
                                       warm ? &last : nullptr);
@@ -531,13 +530,11 @@ class Packer {
       pr.travel_a = travel_[pr.a];
       pr.travel_b = travel_[pr.b];
     }
-    auto tw0 = std::chrono::steady_clock::now();
-    t_pairs_ += std::chrono::duration<double>(tw0 - te0).count();
 #pragma omp parallel for schedule(dynamic, 64) if (n_ > kParallelGrains)
     for (std::size_t i = 0; i < n_; ++i) {
-      wall_count_[i] = detail::evaluate_walls(view(i), frame(i), c_, gap, h_min, &walls_[detail::kMaxWallHits * i]);
+      wall_count_[i] =
+          detail::evaluate_walls(view(i), frame(i), c_, gap, h_min, &walls_[detail::kMaxWallHits * i]);
     }
-    t_walls_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - tw0).count();
   }
 
   struct Stats {
@@ -685,7 +682,7 @@ class Packer {
     wall_count_.assign(n_, 0);
     fire_dt_ = kTune.fire_dt_start;
     build_pairs();
-    const double allow_growing = (std::getenv("GT_GO") ? std::atof(std::getenv("GT_GO")) : kTune.growth_overlap) * req_mean_;
+    const double allow_growing = kTune.growth_overlap * req_mean_;
     // Progress: growth (log of the scale) up to 0.9, then the fall of the worst overlap (log)
     // toward the tolerance; a pure relaxation spends the whole range on the latter.
     const bool grows = s0_ < 1.0;
@@ -738,20 +735,6 @@ class Packer {
         } else if (st.mean() < 0.5 * allow_growing) {
           g = std::min(g * 1.15, kTune.growth_max);
         }
-      }
-      if (std::getenv("GT_DBG") && sweep % std::atoi(std::getenv("GT_DBG")) == 0) std::fprintf(stderr, "sweep %d s %.4f g %.2e worst %.3g pair %.3g wall %.3g mean %.3g ov %zu dt %.3g a %.3g\n", sweep, s_, g, st.worst()*1e6, st.max_pair*1e6, st.max_wall*1e6, st.mean()*1e6, st.overlapping, fire_dt_, fire_alpha_);
-      if (std::getenv("GT_PDBG") && full && sweep > 5000 && sweep < 5016) {
-        std::size_t wk = 0; double wd = -1; for (std::size_t k = 0; k < pairs_.size(); ++k) if (pairs_[k].eval.found && pairs_[k].eval.side.depth > wd) { wd = pairs_[k].eval.side.depth; wk = k; }
-        const PairSlot& pr = pairs_[wk];
-        std::fprintf(stderr, "sweep %d pair %d-%d depth %.3f | ab:", sweep, pr.a, pr.b, wd*1e6);
-        for (int r = 0; r < pr.eval.ab.n; ++r) std::fprintf(stderr, " [%.3f n=(%.3f %.3f %.3f)]", pr.eval.ab.side[r].depth*1e6, pr.eval.ab.side[r].normal.x(), pr.eval.ab.side[r].normal.y(), pr.eval.ab.side[r].normal.z());
-        std::fprintf(stderr, " | ba:");
-        for (int r = 0; r < pr.eval.ba.n; ++r) std::fprintf(stderr, " [%.3f n=(%.3f %.3f %.3f)]", pr.eval.ba.side[r].depth*1e6, pr.eval.ba.side[r].normal.x(), pr.eval.ba.side[r].normal.y(), pr.eval.ba.side[r].normal.z());
-        std::fprintf(stderr, " | Fa=(%.3f %.3f %.3f) Fb=(%.3f %.3f %.3f) dt %.3g\n", force_[pr.a].x()*1e6, force_[pr.a].y()*1e6, force_[pr.a].z()*1e6, force_[pr.b].x()*1e6, force_[pr.b].y()*1e6, force_[pr.b].z()*1e6, fire_dt_);
-      }
-      if (std::getenv("GT_GDBG") && full && sweep > 2720 && sweep < 2745) { std::size_t i = std::atoi(std::getenv("GT_GDBG")); std::fprintf(stderr, "sweep %d grain %zu x=(%.9f %.9f %.9f) q=(%.9f %.9f %.9f %.9f) walls %d:", sweep, i, x_[i].x()*1e3, x_[i].y()*1e3, x_[i].z()*1e3, q_[i].w(), q_[i].x(), q_[i].y(), q_[i].z(), wall_count_[i]); for (int k = 0; k < wall_count_[i]; ++k) std::fprintf(stderr, " %.3f", walls_[detail::kMaxWallHits * i + k].depth*1e6); std::fprintf(stderr, "\n"); }
-      if (std::getenv("GT_WDBG") && full && st.max_wall > 2 * tol_) {
-        for (std::size_t i = 0; i < n_; ++i) for (int w = 0; w < wall_count_[i]; ++w) { const auto& h = walls_[detail::kMaxWallHits * i + w]; if (h.depth > 2 * tol_) { std::fprintf(stderr, "sweep %d grain %zu hits %d:", sweep, i, wall_count_[i]); for (int k = 0; k < wall_count_[i]; ++k) { const auto& hh = walls_[detail::kMaxWallHits * i + k]; std::fprintf(stderr, " [%.2f um n=(%.2f %.2f %.2f) p-x=(%.0f %.0f %.0f)um]", hh.depth*1e6, hh.normal.x(), hh.normal.y(), hh.normal.z(), (hh.point-x_[i]).x()*1e6, (hh.point-x_[i]).y()*1e6, (hh.point-x_[i]).z()*1e6); } std::fprintf(stderr, " F=(%.2f %.2f %.2f) um T=(%.2f %.2f %.2f)\n", force_[i].x()*1e6, force_[i].y()*1e6, force_[i].z()*1e6, torque_[i].x()*1e6, torque_[i].y()*1e6, torque_[i].z()*1e6); break; } }
       }
       fire_step();
       if (progress) {

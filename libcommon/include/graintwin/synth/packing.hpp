@@ -8,7 +8,7 @@
 //     a random position and orientation without bounding-sphere overlap (random sequential
 //     addition, largest grains first).
 //  2. Sweeps: the common scale s grows toward 1 at an adaptive rate that keeps the mean overlap
-//     near 1.5 % of the mean grain radius (quasi-static compression); each sweep finds the
+//     near 1 % of the mean grain radius (quasi-static compression); each sweep finds the
 //     overlapping pairs (Verlet list built on a cell grid, never all pairs) and the grains that
 //     cross a wall, and moves every grain by one FIRE step (a damped-dynamics energy minimiser)
 //     on the overlap energy: forces along the contact normals, and torques from off-centre
