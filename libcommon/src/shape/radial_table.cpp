@@ -120,31 +120,30 @@ RadialTable RadialTable::from_node_radii(int n, std::vector<double> radii) {
   return t;
 }
 
+RadialTable::Cell RadialTable::cell_of(const Eigen::Vector3d& d) const {
+  Cell c;
+  locate(d, c.face, c.u, c.v);
+  const double su = (c.u + 1.0) * inv_h_;
+  const double sv = (c.v + 1.0) * inv_h_;
+  c.i = std::min(static_cast<int>(su), n_ - 2);
+  c.j = std::min(static_cast<int>(sv), n_ - 2);
+  c.t = su - c.i;
+  c.w = sv - c.j;
+  return c;
+}
+
 double RadialTable::radius(const Eigen::Vector3d& unit_dir) const {
-  int face;
-  double u, v;
-  locate(unit_dir, face, u, v);
-  const double su = (u + 1.0) * inv_h_;
-  const double sv = (v + 1.0) * inv_h_;
-  const int i = std::min(static_cast<int>(su), n_ - 2);
-  const int j = std::min(static_cast<int>(sv), n_ - 2);
-  const double t = su - i;
-  const double w = sv - j;
-  const double* p = r_.data() + index(face, i + 1, j + 1);
+  const Cell c = cell_of(unit_dir);
+  const double t = c.t, w = c.w;
+  const double* p = r_.data() + index(c.face, c.i + 1, c.j + 1);
   const double* q = p + stride_;
   return (1.0 - w) * ((1.0 - t) * p[0] + t * p[1]) + w * ((1.0 - t) * q[0] + t * q[1]);
 }
 
 Eigen::Vector3d RadialTable::surface_normal(const Eigen::Vector3d& unit_dir) const {
-  int face;
-  double u, v;
-  locate(unit_dir, face, u, v);
-  const double su = (u + 1.0) * inv_h_;
-  const double sv = (v + 1.0) * inv_h_;
-  const int i = std::min(static_cast<int>(su), n_ - 2);
-  const int j = std::min(static_cast<int>(sv), n_ - 2);
-  const double t = su - i;
-  const double w = sv - j;
+  const Cell c = cell_of(unit_dir);
+  const int face = c.face, i = c.i, j = c.j;
+  const double u = c.u, v = c.v, t = c.t, w = c.w;
   // r and its face-coordinate derivatives at the four cell corners (padded indices i+1..i+2),
   // derivatives by central differences over neighbours that may lie in the ghost ring.
   double r[2][2], ru[2][2], rv[2][2];

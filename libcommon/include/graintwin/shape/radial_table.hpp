@@ -80,6 +80,13 @@ class RadialTable {
   }
   // Face, gnomonic coordinates (u, v) of a direction.
   void locate(const Eigen::Vector3d& d, int& face, double& u, double& v) const;
+  // The table cell holding a direction: face, gnomonic (u, v), lower corner (i, j) in face-node
+  // indices and the bilinear weights (t, w) within the cell.
+  struct Cell {
+    int face = 0, i = 0, j = 0;
+    double u = 0.0, v = 0.0, t = 0.0, w = 0.0;
+  };
+  Cell cell_of(const Eigen::Vector3d& d) const;
   // Integrates volume, centroid, area and inertia from the table (2 x 2 Gauss points per cell).
   void integrate();
 
