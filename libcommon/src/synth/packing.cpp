@@ -766,14 +766,14 @@ class Packer {
 
   [[noreturn]] void fail_jammed() const {
     if (s_ < 1.0) {
-      throw DataError("scene: the grains jam at solid fraction " + fmt_num(fill_ * s_ * s_ * s_) +
+      throw DataError("scene: the grains jam at solid fraction " + fmt_num(fill_ * s_ * s_ * s_, 3) +
                       " (" + fmt_num(100.0 * s_, 1) + " % of full size), below the requested " +
-                      fmt_num(fill_) + " in the " + kind_name(c_) +
+                      fmt_num(fill_, 3) + " in the " + kind_name(c_) +
                       "; enlarge the container or lower the grain count");
     }
     throw DataError("scene: the grains jam at full size: overlaps stop decreasing at " +
                     fmt_um(last_worst_) + " (tolerance " + fmt_um(tol_) +
-                    ") at solid fraction " + fmt_num(fill_) + " in the " + kind_name(c_) +
+                    ") at solid fraction " + fmt_num(fill_, 3) + " in the " + kind_name(c_) +
                     "; enlarge the container, lower the grain count or raise contact_tolerance");
   }
 
@@ -781,12 +781,12 @@ class Packer {
     if (s_ < 1.0) {
       throw DataError("scene: after " + std::to_string(sweeps) + " sweeps the grains are at " +
                       fmt_num(100.0 * s_, 1) + " % of full size (solid fraction " +
-                      fmt_num(fill_ * s_ * s_ * s_) + " of the requested " + fmt_num(fill_) +
+                      fmt_num(fill_ * s_ * s_ * s_, 3) + " of the requested " + fmt_num(fill_, 3) +
                       "); enlarge the container, lower the grain count or raise max_sweeps");
     }
     throw DataError("scene: overlaps still reach " + fmt_um(last_worst_) + " (tolerance " +
                     fmt_um(tol_) + ") after " + std::to_string(sweeps) +
-                    " sweeps at solid fraction " + fmt_num(fill_) +
+                    " sweeps at solid fraction " + fmt_num(fill_, 3) +
                     "; raise max_sweeps or contact_tolerance, or enlarge the container");
   }
 

@@ -16,14 +16,15 @@
 //  3. At full size the steps go on until every pair and wall overlap is within the tolerance.
 // Contacts are evaluated in parallel into per-pair slots and summed per grain in a fixed order,
 // so the result depends only on the inputs and the seed (bit-identical for any thread count).
-// Cost: 2000 grains in 5-10 s on one core; 15 961 ellipsoids (the reference sample) in ~50 s on
-// two cores.
+// Cost: 2000 spheres or ellipsoids in 7-10 s on one core; 15 961 ellipsoids at 0.628 (the
+// reference sample) in 31 s on two cores. Rough SH sand grains are much slower near jamming
+// (the final relaxation creeps): 452 grains at 0.56 in ~30 s, 878 at 0.58 in ~200 s (2 cores).
 //
 // Walls and density: a hard wall leaves a looser layer about half a grain thick beside it, so
 // the solid fraction over the whole container is lower than in the bulk of the packing, the more
 // so the fewer grains fit across it. Measured with the Ottawa-sand size spread (d50 0.551 mm) in
-// a cylinder with height = diameter: spheres jam at about 0.57 over the container with 300 grains
-// (0.63-0.64 in the core) and reach 0.60 with 2000; 1.3:1 ellipsoids reach 0.63 with 300.
+// a cylinder with height = diameter: spheres jam at about 0.58 over the container with 300 grains
+// (0.63 in the core) and reach 0.60 with 2000; 1.3:1 ellipsoids reach 0.63 with 300.
 // PackingReport::core_solid_fraction gives the bulk value, away from the walls.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -125,12 +126,13 @@ struct PairContact {
 };
 
 /// Pair geometry of grains a and b at their poses; nullopt when they are separated by more than
-/// `search_gap` (m). Method: surface points of each grain at Fibonacci directions facing the other
-/// grain are tested against the other's radius function (radial depth), the deepest is refined by a
-/// local search on the unit sphere (to ~0.03 degree), and the depth is measured along the other
-/// grain's surface normal there; both ways, the deeper wins. Accurate for |overlap| much smaller
-/// than the grain radii (the use case: touching grains); deep overlaps are detected but their depth
-/// is only approximate. Thread-safe.
+/// `search_gap` (m). Method: surface points of each grain at Fibonacci-lattice directions facing
+/// the other grain (400, or 1600 for rough shapes) are tested against the other's radius function
+/// (radial depth); every local maximum within reach seeds a local search on the unit sphere
+/// (to ~0.03 degree), and depths are measured along the other grain's surface normal there; both
+/// ways, the deepest point of all wins. Accurate for |overlap| much smaller than the grain radii
+/// (the use case: touching grains); deep overlaps are detected but their depth is approximate.
+/// Thread-safe. Each call samples both shapes afresh: for many pairs use find_contacts().
 std::optional<PairContact> pair_contact(const shape::RadialTable& a, const PackedGrain& ga,
                                         const shape::RadialTable& b, const PackedGrain& gb,
                                         double search_gap);
