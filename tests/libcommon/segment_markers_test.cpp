@@ -12,6 +12,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/segment/edt.hpp"
 #include "graintwin/segment/markers.hpp"
+#include "support/phantoms.hpp"
 #include "graintwin/segment/watershed.hpp"
 
 using namespace graintwin;
@@ -105,33 +106,12 @@ std::vector<double> brute_dynamics(const Volume<float>& f, const Volume<std::uin
   return dyn;
 }
 
-Volume<std::uint8_t> spheres(Shape3 shape, const std::vector<std::array<double, 4>>& balls, Vec3 voxel = {1e-5, 1e-5, 1e-5}) {
-  Volume<std::uint8_t> m(shape, voxel);
-  for (std::size_t z = 0; z < shape[0]; ++z)
-    for (std::size_t y = 0; y < shape[1]; ++y)
-      for (std::size_t x = 0; x < shape[2]; ++x)
-        for (const auto& b : balls)
-          if (std::hypot(z - b[0], y - b[1], x - b[2]) <= b[3]) m(z, y, x) = 1;
-  return m;
-}
+using test::Ball;
+using test::count_labels;
 
 /// A simple-cubic lattice of n^3 touching spheres (radius r, spacing 2r - overlap), jittered.
-std::vector<std::array<double, 4>> lattice(int n, double r, double overlap, double jitter, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  const auto u = [&] { return (rng() % 20001) / 10000.0 - 1.0; };
-  std::vector<std::array<double, 4>> b;
-  const double step = 2 * r - overlap;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k)
-        b.push_back({r + 1 + i * step + jitter * u(), r + 1 + j * step + jitter * u(), r + 1 + k * step + jitter * u(), r});
-  return b;
-}
-
-std::size_t count_labels(const Volume<std::uint32_t>& l) {
-  std::set<std::uint32_t> s(l.values().begin(), l.values().end());
-  s.erase(0);
-  return s.size();
+std::vector<Ball> lattice(int n, double r, double overlap, double jitter, std::uint32_t seed) {
+  return test::jittered_lattice(n, r, 2 * r - overlap, r + 1, jitter, 0.0, seed);
 }
 
 }  // namespace
@@ -153,9 +133,9 @@ TEST(HMaxima, MatchesBruteForceReconstructionOnRandomReliefs) {
 
 TEST(HMaxima, MatchesBruteForceOnAnisotropicBlobEdt) {
   std::mt19937 rng(4);
-  std::vector<std::array<double, 4>> blobs;
+  std::vector<Ball> blobs;
   for (int i = 0; i < 7; ++i) blobs.push_back({double(rng() % 14), double(rng() % 16), double(rng() % 18), 2.0 + rng() % 4});
-  const auto m = spheres({14, 16, 18}, blobs, {2e-5, 1.5e-5, 1e-5});
+  const auto m = test::paint_balls({14, 16, 18}, blobs, {2e-5, 1.5e-5, 1e-5});
   const auto edt = distance_transform(m);
   for (double h : {0.0, 0.7, 2.0}) {
     const auto got = h_maxima_markers(edt, h);
@@ -186,7 +166,7 @@ TEST(HMaxima, APieceLowerThanHIsOneMarker) {
 
 TEST(PeakMarkers, KeepsPeaksAtLeastTheMinimumDistanceApart) {
   // Two overlapping spheres: centres 14 voxels apart.
-  const auto m = spheres({24, 24, 40}, {{11.5, 11.5, 12, 9}, {11.5, 11.5, 26, 9}});
+  const auto m = test::paint_balls({24, 24, 40}, {{11.5, 11.5, 12, 9}, {11.5, 11.5, 26, 9}});
   const auto edt = distance_transform(m);
   const auto two = peak_markers(edt, 10.0);
   ASSERT_EQ(count_labels(two), 2u);
@@ -216,16 +196,16 @@ TEST(ProposeH, FindsTheMarkerPlateauOfATouchingSpherePacking) {
   // have dynamics of about 4 voxels), each with three warts of radius 2.5 on its surface that make
   // spurious shallow maxima.
   const auto balls = lattice(4, 7.0, 1.5, 0.6, 2024);
-  std::vector<std::array<double, 4>> all = balls;
+  std::vector<Ball> all = balls;
   std::mt19937 rng(8);
   std::normal_distribution<double> g;
   for (const auto& b : balls)
     for (int w = 0; w < 3; ++w) {
       double d[3] = {g(rng), g(rng), g(rng)};
       const double n = std::hypot(d[0], d[1], d[2]);
-      all.push_back({b[0] + 7.5 * d[0] / n, b[1] + 7.5 * d[1] / n, b[2] + 7.5 * d[2] / n, 2.5});
+      all.push_back({b.z + 7.5 * d[0] / n, b.y + 7.5 * d[1] / n, b.x + 7.5 * d[2] / n, 2.5});
     }
-  const auto m = spheres({55, 55, 55}, all);
+  const auto m = test::paint_balls({55, 55, 55}, all);
   const auto edt = distance_transform(m);
   const HProposal p = propose_h(edt);
   EXPECT_GT(p.regional_maxima, balls.size());  // the plain regional maxima over-segment

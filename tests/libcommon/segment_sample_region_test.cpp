@@ -6,6 +6,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/segment/sample_region.hpp"
+#include "support/phantoms.hpp"
 
 using namespace graintwin;
 using namespace graintwin::segment;
@@ -16,9 +17,7 @@ constexpr double kVoxel = 2e-5;
 constexpr double kCx = 35.3, kCy = 34.6, kRadius = 28.0;  // voxels
 const Vec3 kOrigin{1e-3, -2e-3, 5e-4};                      // z, y, x (m)
 
-struct Ball {
-  double z, y, x, r;
-};
+using test::Ball;
 
 /// Random sequential addition of non-overlapping balls of radius r inside the cylinder (in voxels).
 std::vector<Ball> fill_cylinder(Shape3 shape, double r, int attempts, std::uint32_t seed) {
@@ -36,13 +35,7 @@ std::vector<Ball> fill_cylinder(Shape3 shape, double r, int attempts, std::uint3
 }
 
 Volume<std::uint8_t> paint(Shape3 shape, const std::vector<Ball>& balls) {
-  Volume<std::uint8_t> m(shape, {kVoxel, kVoxel, kVoxel}, kOrigin);
-  for (std::size_t z = 0; z < shape[0]; ++z)
-    for (std::size_t y = 0; y < shape[1]; ++y)
-      for (std::size_t x = 0; x < shape[2]; ++x)
-        for (const Ball& b : balls)
-          if (std::hypot(z - b.z, y - b.y, x - b.x) <= b.r) m(z, y, x) = 1;
-  return m;
+  return test::paint_balls(shape, balls, {kVoxel, kVoxel, kVoxel}, kOrigin);
 }
 
 Cylinder true_cylinder(const Volume<std::uint8_t>& m) {

@@ -126,7 +126,8 @@ AnyVolume read_png(const fs::path& path) {
 }
 
 namespace {
-bool png_write_raw(const char* path, std::uint32_t w, std::uint32_t h, int depth, const unsigned char* data) {
+/// channels: 1 (grey) or 3 (RGB), 8 or 16 bits each.
+bool png_write_raw(const char* path, std::uint32_t w, std::uint32_t h, int depth, int channels, const unsigned char* data) {
   FILE* fp = std::fopen(path, "wb");
   if (!fp) return false;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
@@ -137,11 +138,11 @@ bool png_write_raw(const char* path, std::uint32_t w, std::uint32_t h, int depth
     return false;
   }
   png_init_io(png, fp);
-  png_set_IHDR(png, info, w, h, depth, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+  png_set_IHDR(png, info, w, h, depth, channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   if (depth == 16) png_set_swap(png);
-  const std::size_t row = static_cast<std::size_t>(w) * (depth / 8);
+  const std::size_t row = static_cast<std::size_t>(w) * static_cast<std::size_t>(channels * depth / 8);
   for (std::uint32_t y = 0; y < h; ++y) png_write_row(png, data + y * row);
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
@@ -154,12 +155,20 @@ void write_png(const fs::path& path, const AnyVolume& slice) {
   if (s[0] != 1) throw DataError("write_png: expected one slice, got " + std::to_string(s[0]));
   bool ok = false;
   if (const auto* v8 = std::get_if<Volume<std::uint8_t>>(&slice))
-    ok = png_write_raw(path.c_str(), s[2], s[1], 8, v8->data());
+    ok = png_write_raw(path.c_str(), s[2], s[1], 8, 1, v8->data());
   else if (const auto* v16 = std::get_if<Volume<std::uint16_t>>(&slice))
-    ok = png_write_raw(path.c_str(), s[2], s[1], 16, reinterpret_cast<const unsigned char*>(v16->data()));
+    ok = png_write_raw(path.c_str(), s[2], s[1], 16, 1, reinterpret_cast<const unsigned char*>(v16->data()));
   else
     throw DataError(path.string() + ": PNG slices must be uint8 or uint16; cast the volume first");
   if (!ok) throw DataError(path.string() + ": cannot write PNG; check that the folder is writable");
+}
+
+void write_png_rgb(const fs::path& path, std::size_t width, std::size_t height, const std::vector<std::uint8_t>& rgb) {
+  if (rgb.size() != 3 * width * height)
+    throw DataError("write_png_rgb: " + std::to_string(rgb.size()) + " bytes do not make a " + std::to_string(width) +
+                    " x " + std::to_string(height) + " RGB image");
+  if (!png_write_raw(path.c_str(), static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height), 8, 3, rgb.data()))
+    throw DataError(path.string() + ": cannot write PNG; check that the folder is writable");
 }
 
 namespace {

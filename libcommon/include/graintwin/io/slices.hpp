@@ -17,5 +17,8 @@ AnyVolume read_slices(const std::vector<std::filesystem::path>& files);
 AnyVolume read_png(const std::filesystem::path& path);
 /// Writes a 2-D uint8 or uint16 grey image (a 1 x ny x nx volume) as PNG.
 void write_png(const std::filesystem::path& path, const AnyVolume& slice);
+/// Writes an 8-bit RGB image, rows top to bottom, pixels (r, g, b) interleaved (3 * width * height bytes).
+void write_png_rgb(const std::filesystem::path& path, std::size_t width, std::size_t height,
+                   const std::vector<std::uint8_t>& rgb);
 
 }  // namespace graintwin::io

@@ -1,0 +1,36 @@
+#pragma once
+// `kind=labels` files (docs/formats.md): the label image, the grain table, the sample region and
+// void ratio, and the segmentation parameters. Written by ct2labels, read by every stage after it.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "graintwin/core/volume.hpp"
+#include "graintwin/segment/labels.hpp"
+#include "graintwin/segment/sample_region.hpp"
+
+namespace graintwin::segment {
+
+/// The sample region of a labels file and what was measured in it.
+struct SampleRecord {
+  Cylinder region;        ///< unbounded radius when the whole volume was the region
+  VoidRatio void_ratio;
+};
+
+struct LabelsFile {
+  Volume<std::uint32_t> labels;
+  std::vector<GrainRecord> grains;  ///< in label order
+  SampleRecord sample;
+  std::string parameters_json;      ///< what the segmentation used and chose (free-form JSON object)
+};
+
+/// Writes a complete labels file (root attributes, /labels, /grains/*, /sample/*,
+/// /segmentation/parameters, /provenance/history). `grains` must be grain_table(labels).
+void write_labels_file(const std::filesystem::path& path, const LabelsFile& content,
+                       const std::vector<std::string>& history);
+
+/// Reads a labels file; UsageError naming the file if it is not one. The grain table is read from
+/// the file (not recomputed); its length must match the largest label.
+LabelsFile read_labels_file(const std::filesystem::path& path);
+
+}  // namespace graintwin::segment

@@ -1,0 +1,104 @@
+#include "graintwin/segment/labels_file.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+
+namespace graintwin::segment {
+namespace {
+
+io::DatasetOptions units(const char* u) {
+  io::DatasetOptions o;
+  o.units = u;
+  return o;
+}
+
+}  // namespace
+
+void write_labels_file(const std::filesystem::path& path, const LabelsFile& c, const std::vector<std::string>& history) {
+  io::H5File f = io::H5File::create(path);
+  io::write_root_attrs(f, schema::kind::labels);
+  io::write_image(f, schema::path::labels, c.labels, "1");
+
+  const std::size_t n = c.grains.size();
+  std::vector<std::uint32_t> label(n);
+  std::vector<std::uint64_t> voxels(n);
+  std::vector<double> volume(n), centroid(3 * n);
+  std::vector<std::uint64_t> bbox(6 * n);
+  std::vector<std::uint8_t> edge(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const GrainRecord& g = c.grains[i];
+    label[i] = g.label;
+    voxels[i] = g.voxels;
+    volume[i] = g.volume_m3;
+    for (int k = 0; k < 3; ++k) centroid[3 * i + k] = g.centroid_xyz[k];
+    for (int k = 0; k < 6; ++k) bbox[6 * i + k] = g.bbox[k];
+    edge[i] = g.touches_edge ? 1 : 0;
+  }
+  const hsize_t rows = n;
+  f.write("/grains/label", label);
+  f.write("/grains/voxels", voxels);
+  f.write("/grains/volume", volume, units("m^3"));
+  f.write("/grains/centroid", centroid.data(), {rows, 3}, units("m"));
+  f.write("/grains/bbox", bbox.data(), {rows, 6}, units("voxel"));
+  f.write("/grains/touches_edge", edge);
+
+  const Cylinder& r = c.sample.region;
+  // HDF5 attributes hold infinities, but pandas/JSON readers choke on them: an unbounded extent is NaN.
+  const auto finite_or_nan = [](double v) { return std::isfinite(v) ? v : std::numeric_limits<double>::quiet_NaN(); };
+  f.ensure_group("/sample");
+  f.set_attr("/sample", "cylinder_centre_xy", std::vector<double>{r.centre_x, r.centre_y});
+  f.set_attr("/sample", "cylinder_radius", finite_or_nan(r.radius));
+  f.set_attr("/sample", "cylinder_z_range", std::vector<double>{finite_or_nan(r.z_min), finite_or_nan(r.z_max)});
+  f.write("/sample/void_ratio", std::vector<double>{c.sample.void_ratio.e}, units("1"));
+  f.write("/sample/solid_volume", std::vector<double>{c.sample.void_ratio.solid_m3}, units("m^3"));
+  f.write("/sample/void_volume", std::vector<double>{c.sample.void_ratio.void_m3}, units("m^3"));
+  f.write_strings("/segmentation/parameters", {c.parameters_json});
+  io::write_history(f, history);
+}
+
+LabelsFile read_labels_file(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::labels, "pass the output of ct2labels");
+  LabelsFile c;
+  c.labels = io::read_image_as<std::uint32_t>(f, schema::path::labels);
+  const auto label = f.read<std::uint32_t>("/grains/label");
+  const auto voxels = f.read<std::uint64_t>("/grains/voxels");
+  const auto volume = f.read<double>("/grains/volume");
+  const auto centroid = f.read<double>("/grains/centroid");
+  const auto bbox = f.read<std::uint64_t>("/grains/bbox");
+  const auto edge = f.read<std::uint8_t>("/grains/touches_edge");
+  const std::size_t n = label.size();
+  if (voxels.size() != n || volume.size() != n || centroid.size() != 3 * n || bbox.size() != 6 * n || edge.size() != n)
+    throw DataError(path.string() + " has grain table columns of different lengths; rewrite it with ct2labels");
+  c.grains.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    GrainRecord& g = c.grains[i];
+    g.label = label[i];
+    g.voxels = voxels[i];
+    g.volume_m3 = volume[i];
+    for (int k = 0; k < 3; ++k) g.centroid_xyz[k] = centroid[3 * i + k];
+    for (int k = 0; k < 6; ++k) g.bbox[k] = bbox[6 * i + k];
+    g.touches_edge = edge[i] != 0;
+  }
+  Cylinder& r = c.sample.region;
+  const auto centre = f.attr_doubles("/sample", "cylinder_centre_xy");
+  const auto radius = f.attr_doubles("/sample", "cylinder_radius");
+  const auto zr = f.attr_doubles("/sample", "cylinder_z_range");
+  const auto nan_to = [](double v, double inf) { return std::isnan(v) ? inf : v; };
+  const double inf = std::numeric_limits<double>::infinity();
+  if (centre.size() == 2) r.centre_x = centre[0], r.centre_y = centre[1];
+  if (radius.size() == 1) r.radius = nan_to(radius[0], inf);
+  if (zr.size() == 2) r.z_min = nan_to(zr[0], -inf), r.z_max = nan_to(zr[1], inf);
+  c.sample.void_ratio.e = f.read<double>("/sample/void_ratio").at(0);
+  c.sample.void_ratio.solid_m3 = f.read<double>("/sample/solid_volume").at(0);
+  c.sample.void_ratio.void_m3 = f.read<double>("/sample/void_volume").at(0);
+  c.parameters_json = f.read_strings("/segmentation/parameters").at(0);
+  return c;
+}
+
+}  // namespace graintwin::segment

@@ -1,0 +1,157 @@
+// ct2labels: CLI contract, the labels file it writes, the preview picture, and every bad input the
+// issue lists (empty, all-solid, constant, NaN, one-voxel grains, wrong kind) failing cleanly.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "support/cli_contract.hpp"
+#include "support/phantoms.hpp"
+
+using namespace graintwin;
+using test::run_tool;
+
+namespace {
+
+const std::vector<test::Ball> kBalls = test::jittered_lattice(3, 7.0, 13.0, 9.0, 0.8, 0.05, 21);
+
+/// A uint16 scan of 27 touching spheres, 44^3 voxels of 20 um.
+std::filesystem::path write_phantom(const test::TempDir& dir) {
+  const Volume<float> f = test::scan_balls({44, 44, 44}, kBalls, 4, 0.03, {2e-5, 2e-5, 2e-5});
+  Volume<std::uint16_t> v(f.shape(), f.voxel_size());
+  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  io::write_volume_file(dir / "scan.h5", v, {"phantom"});
+  return dir / "scan.h5";
+}
+
+template <class T>
+std::filesystem::path write_constant(const test::TempDir& dir, const std::string& name, T value, Shape3 shape = {8, 8, 8}) {
+  Volume<T> v(shape, {1e-5, 1e-5, 1e-5});
+  for (auto& x : v.values()) x = value;
+  io::write_volume_file(dir / name, v, {"constant"});
+  return dir / name;
+}
+
+/// Width and height from a PNG's IHDR chunk.
+std::pair<std::uint32_t, std::uint32_t> png_size(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  unsigned char h[24] = {};
+  in.read(reinterpret_cast<char*>(h), 24);
+  const auto be = [&](int o) { return std::uint32_t(h[o]) << 24 | std::uint32_t(h[o + 1]) << 16 | std::uint32_t(h[o + 2]) << 8 | h[o + 3]; };
+  return {be(16), be(20)};
+}
+
+/// Runs ct2labels expecting failure; checks the exit code, that the message names `input` and holds
+/// `words`, and that nothing new was left in the folder.
+void expect_clean_failure(const test::TempDir& dir, const std::vector<std::string>& args, int code,
+                          const std::string& words) {
+  const auto before = test::list_dir(dir.path());
+  const auto r = run_tool("ct2labels", args);
+  EXPECT_EQ(r.exit_code, code) << r.err;
+  EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+  EXPECT_EQ(test::list_dir(dir.path()), before) << "a failing run left files behind";
+}
+
+}  // namespace
+
+TEST(Ct2labels, StandardCli) { test::expect_standard_cli("ct2labels"); }
+
+TEST(Ct2labels, SegmentsAPhantomAndWritesTheLabelsFile) {
+  test::TempDir dir;
+  const auto scan = write_phantom(dir);
+  const auto r = run_tool("ct2labels", {scan.string(), (dir / "labels.h5").string(), "--preview",
+                                        (dir / "preview.png").string(), "--region", "volume"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("chosen from the image"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("27 grains"), std::string::npos) << r.err;
+
+  const segment::LabelsFile l = segment::read_labels_file(dir / "labels.h5");
+  EXPECT_EQ(l.grains.size(), kBalls.size());
+  EXPECT_EQ(l.labels.shape(), (Shape3{44, 44, 44}));
+  EXPECT_EQ(l.labels.voxel_size(), (Vec3{2e-5, 2e-5, 2e-5}));
+  // Grain volumes: the spheres' (4/3 pi r^3), within the partial-volume error of a 7-voxel radius.
+  for (const auto& g : l.grains) EXPECT_NEAR(g.volume_m3 / (4.0 / 3.0 * M_PI * std::pow(7 * 2e-5, 3)), 1.0, 0.2);
+  const auto p = nlohmann::json::parse(l.parameters_json);
+  EXPECT_EQ(p["threshold_method"], "otsu");
+  EXPECT_EQ(p["marker_parameter_automatic"], true);
+  EXPECT_GT(p["h_vox"].get<double>(), 0.0);
+  EXPECT_EQ(p["grains"], 27);
+  const io::H5File f = io::H5File::open(dir / "labels.h5");
+  const auto history = io::read_history(f);
+  ASSERT_EQ(history.size(), 2u);
+  EXPECT_EQ(history[0], "phantom");
+  EXPECT_NE(history[1].find("ct2labels"), std::string::npos);
+  EXPECT_EQ(f.attr_string("/grains/volume", "units"), "m^3");
+  // Preview: the axial slice (44 x 44) and the vertical section (44 x 44) side by side, 8 apart.
+  EXPECT_EQ(png_size(dir / "preview.png"), (std::pair<std::uint32_t, std::uint32_t>{96, 44}));
+}
+
+TEST(Ct2labels, OptionsReachTheSegmentation) {
+  test::TempDir dir;
+  const auto scan = write_phantom(dir);
+  const auto r = run_tool("ct2labels", {scan.string(), (dir / "l.h5").string(), "--markers", "peaks", "--d50", "0.28mm",
+                                        "--threshold", "2000", "--denoise", "gaussian", "--connectivity", "18", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << "-q must silence the log: " << r.err;
+  const auto p = nlohmann::json::parse(segment::read_labels_file(dir / "l.h5").parameters_json);
+  EXPECT_EQ(p["markers"], "peaks");
+  EXPECT_DOUBLE_EQ(p["min_distance_vox"].get<double>(), 7.0);  // d50 / 2 in voxels
+  EXPECT_EQ(p["threshold"], 2000.0);
+  EXPECT_EQ(p["connectivity"], 18);
+  EXPECT_EQ(p["denoise"], "gaussian");
+  EXPECT_EQ(p["grains"], 27);
+}
+
+TEST(Ct2labels, BadVolumesFailWithOneSentenceAndNoOutput) {
+  test::TempDir dir;
+  const std::string out = (dir / "labels.h5").string();
+  // Constant: Otsu is undefined.
+  const auto flat = write_constant<std::uint16_t>(dir, "flat.h5", 1000);
+  expect_clean_failure(dir, {flat.string(), out}, 1, "constant");
+  expect_clean_failure(dir, {flat.string(), out, "--preview", (dir / "p.png").string()}, 1, flat.string());
+  // All solid and no solid under a given threshold.
+  expect_clean_failure(dir, {flat.string(), out, "--threshold", "10"}, 1, "every voxel is solid");
+  expect_clean_failure(dir, {flat.string(), out, "--threshold", "5000"}, 1, "no solid");
+  // NaN in a float scan.
+  Volume<float> nan({8, 8, 8}, {1e-5, 1e-5, 1e-5});
+  nan(1, 2, 3) = std::numeric_limits<float>::quiet_NaN();
+  io::write_volume_file(dir / "nan.h5", nan, {"nan"});
+  expect_clean_failure(dir, {(dir / "nan.h5").string(), out}, 1, "NaN");
+  // Grains of one voxel: specks on a void background.
+  Volume<std::uint16_t> specks({12, 12, 12}, {1e-5, 1e-5, 1e-5});
+  for (std::size_t z = 2; z < 12; z += 4)
+    for (std::size_t y = 2; y < 12; y += 4)
+      for (std::size_t x = 2; x < 12; x += 4) specks(z, y, x) = 3000;
+  io::write_volume_file(dir / "specks.h5", specks, {"specks"});
+  expect_clean_failure(dir, {(dir / "specks.h5").string(), out, "--denoise", "none", "--region", "volume"}, 1,
+                       "no grain is left");
+  // Empty volume.
+  io::write_volume_file(dir / "empty.h5", Volume<std::uint16_t>({0, 8, 8}, {1e-5, 1e-5, 1e-5}), {"empty"});
+  expect_clean_failure(dir, {(dir / "empty.h5").string(), out}, 1, "empty");
+}
+
+TEST(Ct2labels, WrongInputsAndOptionsAreUsageErrors) {
+  test::TempDir dir;
+  const auto scan = write_phantom(dir);
+  const std::string out = (dir / "labels.h5").string();
+  // A labels file is not a scan.
+  ASSERT_EQ(run_tool("ct2labels", {scan.string(), out, "-q"}).exit_code, 0);
+  expect_clean_failure(dir, {out, (dir / "again.h5").string()}, 2, "pass a scan");
+  // Existing output without --force, and with it.
+  expect_clean_failure(dir, {scan.string(), out}, 2, "--force");
+  EXPECT_EQ(run_tool("ct2labels", {scan.string(), out, "-q", "--force"}).exit_code, 0);
+  // uint32 scans, bad option values, a preview that is not PNG.
+  const auto u32 = write_constant<std::uint32_t>(dir, "u32.h5", 7);
+  expect_clean_failure(dir, {u32.string(), (dir / "x.h5").string()}, 2, "uint32");
+  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--markers", "blobs"}, 2, "--markers");
+  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--h", "-1"}, 2, "--h");
+  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--connectivity", "8"}, 2, "connectivity");
+  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--region", "cylinder"}, 2, "--cylinder");
+  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--preview", (dir / "p.jpg").string()}, 2, ".png");
+}

@@ -1,0 +1,36 @@
+#pragma once
+// Sphere phantoms with exact answers, shared by the segmentation tests: painted masks, jittered
+// lattices and noisy synthetic scans (the spam / kalisphera protocol).
+#include <cstdint>
+#include <vector>
+
+#include "graintwin/core/volume.hpp"
+
+namespace graintwin::test {
+
+/// A sphere in voxel coordinates (centre z, y, x and radius, all in voxels).
+struct Ball {
+  double z, y, x, r;
+};
+
+/// Mask of the union of the balls: 1 where the voxel centre lies inside one.
+Volume<std::uint8_t> paint_balls(Shape3 shape, const std::vector<Ball>& balls, Vec3 voxel = {1e-5, 1e-5, 1e-5},
+                                 Vec3 origin = {0.0, 0.0, 0.0});
+
+/// Labels of the balls: voxel centre inside ball i gets i + 1 (the later ball wins an overlap).
+Volume<std::uint32_t> label_balls(Shape3 shape, const std::vector<Ball>& balls, Vec3 voxel = {1e-5, 1e-5, 1e-5});
+
+/// Simple-cubic lattice of n^3 balls of radius r (+- radius_jitter * r), spacing `step`, the first
+/// centre at `first`, each centre moved by up to +- jitter voxels along each axis.
+std::vector<Ball> jittered_lattice(int n, double r, double step, double first, double jitter, double radius_jitter,
+                                   std::uint32_t seed);
+
+/// A synthetic scan of the balls: 2x2x2 supersampled occupancy, grey 0.25 + 0.5 occupancy,
+/// Gaussian blur 0.8 voxel, Gaussian noise of the given standard deviation.
+Volume<float> scan_balls(Shape3 shape, const std::vector<Ball>& balls, std::uint32_t seed, double noise = 0.03,
+                         Vec3 voxel = {1e-5, 1e-5, 1e-5});
+
+/// Number of distinct non-zero labels.
+std::size_t count_labels(const Volume<std::uint32_t>& labels);
+
+}  // namespace graintwin::test
