@@ -66,9 +66,18 @@ CLI::Option* Tool::add_input(const std::string& name, fs::path& target, const st
   return app_.add_option(name, target, description)->required();
 }
 
+CLI::Option* Tool::add_optional_input(const std::string& name, fs::path& target, const std::string& description) {
+  optional_input_ = &target;
+  return app_.add_option(name, target, description + " (optional)");
+}
+
 CLI::Option* Tool::add_output(const std::string& name, fs::path& target, const std::string& description) {
   outputs_.push_back(&target);
-  return app_.add_option(name, target, description)->required();
+  output_names_.push_back(name);
+  CLI::Option* o = app_.add_option(name, target, description);
+  // CLI11 fills positionals greedily from the left, so after an optional input the outputs are
+  // checked in run(), once the arguments have been shifted.
+  return optional_input_ ? o : o->required();
 }
 
 void Tool::use_positional_config(const std::string& name, fs::path& target, const std::string& description) {
@@ -105,6 +114,20 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
     return rc == 0 ? 0 : static_cast<int>(ExitCode::usage_error);
   }
   if (config_positional_) *config_target_ = config_positional_->as<std::string>();
+  if (optional_input_) {
+    // One argument short: the optional input took what belongs to the outputs.
+    for (std::size_t i = outputs_.size(); i-- > 0;) {
+      if (!outputs_[i]->empty()) break;
+      *outputs_[i] = i > 0 ? *outputs_[i - 1] : *optional_input_;
+      (i > 0 ? *outputs_[i - 1] : *optional_input_).clear();
+    }
+    for (std::size_t i = 0; i < outputs_.size(); ++i)
+      if (outputs_[i]->empty()) {
+        std::cerr << name_ << ": " << output_names_[i] << " is required\nRun with --help for more information.\n";
+        return static_cast<int>(ExitCode::usage_error);
+      }
+    if (!optional_input_->empty()) inputs_.push_back(optional_input_);
+  }
   log->set_level(quiet_ ? spdlog::level::err
                         : verbosity_ >= 2 ? spdlog::level::trace
                         : verbosity_ == 1 ? spdlog::level::debug

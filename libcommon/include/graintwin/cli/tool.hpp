@@ -56,6 +56,11 @@ class Tool {
   /// `must_exist` false the tool checks it itself (globs, optional inputs).
   CLI::Option* add_input(const std::string& name, std::filesystem::path& target,
                          const std::string& description, bool must_exist = true);
+  /// An optional positional input between the required inputs and the outputs, as in
+  /// `labels2contacts LABELS [VOLUME] CONTACTS`: with one argument fewer it stays empty and the
+  /// arguments move on to the outputs. At most one per tool, declared before the outputs.
+  CLI::Option* add_optional_input(const std::string& name, std::filesystem::path& target,
+                                  const std::string& description);
   /// A positional output; an existing one is refused unless --force, before the body runs.
   CLI::Option* add_output(const std::string& name, std::filesystem::path& target,
                           const std::string& description);
@@ -79,6 +84,8 @@ class Tool {
   int threads_ = 0;
   std::vector<std::filesystem::path*> inputs_;
   std::vector<std::filesystem::path*> outputs_;
+  std::vector<std::string> output_names_;
+  std::filesystem::path* optional_input_ = nullptr;
   CLI::Option* config_positional_ = nullptr;
   std::filesystem::path* config_target_ = nullptr;
 };
