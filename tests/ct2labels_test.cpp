@@ -47,15 +47,8 @@ std::pair<std::uint32_t, std::uint32_t> png_size(const std::filesystem::path& p)
   return {be(16), be(20)};
 }
 
-/// Runs ct2labels expecting failure; checks the exit code, that the message names `input` and holds
-/// `words`, and that nothing new was left in the folder.
-void expect_clean_failure(const test::TempDir& dir, const std::vector<std::string>& args, int code,
-                          const std::string& words) {
-  const auto before = test::list_dir(dir.path());
-  const auto r = run_tool("ct2labels", args);
-  EXPECT_EQ(r.exit_code, code) << r.err;
-  EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
-  EXPECT_EQ(test::list_dir(dir.path()), before) << "a failing run left files behind";
+void fail(const test::TempDir& dir, const std::vector<std::string>& args, int code, const std::string& words) {
+  test::expect_clean_failure("ct2labels", dir, args, code, words);
 }
 
 }  // namespace
@@ -113,27 +106,27 @@ TEST(Ct2labels, BadVolumesFailWithOneSentenceAndNoOutput) {
   const std::string out = (dir / "labels.h5").string();
   // Constant: Otsu is undefined.
   const auto flat = write_constant<std::uint16_t>(dir, "flat.h5", 1000);
-  expect_clean_failure(dir, {flat.string(), out}, 1, "constant");
-  expect_clean_failure(dir, {flat.string(), out, "--preview", (dir / "p.png").string()}, 1, flat.string());
+  fail(dir, {flat.string(), out}, 1, "constant");
+  fail(dir, {flat.string(), out, "--preview", (dir / "p.png").string()}, 1, flat.string());
   // All solid and no solid under a given threshold.
-  expect_clean_failure(dir, {flat.string(), out, "--threshold", "10"}, 1, "every voxel is solid");
-  expect_clean_failure(dir, {flat.string(), out, "--threshold", "5000"}, 1, "no solid");
+  fail(dir, {flat.string(), out, "--threshold", "10"}, 1, "every voxel is solid");
+  fail(dir, {flat.string(), out, "--threshold", "5000"}, 1, "no solid");
   // NaN in a float scan.
   Volume<float> nan({8, 8, 8}, {1e-5, 1e-5, 1e-5});
   nan(1, 2, 3) = std::numeric_limits<float>::quiet_NaN();
   io::write_volume_file(dir / "nan.h5", nan, {"nan"});
-  expect_clean_failure(dir, {(dir / "nan.h5").string(), out}, 1, "NaN");
+  fail(dir, {(dir / "nan.h5").string(), out}, 1, "NaN");
   // Grains of one voxel: specks on a void background.
   Volume<std::uint16_t> specks({12, 12, 12}, {1e-5, 1e-5, 1e-5});
   for (std::size_t z = 2; z < 12; z += 4)
     for (std::size_t y = 2; y < 12; y += 4)
       for (std::size_t x = 2; x < 12; x += 4) specks(z, y, x) = 3000;
   io::write_volume_file(dir / "specks.h5", specks, {"specks"});
-  expect_clean_failure(dir, {(dir / "specks.h5").string(), out, "--denoise", "none", "--region", "volume"}, 1,
+  fail(dir, {(dir / "specks.h5").string(), out, "--denoise", "none", "--region", "volume"}, 1,
                        "no grain is left");
   // Empty volume.
   io::write_volume_file(dir / "empty.h5", Volume<std::uint16_t>({0, 8, 8}, {1e-5, 1e-5, 1e-5}), {"empty"});
-  expect_clean_failure(dir, {(dir / "empty.h5").string(), out}, 1, "empty");
+  fail(dir, {(dir / "empty.h5").string(), out}, 1, "empty");
 }
 
 TEST(Ct2labels, WrongInputsAndOptionsAreUsageErrors) {
@@ -142,16 +135,16 @@ TEST(Ct2labels, WrongInputsAndOptionsAreUsageErrors) {
   const std::string out = (dir / "labels.h5").string();
   // A labels file is not a scan.
   ASSERT_EQ(run_tool("ct2labels", {scan.string(), out, "-q"}).exit_code, 0);
-  expect_clean_failure(dir, {out, (dir / "again.h5").string()}, 2, "pass a scan");
+  fail(dir, {out, (dir / "again.h5").string()}, 2, "pass a scan");
   // Existing output without --force, and with it.
-  expect_clean_failure(dir, {scan.string(), out}, 2, "--force");
+  fail(dir, {scan.string(), out}, 2, "--force");
   EXPECT_EQ(run_tool("ct2labels", {scan.string(), out, "-q", "--force"}).exit_code, 0);
   // uint32 scans, bad option values, a preview that is not PNG.
   const auto u32 = write_constant<std::uint32_t>(dir, "u32.h5", 7);
-  expect_clean_failure(dir, {u32.string(), (dir / "x.h5").string()}, 2, "uint32");
-  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--markers", "blobs"}, 2, "--markers");
-  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--h", "-1"}, 2, "--h");
-  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--connectivity", "8"}, 2, "connectivity");
-  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--region", "cylinder"}, 2, "--cylinder");
-  expect_clean_failure(dir, {scan.string(), (dir / "x.h5").string(), "--preview", (dir / "p.jpg").string()}, 2, ".png");
+  fail(dir, {u32.string(), (dir / "x.h5").string()}, 2, "uint32");
+  fail(dir, {scan.string(), (dir / "x.h5").string(), "--markers", "blobs"}, 2, "--markers");
+  fail(dir, {scan.string(), (dir / "x.h5").string(), "--h", "-1"}, 2, "--h");
+  fail(dir, {scan.string(), (dir / "x.h5").string(), "--connectivity", "8"}, 2, "connectivity");
+  fail(dir, {scan.string(), (dir / "x.h5").string(), "--region", "cylinder"}, 2, "--cylinder");
+  fail(dir, {scan.string(), (dir / "x.h5").string(), "--preview", (dir / "p.jpg").string()}, 2, ".png");
 }

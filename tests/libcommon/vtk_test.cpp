@@ -1,31 +1,14 @@
 // VTK XML PolyData writer: checked by VTK's own reader (the one ParaView uses), and bad input.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
-#include <cstdio>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/vtk.hpp"
 #include "support/run_tool.hpp"
+#include "support/vtk_summary.hpp"
 
 using namespace graintwin;
 
-namespace {
-
-/// JSON summary of a VTK file from tests/scripts/vtk_summary.py (Debian python3-vtk9).
-nlohmann::json vtk_summary(const std::filesystem::path& file) {
-  const std::string cmd = std::string("/usr/bin/python3 ") + GRAINTWIN_SOURCE_DIR + "/tests/scripts/vtk_summary.py " +
-                          file.string() + " 2>&1";
-  std::string out;
-  if (FILE* p = popen(cmd.c_str(), "r")) {
-    char buf[4096];
-    while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-    EXPECT_EQ(pclose(p), 0) << out;
-  }
-  return nlohmann::json::parse(out);
-}
-
-}  // namespace
+using test::vtk_summary;
 
 TEST(Vtk, PolyDataWithVertsLinesTrianglesAndArraysReadsBackInVtk) {
   test::TempDir dir;

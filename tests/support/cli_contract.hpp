@@ -25,4 +25,15 @@ inline void expect_standard_cli(const std::string& tool, const std::string& conf
   EXPECT_EQ(none.exit_code, 2) << "missing positional arguments must be a usage error";
 }
 
+/// Runs `tool` expecting failure: checks the exit code, that stderr holds `words` (e.g. the file
+/// name and the fix), and that nothing new appeared in `dir` (no half-written output).
+inline void expect_clean_failure(const std::string& tool, const TempDir& dir, const std::vector<std::string>& args,
+                                 int code, const std::string& words) {
+  const auto before = list_dir(dir.path());
+  const ToolResult r = run_tool(tool, args);
+  EXPECT_EQ(r.exit_code, code) << r.err;
+  EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+  EXPECT_EQ(list_dir(dir.path()), before) << "a failing run left files behind";
+}
+
 }  // namespace graintwin::test

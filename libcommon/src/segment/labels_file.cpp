@@ -10,15 +10,7 @@
 #include "graintwin/io/volume_io.hpp"
 
 namespace graintwin::segment {
-namespace {
-
-io::DatasetOptions units(const char* u) {
-  io::DatasetOptions o;
-  o.units = u;
-  return o;
-}
-
-}  // namespace
+using io::units;
 
 void write_labels_file(const std::filesystem::path& path, const LabelsFile& c, const std::vector<std::string>& history) {
   io::H5File f = io::H5File::create(path);

@@ -39,6 +39,13 @@ struct DatasetOptions {
   std::vector<hsize_t> chunk;   ///< empty: chosen automatically
 };
 
+/// Options that only set the units attribute, e.g. f.write("/grains/volume", v, units("m^3")).
+inline DatasetOptions units(std::string u) {
+  DatasetOptions o;
+  o.units = std::move(u);
+  return o;
+}
+
 /// Shape and element type of a stored dataset.
 struct DatasetInfo {
   std::vector<hsize_t> dims;

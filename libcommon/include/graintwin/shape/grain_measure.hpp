@@ -1,0 +1,108 @@
+#pragma once
+// Per-grain properties and spherical-harmonic fits from a label image (SPEC sections 2 and 5):
+// voxel moments (volume, centroid, inertia-equivalent ellipsoid), an isosurface for the surface
+// area, radii along shared directions from the centroid with sub-voxel accuracy, the SH fit with a
+// per-grain degree, its errors, and flags for what cannot be trusted.
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "graintwin/core/volume.hpp"
+#include "graintwin/shape/sh_fitter.hpp"
+
+namespace graintwin::shape {
+
+/// Bits of GrainShape::flags (stored as /sh/flags).
+namespace shape_flag {
+inline constexpr std::uint8_t not_star_shaped = 1;    ///< some centroid ray leaves the grain more than once
+inline constexpr std::uint8_t centroid_outside = 2;   ///< the centroid lies outside the grain
+inline constexpr std::uint8_t unreliable_fit = 4;     ///< the SH surface misrepresents the grain (see docs)
+inline constexpr std::uint8_t touches_edge = 8;       ///< cut by the field of view: shape incomplete
+inline constexpr std::uint8_t small = 16;             ///< under 6 voxels across: shape is mostly voxel noise
+inline constexpr std::uint8_t tolerance_not_met = 32; ///< even the full degree misses --tol
+}  // namespace shape_flag
+
+/// Where the sub-voxel surface comes from.
+enum class SurfaceSource {
+  labels,  ///< the grain's indicator smoothed with a Gaussian, level 0.5
+  grey,    ///< smoothed grey levels between the void and grain levels, level 0.5, bounded by the labels
+};
+
+struct MeasureOptions {
+  SurfaceSource source = SurfaceSource::labels;
+  /// Gaussian sigma (voxels) of the indicator (labels; 0.7 removes the voxel staircase) or of the
+  /// grey levels (grey; 0 by default: the labels already bound the surface, and smoothing rounds it).
+  double smooth_vox = 0.7;
+  double grey_void = 0.0;    ///< grey source: grey level of void (fraction 0)
+  double grey_grain = 1.0;   ///< grey source: grey level of grain (fraction 1)
+  /// Per-grain degree: the smallest degree whose RMS radial residual is at most tol x equivalent
+  /// radius (0: always the fitter's degree).
+  double tol = 0.0;
+  /// A non-star-shaped grain's fit is unreliable when more than this share of rays exit twice.
+  double max_multi_exit_fraction = 0.02;
+};
+
+/// One grain's measurements. Lengths in metres, positions (x, y, z).
+struct GrainShape {
+  std::uint32_t label = 0;
+  std::uint64_t voxels = 0;
+  double volume = 0.0;                                   ///< voxel count x voxel volume
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();    ///< mean of voxel centres
+  double surface_area = 0.0;                             ///< of the isosurface
+  double equivalent_diameter = 0.0;                      ///< (6 V / pi)^(1/3)
+  double sphericity = 0.0;                               ///< pi^(1/3) (6 V)^(2/3) / A
+  Eigen::Vector3d semi_axes = Eigen::Vector3d::Zero();   ///< a >= b >= c of the ellipsoid with the same inertia
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();    ///< columns: unit directions of a, b, c (right-handed)
+  double aspect_ratio = 1.0;                             ///< a / c
+  double elongation = 1.0;                               ///< b / a
+  double flatness = 1.0;                                 ///< c / b
+  int sh_degree = 0;                                     ///< degree kept for this grain
+  Eigen::VectorXd coeffs;                                ///< fitter degree; zero above sh_degree
+  Eigen::VectorXd invariants;                            ///< ||R_n||, n = 0..fitter degree
+  double rms_error = 0.0;                                ///< RMS radial residual / equivalent radius
+  double max_error = 0.0;                                ///< largest |radial residual| / equivalent radius
+  double volume_error = 0.0;                             ///< (V_sh - V) / V
+  double multi_exit_fraction = 0.0;                      ///< share of rays that leave the grain more than once
+  std::uint8_t flags = 0;
+};
+
+/// Measures the grain `label` whose voxels lie in the half-open box `bbox` (z0, y0, x0, z1, y1, x1)
+/// of `labels`. `grey` (same shape) is required for SurfaceSource::grey, else ignored (may be
+/// null). Thread-safe: call it for many grains in parallel. DataError if the box holds no voxel of
+/// the label.
+template <class T>
+GrainShape measure_grain(const Volume<std::uint32_t>& labels, const Volume<T>* grey, std::uint32_t label,
+                         const std::array<std::size_t, 6>& bbox, const ShFitter& fitter, const MeasureOptions& options);
+
+/// measure_grain for every (label, bbox), in parallel over grains (OpenMP, dynamic schedule), in
+/// the given order; `progress` (may be empty) receives the fraction done from the calling thread.
+template <class T>
+std::vector<GrainShape> measure_grains(const Volume<std::uint32_t>& labels, const Volume<T>* grey,
+                                       const std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>>& grains,
+                                       const ShFitter& fitter, const MeasureOptions& options,
+                                       const std::function<void(double)>& progress = {});
+
+/// Typical grey levels of void and of grain in a segmented scan: the medians over voxels whose six
+/// neighbours share their label (background for void, one grain for grain), so partial-volume
+/// voxels at surfaces do not bias them. Sampled on a regular stride (at most ~4 million voxels per
+/// class). DataError if either class has no such voxel or the two levels coincide.
+struct GreyLevels {
+  double void_level = 0.0;
+  double grain_level = 0.0;
+};
+template <class T>
+GreyLevels grey_levels(const Volume<std::uint32_t>& labels, const Volume<T>& grey);
+
+/// Percent passing by volume against diameter: diameters sorted ascending, percent[i] = 100 x the
+/// volume of grains with d <= diameters[i] over the total; d50 interpolated linearly in percent.
+struct SizeDistribution {
+  std::vector<double> diameter;
+  std::vector<double> percent_passing;
+  double d50 = 0.0;
+};
+SizeDistribution size_distribution(const std::vector<double>& diameters, const std::vector<double>& volumes);
+
+}  // namespace graintwin::shape

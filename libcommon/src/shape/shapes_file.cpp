@@ -1,0 +1,140 @@
+#include "graintwin/shape/shapes_file.hpp"
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/shape/sh_basis.hpp"
+
+namespace graintwin::shape {
+using io::units;
+namespace {
+
+
+/// One column of a per-grain quantity, or an N x k table of vectors.
+template <class T, class Get>
+std::vector<T> column(const std::vector<GrainShape>& g, std::size_t k, Get&& get) {
+  std::vector<T> out(g.size() * k);
+  for (std::size_t i = 0; i < g.size(); ++i)
+    for (std::size_t c = 0; c < k; ++c) out[i * k + c] = get(g[i], c);
+  return out;
+}
+
+}  // namespace
+
+void write_shapes_file(const std::filesystem::path& path, const ShapesFile& c, const std::vector<std::string>& history) {
+  const auto& g = c.grains;
+  const hsize_t n = g.size();
+  const std::size_t ncoef = static_cast<std::size_t>(sh_count(c.degree));
+  for (const GrainShape& s : g)
+    if (static_cast<std::size_t>(s.coeffs.size()) != ncoef || s.invariants.size() != c.degree + 1)
+      throw UsageError("write_shapes_file: every grain needs coefficients of degree " + std::to_string(c.degree));
+  io::H5File f = io::H5File::create(path);
+  io::write_root_attrs(f, schema::kind::shapes);
+  const auto scalar = [&](const char* name, const char* unit, auto get) {
+    f.write(std::string("/grains/") + name, column<double>(g, 1, [&](const GrainShape& s, std::size_t) { return get(s); }),
+            units(unit));
+  };
+  f.write("/grains/label", column<std::uint32_t>(g, 1, [](const GrainShape& s, std::size_t) { return s.label; }));
+  f.write("/grains/voxels", column<std::uint64_t>(g, 1, [](const GrainShape& s, std::size_t) { return s.voxels; }));
+  scalar("volume", "m^3", [](const GrainShape& s) { return s.volume; });
+  f.write("/grains/centroid", column<double>(g, 3, [](const GrainShape& s, std::size_t k) { return s.centroid[k]; }).data(),
+          {n, 3}, units("m"));
+  scalar("surface_area", "m^2", [](const GrainShape& s) { return s.surface_area; });
+  scalar("equivalent_diameter", "m", [](const GrainShape& s) { return s.equivalent_diameter; });
+  scalar("sphericity", "1", [](const GrainShape& s) { return s.sphericity; });
+  f.write("/grains/semi_axes", column<double>(g, 3, [](const GrainShape& s, std::size_t k) { return s.semi_axes[k]; }).data(),
+          {n, 3}, units("m"));
+  // axes[i, k, :] is the unit direction (x, y, z) of semi-axis k of grain i.
+  f.write("/grains/axes", column<double>(g, 9, [](const GrainShape& s, std::size_t k) { return s.axes(k % 3, k / 3); }).data(),
+          {n, 3, 3}, units("1"));
+  scalar("aspect_ratio", "1", [](const GrainShape& s) { return s.aspect_ratio; });
+  scalar("elongation", "1", [](const GrainShape& s) { return s.elongation; });
+  scalar("flatness", "1", [](const GrainShape& s) { return s.flatness; });
+
+  f.write("/sh/coeffs", column<double>(g, ncoef, [](const GrainShape& s, std::size_t k) { return s.coeffs[static_cast<Eigen::Index>(k)]; }).data(),
+          {n, ncoef}, units("m"));
+  f.set_attr("/sh/coeffs", "degree", static_cast<long long>(c.degree));
+  f.set_attr("/sh/coeffs", "basis", std::string(kShBasisDescription));
+  f.set_attr("/sh/coeffs", "origin", std::string("the grain's centroid (/grains/centroid), world (image) axes"));
+  f.write("/sh/degree", column<std::int32_t>(g, 1, [](const GrainShape& s, std::size_t) { return s.sh_degree; }));
+  f.write("/sh/invariants",
+          column<double>(g, static_cast<std::size_t>(c.degree + 1), [](const GrainShape& s, std::size_t k) { return s.invariants[static_cast<Eigen::Index>(k)]; }).data(),
+          {n, static_cast<hsize_t>(c.degree + 1)}, units("m"));
+  const auto sh_scalar = [&](const char* name, auto get) {
+    f.write(std::string("/sh/") + name, column<double>(g, 1, [&](const GrainShape& s, std::size_t) { return get(s); }), units("1"));
+  };
+  sh_scalar("rms_error", [](const GrainShape& s) { return s.rms_error; });
+  sh_scalar("max_error", [](const GrainShape& s) { return s.max_error; });
+  sh_scalar("volume_error", [](const GrainShape& s) { return s.volume_error; });
+  sh_scalar("multi_exit_fraction", [](const GrainShape& s) { return s.multi_exit_fraction; });
+  f.write("/sh/flags", column<std::uint8_t>(g, 1, [](const GrainShape& s, std::size_t) { return s.flags; }));
+  f.set_attr("/sh/flags", "bits",
+             std::string("1 not star-shaped, 2 centroid outside, 4 unreliable fit, 8 touches edge, 16 small, "
+                         "32 tolerance not met"));
+
+  f.write("/psd/diameter", c.psd.diameter, units("m"));
+  f.write("/psd/percent_passing", c.psd.percent_passing, units("%"));
+  f.write("/psd/d50", std::vector<double>{c.psd.d50}, units("m"));
+  f.write_strings("/shapes/parameters", {c.parameters_json});
+  io::write_history(f, history);
+}
+
+ShapesFile read_shapes_file(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::shapes, "pass the output of labels2shapes");
+  ShapesFile c;
+  c.degree = static_cast<int>(f.attr_int("/sh/coeffs", "degree").value_or(-1));
+  if (c.degree < 0) throw DataError(path.string() + " has no SH degree on /sh/coeffs; rewrite it with labels2shapes");
+  const auto label = f.read<std::uint32_t>("/grains/label");
+  const std::size_t n = label.size(), ncoef = static_cast<std::size_t>(sh_count(c.degree)), ninv = static_cast<std::size_t>(c.degree + 1);
+  const auto need = [&](const char* name, std::size_t k) {
+    auto v = f.read<double>(name);
+    if (v.size() != n * k)
+      throw DataError(path.string() + ": " + name + " has " + std::to_string(v.size()) + " values for " + std::to_string(n) +
+                      " grains; rewrite it with labels2shapes");
+    return v;
+  };
+  const auto voxels = f.read<std::uint64_t>("/grains/voxels");
+  const auto volume = need("/grains/volume", 1), centroid = need("/grains/centroid", 3), area = need("/grains/surface_area", 1),
+             deq = need("/grains/equivalent_diameter", 1), sph = need("/grains/sphericity", 1),
+             semi = need("/grains/semi_axes", 3), axes = need("/grains/axes", 9), ar = need("/grains/aspect_ratio", 1),
+             el = need("/grains/elongation", 1), fl = need("/grains/flatness", 1), coeffs = need("/sh/coeffs", ncoef),
+             inv = need("/sh/invariants", ninv), rms = need("/sh/rms_error", 1), mx = need("/sh/max_error", 1),
+             ve = need("/sh/volume_error", 1), mef = need("/sh/multi_exit_fraction", 1);
+  const auto degree = f.read<std::int32_t>("/sh/degree");
+  const auto flags = f.read<std::uint8_t>("/sh/flags");
+  if (voxels.size() != n || degree.size() != n || flags.size() != n)
+    throw DataError(path.string() + " has grain columns of different lengths; rewrite it with labels2shapes");
+  c.grains.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    GrainShape& s = c.grains[i];
+    s.label = label[i];
+    s.voxels = voxels[i];
+    s.volume = volume[i];
+    s.centroid = Eigen::Vector3d(centroid[3 * i], centroid[3 * i + 1], centroid[3 * i + 2]);
+    s.surface_area = area[i];
+    s.equivalent_diameter = deq[i];
+    s.sphericity = sph[i];
+    s.semi_axes = Eigen::Vector3d(semi[3 * i], semi[3 * i + 1], semi[3 * i + 2]);
+    for (int k = 0; k < 9; ++k) s.axes(k % 3, k / 3) = axes[9 * i + static_cast<std::size_t>(k)];
+    s.aspect_ratio = ar[i];
+    s.elongation = el[i];
+    s.flatness = fl[i];
+    s.sh_degree = degree[i];
+    s.coeffs = Eigen::Map<const Eigen::VectorXd>(coeffs.data() + i * ncoef, static_cast<Eigen::Index>(ncoef));
+    s.invariants = Eigen::Map<const Eigen::VectorXd>(inv.data() + i * ninv, static_cast<Eigen::Index>(ninv));
+    s.rms_error = rms[i];
+    s.max_error = mx[i];
+    s.volume_error = ve[i];
+    s.multi_exit_fraction = mef[i];
+    s.flags = flags[i];
+  }
+  c.psd.diameter = f.read<double>("/psd/diameter");
+  c.psd.percent_passing = f.read<double>("/psd/percent_passing");
+  c.psd.d50 = f.read<double>("/psd/d50").at(0);
+  c.parameters_json = f.read_strings("/shapes/parameters").at(0);
+  return c;
+}
+
+}  // namespace graintwin::shape

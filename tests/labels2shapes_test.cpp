@@ -1,0 +1,135 @@
+// labels2shapes: CLI contract, the shapes file, surfaces for ParaView and STL, grey-level mode, and
+// bad inputs failing cleanly.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <numbers>
+
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "graintwin/shape/shapes_file.hpp"
+#include "support/cli_contract.hpp"
+#include "support/phantoms.hpp"
+#include "support/vtk_summary.hpp"
+
+using namespace graintwin;
+using test::run_tool;
+
+namespace {
+
+constexpr double kVoxel = 2e-5;
+// Eight spheres of radius 6-8 voxels, apart from each other.
+const std::vector<test::Ball> kBalls = test::jittered_lattice(2, 7.0, 18.0, 11.0, 0.5, 0.1, 3);
+
+std::filesystem::path write_labels(const test::TempDir& dir, const std::string& name = "labels.h5") {
+  segment::LabelsFile c;
+  c.labels = test::label_balls({40, 40, 40}, kBalls, {kVoxel, kVoxel, kVoxel});
+  c.grains = segment::grain_table(c.labels);
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / name, c, {"phantom labels"});
+  return dir / name;
+}
+
+std::filesystem::path write_scan(const test::TempDir& dir) {
+  const Volume<float> f = test::scan_balls({40, 40, 40}, kBalls, 2, 0.02, {kVoxel, kVoxel, kVoxel});
+  Volume<std::uint16_t> v(f.shape(), f.voxel_size());
+  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  io::write_volume_file(dir / "scan.h5", v, {"phantom scan"});
+  return dir / "scan.h5";
+}
+
+void fail(const test::TempDir& dir, const std::vector<std::string>& args, int code, const std::string& words) {
+  test::expect_clean_failure("labels2shapes", dir, args, code, words);
+}
+
+}  // namespace
+
+TEST(Labels2shapes, StandardCli) { test::expect_standard_cli("labels2shapes"); }
+
+TEST(Labels2shapes, MeasuresSpheresAndWritesShapesAndSurfaces) {
+  test::TempDir dir;
+  const auto labels = write_labels(dir);
+  const auto r = run_tool("labels2shapes", {labels.string(), (dir / "shapes.h5").string(), "--surfaces",
+                                            (dir / "grains.vtp").string(), "--degree", "10"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("8 grains"), std::string::npos) << r.err;
+  const shape::ShapesFile s = shape::read_shapes_file(dir / "shapes.h5");
+  EXPECT_EQ(s.degree, 10);
+  ASSERT_EQ(s.grains.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i) {
+    const shape::GrainShape& g = s.grains[i];
+    EXPECT_EQ(g.label, i + 1);
+    const double r_true = kBalls[i].r * kVoxel;
+    EXPECT_NEAR(g.coeffs[0] / std::sqrt(4 * std::numbers::pi) / r_true, 1.0, 0.03) << i;
+    EXPECT_NEAR(g.sphericity, 1.0, 0.05) << i;
+    EXPECT_EQ(g.flags & shape::shape_flag::unreliable_fit, 0) << i;
+  }
+  EXPECT_GT(s.psd.d50, 2 * 6 * kVoxel);
+  EXPECT_LT(s.psd.d50, 2 * 8 * kVoxel);
+  EXPECT_EQ(s.psd.percent_passing.back(), 100.0);
+  const auto p = nlohmann::json::parse(s.parameters_json);
+  EXPECT_EQ(p["surface"], "labels");
+  const io::H5File f = io::H5File::open(dir / "shapes.h5");
+  EXPECT_EQ(io::read_history(f).front(), "phantom labels");
+  EXPECT_EQ(f.attr_string("/sh/coeffs", "basis"), std::string(shape::kShBasisDescription));
+  // ParaView: 8 icospheres of 642 points and 1280 triangles, labelled.
+  const auto v = test::vtk_summary(dir / "grains.vtp");
+  EXPECT_EQ(v["points"], 8 * 642);
+  EXPECT_EQ(v["polys"], 8 * 1280);
+  EXPECT_EQ(v["cell_data"]["label"]["range"][1], 8.0);
+}
+
+TEST(Labels2shapes, GreyLevelsStlAndTolerance) {
+  test::TempDir dir;
+  const auto labels = write_labels(dir);
+  const auto scan = write_scan(dir);
+  const auto r = run_tool("labels2shapes", {labels.string(), scan.string(), (dir / "s.h5").string(), "--surfaces",
+                                            (dir / "g.stl").string(), "--surface-subdivisions", "1", "--tol", "0.03"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("grey levels: void"), std::string::npos) << r.err;
+  const shape::ShapesFile s = shape::read_shapes_file(dir / "s.h5");
+  EXPECT_EQ(nlohmann::json::parse(s.parameters_json)["surface"], "grey");
+  for (const auto& g : s.grains) EXPECT_LT(g.sh_degree, 15);  // spheres need few degrees at 3 % tolerance
+  // Binary STL: 80-byte header, count, 50 bytes per triangle (8 grains x 80 triangles).
+  EXPECT_EQ(std::filesystem::file_size(dir / "g.stl"), 84u + 50u * 8u * 80u);
+}
+
+TEST(Labels2shapes, BadInputsFailCleanly) {
+  test::TempDir dir;
+  const auto labels = write_labels(dir);
+  const auto scan = write_scan(dir);
+  const std::string out = (dir / "out.h5").string();
+  fail(dir, {scan.string(), out}, 2, "pass the output of ct2labels");
+  fail(dir, {labels.string(), labels.string(), out}, 2, "pass the scan that was segmented");
+  fail(dir, {labels.string(), out, "--surface", "grey"}, 2, "needs the scan");
+  fail(dir, {labels.string(), out, "--surface", "wobbly"}, 2, "--surface");
+  fail(dir, {labels.string(), out, "--surfaces", (dir / "g.obj").string()}, 2, ".vtp or .stl");
+  // A scan of another size.
+  io::write_volume_file(dir / "small.h5", Volume<std::uint16_t>({10, 10, 10}, {kVoxel, kVoxel, kVoxel}), {"small"});
+  fail(dir, {labels.string(), (dir / "small.h5").string(), out}, 2, "10 x 10 x 10");
+  // NaN grey values.
+  Volume<float> nan({40, 40, 40}, {kVoxel, kVoxel, kVoxel});
+  nan(3, 3, 3) = std::numeric_limits<float>::quiet_NaN();
+  io::write_volume_file(dir / "nan.h5", nan, {"nan"});
+  fail(dir, {labels.string(), (dir / "nan.h5").string(), out}, 1, "NaN");
+  // No grain at all.
+  segment::LabelsFile empty;
+  empty.labels = Volume<std::uint32_t>({8, 8, 8}, {kVoxel, kVoxel, kVoxel});
+  empty.parameters_json = "{}";
+  segment::write_labels_file(dir / "empty.h5", empty, {"empty"});
+  fail(dir, {(dir / "empty.h5").string(), out}, 1, "holds no grain");
+}
+
+TEST(Labels2shapes, TooFewDirectionsLowerTheDegreeWithAWarning) {
+  test::TempDir dir;
+  const auto labels = write_labels(dir);
+  const auto r = run_tool("labels2shapes", {labels.string(), (dir / "s.h5").string(), "--degree", "12", "--directions", "60"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("SH degree lowered from 12"), std::string::npos) << r.err;
+  EXPECT_LT(shape::read_shapes_file(dir / "s.h5").degree, 7);
+}

@@ -1,0 +1,226 @@
+// labels2shapes: measure every grain of a labels file and fit its spherical-harmonic surface
+// (SPEC.md sections 2 and 5).
+//   labels2shapes labels.h5 shapes.h5
+//   labels2shapes labels.h5 scan.h5 shapes.h5 --surfaces grains.vtp
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "graintwin/cli/tool.hpp"
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/atomic_output.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/stl.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/io/vtk.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "graintwin/shape/sh_basis.hpp"
+#include "graintwin/shape/sh_surface.hpp"
+#include "graintwin/shape/shapes_file.hpp"
+
+namespace fs = std::filesystem;
+using namespace graintwin;
+using namespace graintwin::shape;
+
+namespace {
+
+struct Options {
+  int degree = 15;
+  int directions = 0;
+  double tol = 0.01;
+  std::string surface = "auto";
+  std::optional<double> smooth_vox;
+  std::optional<double> grey_void, grey_grain;
+  double max_multi_exit = 0.02;
+  fs::path surfaces;
+  int surface_subdivisions = 3;
+};
+
+/// Reconstructed SH surfaces of all grains, one mesh: ParaView (.vtp, cell data label and flags)
+/// or STL (triangle soup).
+void write_surfaces(const fs::path& path, bool stl, const std::vector<GrainShape>& grains, int degree, int subdivisions) {
+  const SphereMesh sphere = icosphere(subdivisions);
+  const Eigen::MatrixXd basis = sh_design_matrix(degree, sphere.directions);
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<double> label, flags;
+  for (const GrainShape& g : grains) {
+    const int first = static_cast<int>(vertices.size());
+    const auto v = displaced_vertices(sphere, (basis * g.coeffs).cwiseMax(0.0), g.centroid);
+    vertices.insert(vertices.end(), v.begin(), v.end());
+    for (const auto& t : sphere.triangles) {
+      triangles.push_back({first + t[0], first + t[1], first + t[2]});
+      label.push_back(g.label);
+      flags.push_back(g.flags);
+    }
+  }
+  if (stl) {
+    io::write_stl(path, vertices, triangles);
+    return;
+  }
+  io::VtkPolyData d;
+  for (const auto& v : vertices) d.points.insert(d.points.end(), {v[0], v[1], v[2]});
+  for (const auto& t : triangles) d.add_triangle(t[0], t[1], t[2]);
+  d.cell_data.push_back({"label", 1, std::move(label)});
+  d.cell_data.push_back({"flags", 1, std::move(flags)});
+  io::write_vtp(path, d);
+}
+
+std::size_t count_flag(const std::vector<GrainShape>& g, std::uint8_t bit) {
+  return static_cast<std::size_t>(std::count_if(g.begin(), g.end(), [&](const GrainShape& s) { return s.flags & bit; }));
+}
+
+template <class T>
+std::vector<GrainShape> measure_all(const segment::LabelsFile& labels, const Volume<T>* grey, const ShFitter& fitter,
+                                    const MeasureOptions& options, cli::RunContext& ctx) {
+  std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> grains;
+  grains.reserve(labels.grains.size());
+  for (const auto& r : labels.grains) grains.push_back({r.label, r.bbox});
+  return measure_grains(labels.labels, grey, grains, fitter, options, ctx.progress_callback("grains"));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Tool tool("labels2shapes",
+                 "Measure every grain of a labels file (kind=labels) and fit its spherical-harmonic surface "
+                 "(kind=shapes): volume, centroid, surface area of an isosurface (marching tetrahedra, not voxel "
+                 "faces), inertia-equivalent ellipsoid (semi-axes, principal directions, aspect ratios), equivalent "
+                 "diameter, sphericity, the size distribution and d50; radii along shared Fibonacci directions from "
+                 "each centroid, with sub-voxel accuracy from the grey levels (when VOLUME is given) or from the "
+                 "smoothed label surface; a least-squares SH fit through one precomputed pseudo-inverse, a per-grain "
+                 "degree from --tol, rotation invariants, reconstruction errors, and flags for grains that are not "
+                 "star-shaped from their centroid, cut by the volume edge or too small.");
+  Options o;
+  fs::path labels_path, volume_path, output;
+  auto& app = tool.cli();
+  tool.add_input("labels", labels_path, "Labels file (.h5, kind=labels, from ct2labels)");
+  tool.add_optional_input("volume", volume_path, "The scan that was segmented (.h5, kind=volume): sub-voxel surfaces from grey levels");
+  tool.add_output("shapes", output, "Shapes file to write (.h5, kind=shapes)");
+  app.add_option("--degree", o.degree, "Largest SH degree")->check(CLI::Range(0, 40))->capture_default_str();
+  app.add_option("--directions", o.directions, "Sample directions per grain (0 = twice the coefficients)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--tol", o.tol,
+                 "Per-grain degree: the smallest whose RMS radial residual is at most tol x equivalent radius "
+                 "(0 = always --degree)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--surface", o.surface, "Sub-voxel surface: auto (grey when VOLUME is given), grey or labels")
+      ->capture_default_str();
+  app.add_option("--smooth-vox", o.smooth_vox,
+                 "Gaussian sigma (voxels) of the grain indicator (labels surface, default 0.7) or of the grey levels "
+                 "(grey surface, default 0)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--grey-void", o.grey_void, "grey surface: grey level of void (default: median of interior void)");
+  app.add_option("--grey-grain", o.grey_grain, "grey surface: grey level of grain (default: median of grain interiors)");
+  app.add_option("--max-multi-exit", o.max_multi_exit,
+                 "Share of centroid rays leaving a grain twice above which its fit is flagged unreliable")
+      ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  app.add_option("--surfaces", o.surfaces, "Also write the reconstructed SH surfaces: .vtp (ParaView) or .stl");
+  app.add_option("--surface-subdivisions", o.surface_subdivisions,
+                 "Icosphere subdivisions of each reconstructed surface (3: 1280 triangles per grain)")
+      ->check(CLI::Range(0, 6))->capture_default_str();
+  tool.set_examples({"labels2shapes labels.h5 shapes.h5",
+                     "labels2shapes labels.h5 scan.h5 shapes.h5 --surfaces grains.vtp",
+                     "labels2shapes labels.h5 shapes.h5 --degree 20 --tol 0.005"});
+
+  return tool.run(argc, argv, [&](cli::RunContext& ctx) {
+    // Options first (PDAL style), then the inputs' kinds, then the heavy work.
+    if (o.surface != "auto" && o.surface != "grey" && o.surface != "labels")
+      throw UsageError("--surface '" + o.surface + "' is not auto, grey or labels");
+    const bool use_grey = o.surface == "grey" || (o.surface == "auto" && !volume_path.empty());
+    if (use_grey && volume_path.empty()) throw UsageError("--surface grey needs the scan: labels2shapes LABELS VOLUME SHAPES");
+    if (!o.surfaces.empty() && o.surfaces.extension() != ".vtp" && o.surfaces.extension() != ".stl")
+      throw UsageError("--surfaces " + o.surfaces.string() + " must end in .vtp or .stl");
+    if (!o.surfaces.empty()) io::check_output_allowed(o.surfaces, ctx.force());
+    // Cheap checks of both inputs (kind, geometry) before any heavy work.
+    {
+      const io::H5File lf = io::open_kind(labels_path, schema::kind::labels, "pass the output of ct2labels");
+      ctx.add_input_history(lf);
+      if (!volume_path.empty()) {
+        const io::H5File vf = io::open_kind(volume_path, schema::kind::volume, "pass the scan that was segmented");
+        ctx.add_input_history(vf);
+        const Shape3 ls = io::read_image_header(lf, schema::path::labels).shape;
+        const Shape3 vs = io::read_image_header(vf, schema::path::volume).shape;
+        if (vs != ls)
+          throw UsageError(volume_path.string() + " is " + std::to_string(vs[0]) + " x " + std::to_string(vs[1]) + " x " +
+                           std::to_string(vs[2]) + " but the labels are " + std::to_string(ls[0]) + " x " +
+                           std::to_string(ls[1]) + " x " + std::to_string(ls[2]) + "; pass the scan that was segmented");
+      }
+    }
+    const ShFitter fitter(o.degree, o.directions);
+    if (!fitter.warning().empty()) spdlog::warn("{}", fitter.warning());
+    const segment::LabelsFile labels = segment::read_labels_file(labels_path);
+    if (labels.grains.empty())
+      throw DataError(labels_path.string() + " holds no grain; check the segmentation (ct2labels) that made it");
+    AnyVolume grey;
+    if (use_grey) grey = io::read_image(io::H5File::open(volume_path), schema::path::volume);
+    io::AtomicOutput out(output, ctx.force());
+    std::optional<io::AtomicOutput> surfaces;
+    if (!o.surfaces.empty()) surfaces.emplace(o.surfaces, ctx.force());
+
+    MeasureOptions mo;
+    mo.source = use_grey ? SurfaceSource::grey : SurfaceSource::labels;
+    mo.smooth_vox = o.smooth_vox.value_or(use_grey ? 0.0 : 0.7);
+    mo.tol = o.tol;
+    mo.max_multi_exit_fraction = o.max_multi_exit;
+    std::vector<GrainShape> grains;
+    try {
+      grains = std::visit(
+          [&](const auto& g) -> std::vector<GrainShape> {
+            using T = typename std::decay_t<decltype(g)>::value_type;
+            if constexpr (std::is_same_v<T, std::uint32_t>) {
+              throw UsageError(volume_path.string() + " is uint32; pass the uint8, uint16 or float32 scan");
+            } else {
+              if (!use_grey) return measure_all<T>(labels, nullptr, fitter, mo, ctx);
+              if constexpr (std::is_floating_point_v<T>)
+                for (float v : g.values())
+                  if (!std::isfinite(v)) throw DataError(volume_path.string() + " holds NaN or infinite grey values; use --surface labels");
+              const GreyLevels levels = grey_levels(labels.labels, g);
+              mo.grey_void = o.grey_void.value_or(levels.void_level);
+              mo.grey_grain = o.grey_grain.value_or(levels.grain_level);
+              spdlog::info("grey levels: void {:.6g}, grain {:.6g}{}", mo.grey_void, mo.grey_grain,
+                           o.grey_void || o.grey_grain ? " (given)" : " (medians of interior voxels)");
+              return measure_all<T>(labels, &g, fitter, mo, ctx);
+            }
+          },
+          use_grey ? grey : AnyVolume(Volume<std::uint8_t>()));
+    } catch (Error& e) {
+      e.add_context("while measuring the grains of " + labels_path.string());
+      throw;
+    }
+
+    ShapesFile content;
+    content.degree = fitter.degree();
+    std::vector<double> d(grains.size()), v(grains.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) d[i] = grains[i].equivalent_diameter, v[i] = grains[i].volume;
+    content.psd = size_distribution(d, v);
+    nlohmann::json p = {{"degree", fitter.degree()},
+                        {"requested_degree", o.degree},
+                        {"directions", fitter.directions().size()},
+                        {"condition_number", fitter.condition_number()},
+                        {"tol", o.tol},
+                        {"surface", use_grey ? "grey" : "labels"},
+                        {"max_multi_exit", o.max_multi_exit}};
+    if (use_grey) p["grey_levels"] = {mo.grey_void, mo.grey_grain};
+    p["smooth_vox"] = mo.smooth_vox;
+    content.parameters_json = p.dump();
+    content.grains = std::move(grains);
+    const auto& g = content.grains;
+    double mean_degree = 0.0, mean_rms = 0.0;
+    for (const auto& s : g) mean_degree += s.sh_degree, mean_rms += s.rms_error;
+    spdlog::info("{} grains, d50 {:.4g} mm; SH degree {} ({} directions, condition {:.2f}), mean degree kept {:.1f} at "
+                 "--tol {}, mean RMS residual {:.2f} % of the equivalent radius",
+                 g.size(), content.psd.d50 * 1e3, fitter.degree(), fitter.directions().size(), fitter.condition_number(),
+                 mean_degree / g.size(), o.tol, 100.0 * mean_rms / g.size());
+    spdlog::info("flags: {} not star-shaped, {} unreliable fits, {} cut by the volume edge, {} small, {} missing --tol",
+                 count_flag(g, shape_flag::not_star_shaped), count_flag(g, shape_flag::unreliable_fit),
+                 count_flag(g, shape_flag::touches_edge), count_flag(g, shape_flag::small),
+                 count_flag(g, shape_flag::tolerance_not_met));
+    write_shapes_file(out.temp_path(), content, ctx.history());
+    if (surfaces) write_surfaces(surfaces->temp_path(), o.surfaces.extension() == ".stl", g, content.degree, o.surface_subdivisions);
+    out.commit();
+    if (surfaces) surfaces->commit();
+  });
+}
