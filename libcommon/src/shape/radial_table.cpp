@@ -14,12 +14,7 @@ namespace {
 
 // Per face: major axis k, its sign, and the axes (a, b) carrying u and v, chosen so that
 // (e_a, e_b, sign * e_k) is right-handed; the outward-normal formula relies on that handedness.
-struct Face {
-  int k;
-  double sign;
-  int a;
-  int b;
-};
+using Face = RadialTable::FaceAxes;
 constexpr Face kFaces[6] = {{0, +1.0, 1, 2}, {0, -1.0, 2, 1}, {1, +1.0, 2, 0},
                             {1, -1.0, 0, 2}, {2, +1.0, 0, 1}, {2, -1.0, 1, 0}};
 
@@ -76,6 +71,13 @@ std::vector<Eigen::Vector3d> RadialTable::node_directions(int n) {
     }
   }
   return dirs;
+}
+
+RadialTable::FaceAxes RadialTable::face_axes(int face) {
+  if (face < 0 || face > 5) {
+    throw UsageError("a cube map has faces 0..5 (got " + std::to_string(face) + ")");
+  }
+  return kFaces[face];
 }
 
 RadialTable RadialTable::from_function(
@@ -178,54 +180,131 @@ void RadialTable::integrate() {
   // Each cell is integrated with 2 x 2 Gauss points: the integrands are smooth inside a cell
   // (the kinks of the bilinear body are on cell edges), so this is accurate to O(h^4) per cell
   // and a constant-radius table reproduces the sphere's volume and area to ~1e-9.
+  // The geometry of a Gauss point (direction in face axes, solid angle) is the same on all six
+  // faces, so it is computed once per row and the faces only add their radii; sums are kept per
+  // cell column (so the loops over a row vectorise) and added up at the end in a fixed order.
   const double g = 0.5 / std::sqrt(3.0);
   const double gauss[2] = {0.5 - g, 0.5 + g};
   const double h = 2.0 / (n_ - 1);
   const double cell_weight = 0.25 * h * h;
+  const int cells = n_ - 1;
+  // Per face and cell column: volume, area, first moment (a, b, k face axes) and second moment
+  // (aa, bb, kk, ab, ak, bk).
+  constexpr int kSums = 11;
+  std::vector<double> sums(static_cast<std::size_t>(6 * kSums * cells), 0.0);
+  // Per Gauss point of the row's cells: u, weights for the volume, first and second moments, and
+  // the area terms.
+  constexpr int kGeo = 14;
+  std::vector<double> geo(static_cast<std::size_t>(4 * kGeo * cells));
+  std::vector<double> area_weight(static_cast<std::size_t>(4 * cells)), area_root(static_cast<std::size_t>(4 * cells));
+  std::vector<double> inv_rho(static_cast<std::size_t>(cells));
+  double worst_slope = 0.0;  // largest |q|^2 |N|^2 / cell_weight over the Gauss points
+  for (int j = 0; j < cells; ++j) {
+    for (int gp = 0; gp < 4; ++gp) {
+      const double t = gauss[gp % 2], w = gauss[gp / 2];
+      const double v = -1.0 + (j + w) * h;
+      double* G = &geo[static_cast<std::size_t>(gp * kGeo * cells)];
+      for (int i = 0; i < cells; ++i) {
+        const double u = -1.0 + (i + t) * h;
+        inv_rho[i] = 1.0 + u * u + v * v;
+      }
+      // 1 / |q| (Eigen's sqrt vectorises; std::sqrt keeps a scalar errno path).
+      Eigen::Map<Eigen::ArrayXd>(inv_rho.data(), cells) = Eigen::Map<Eigen::ArrayXd>(inv_rho.data(), cells).rsqrt();
+      for (int i = 0; i < cells; ++i) {
+        const double u = -1.0 + (i + t) * h;
+        const double ir = inv_rho[i], ir2 = ir * ir;
+        const double d_omega = cell_weight * ir2 * ir;  // solid angle du dv / |q|^3
+        const double da = u * ir, db = v * ir, dk = ir;
+        G[0 * cells + i] = u;
+        G[1 * cells + i] = d_omega / 3.0;
+        G[2 * cells + i] = d_omega / 4.0 * da;
+        G[3 * cells + i] = d_omega / 4.0 * db;
+        G[4 * cells + i] = d_omega / 4.0 * dk;
+        G[5 * cells + i] = d_omega / 5.0 * da * da;
+        G[6 * cells + i] = d_omega / 5.0 * db * db;
+        G[7 * cells + i] = d_omega / 5.0 * dk * dk;
+        G[8 * cells + i] = d_omega / 5.0 * da * db;
+        G[9 * cells + i] = d_omega / 5.0 * da * dk;
+        G[10 * cells + i] = d_omega / 5.0 * db * dk;
+        G[11 * cells + i] = u * ir2;
+        G[12 * cells + i] = v * ir2;
+        G[13 * cells + i] = cell_weight * ir2;
+      }
+    }
+    for (int face = 0; face < 6; ++face) {
+      const double* lo = &r_[index(face, 1, j + 1)];  // r at nodes (i, j) and (i + 1, j): lo[i], lo[i + 1]
+      const double* hi = &r_[index(face, 1, j + 2)];
+      double* S = &sums[static_cast<std::size_t>(face * kSums * cells)];
+#pragma omp simd
+      for (int i = 0; i < cells; ++i) {
+        const double r00 = lo[i], r10 = lo[i + 1], r01 = hi[i], r11 = hi[i + 1];
+        double add[kSums] = {};
+#pragma GCC unroll 4
+        for (int gp = 0; gp < 4; ++gp) {
+          const double t = gauss[gp % 2], w = gauss[gp / 2];
+          const double v = -1.0 + (j + w) * h;
+          const double* G = &geo[static_cast<std::size_t>(gp * kGeo * cells)];
+          const double r = (1.0 - w) * ((1.0 - t) * r00 + t * r10) + w * ((1.0 - t) * r01 + t * r11);
+          const double r_u = ((1.0 - w) * (r10 - r00) + w * (r11 - r01)) * inv_h_;
+          const double r_v = ((1.0 - t) * (r01 - r00) + t * (r11 - r10)) * inv_h_;
+          const double r2 = r * r, r3 = r2 * r, r4 = r3 * r, r5 = r3 * r2;
+          const double inv_r = 1.0 / r;  // the loop's only division
+          add[0] += r3 * G[1 * cells + i];
+#pragma GCC unroll 3
+          for (int q = 2; q < 5; ++q) add[q] += r4 * G[q * cells + i];
+#pragma GCC unroll 6
+          for (int q = 5; q < 11; ++q) add[q] += r5 * G[q * cells + i];
+          // |p_u x p_v| du dv with p = (r / |q|) q, see surface_normal(); the root is taken below.
+          const double gu = r_u * inv_r - G[11 * cells + i];
+          const double gv = r_v * inv_r - G[12 * cells + i];
+          const double e = 1.0 + G[0 * cells + i] * gu + v * gv;
+          area_weight[gp * cells + i] = r2 * G[13 * cells + i];
+          area_root[gp * cells + i] = gu * gu + gv * gv + e * e;
+        }
+#pragma GCC unroll 11
+        for (int q = 0; q < kSums; ++q) S[q * cells + i] += add[q];
+      }
+      Eigen::Map<Eigen::ArrayXd> area(S + cells, cells);
+      for (int gp = 0; gp < 4; ++gp) {
+        const Eigen::Map<const Eigen::ArrayXd> root(&area_root[gp * cells], cells);
+        area += Eigen::Map<const Eigen::ArrayXd>(&area_weight[gp * cells], cells) * root.sqrt();
+        // cos(normal, radial) = 1 / (|q| |N|) with |N|^2 = root (surface_normal()), and
+        // |q|^2 = cell_weight / G[13].
+        const Eigen::Map<const Eigen::ArrayXd> w13(&geo[static_cast<std::size_t>((gp * kGeo + 13) * cells)], cells);
+        worst_slope = std::max(worst_slope, (root / w13).maxCoeff());
+      }
+    }
+  }
   double vol = 0.0;
   double area = 0.0;
   Eigen::Vector3d first = Eigen::Vector3d::Zero();
   Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
   for (int face = 0; face < 6; ++face) {
     const Face& f = kFaces[face];
-    for (int j = 0; j < n_ - 1; ++j) {
-      for (int i = 0; i < n_ - 1; ++i) {
-        const double r00 = r_[index(face, i + 1, j + 1)];
-        const double r10 = r_[index(face, i + 2, j + 1)];
-        const double r01 = r_[index(face, i + 1, j + 2)];
-        const double r11 = r_[index(face, i + 2, j + 2)];
-        for (double w : gauss) {
-          for (double t : gauss) {
-            const double u = -1.0 + (i + t) * h;
-            const double v = -1.0 + (j + w) * h;
-            const double r =
-                (1.0 - w) * ((1.0 - t) * r00 + t * r10) + w * ((1.0 - t) * r01 + t * r11);
-            const double r_u = ((1.0 - w) * (r10 - r00) + w * (r11 - r01)) / h;
-            const double r_v = ((1.0 - t) * (r01 - r00) + t * (r11 - r10)) / h;
-            const double rho2 = 1.0 + u * u + v * v;
-            const double rho = std::sqrt(rho2);
-            const double d_omega = cell_weight / (rho2 * rho);  // solid angle du dv / |q|^3
-            Eigen::Vector3d d;
-            d[f.k] = f.sign / rho;
-            d[f.a] = u / rho;
-            d[f.b] = v / rho;
-            const double r2 = r * r;
-            const double r3 = r2 * r;
-            vol += r3 / 3.0 * d_omega;
-            first += (r3 * r / 4.0 * d_omega) * d;
-            second += (r3 * r2 / 5.0 * d_omega) * (d * d.transpose());
-            // |p_u x p_v| du dv with p = (r / |q|) q, see surface_normal().
-            const double gu = r_u / r - u / rho2;
-            const double gv = r_v / r - v / rho2;
-            const double e = 1.0 + u * gu + v * gv;
-            area += r2 / rho2 * std::sqrt(gu * gu + gv * gv + e * e) * cell_weight;
-          }
-        }
-      }
+    double total[kSums] = {};
+    const double* S = &sums[static_cast<std::size_t>(face * kSums * cells)];
+    for (int q = 0; q < kSums; ++q) {
+      for (int i = 0; i < cells; ++i) total[q] += S[q * cells + i];
     }
+    // Face axes to body axes: d = d_a e_a + d_b e_b + sign d_k e_k.
+    vol += total[0];
+    area += total[1];
+    first[f.a] += total[2];
+    first[f.b] += total[3];
+    first[f.k] += f.sign * total[4];
+    second(f.a, f.a) += total[5];
+    second(f.b, f.b) += total[6];
+    second(f.k, f.k) += total[7];
+    second(f.a, f.b) += total[8];
+    second(f.b, f.a) += total[8];
+    second(f.a, f.k) += f.sign * total[9];
+    second(f.k, f.a) += f.sign * total[9];
+    second(f.b, f.k) += f.sign * total[10];
+    second(f.k, f.b) += f.sign * total[10];
   }
   volume_ = vol;
   surface_area_ = area;
+  min_normal_cosine_ = 1.0 / std::sqrt(cell_weight * worst_slope);
   centroid_ = first / vol;
   // Inertia about the origin from the second moment M = integral of x x^T dV, then moved to the
   // centroid with the parallel-axis theorem.

@@ -42,6 +42,15 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
   set.tables.resize(n);
   set.stats.resize(n);
   set.coeffs_body = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), shape::sh_count(degree));
+  // Ellipsoids differ only in size: their coefficients are fitted once, at unit volume-equivalent
+  // radius, and scaled.
+  const double ell_a = std::pow(p.aspect_ratio, 2.0 / 3.0), ell_b = std::pow(p.aspect_ratio, -1.0 / 3.0);
+  const Eigen::VectorXd unit_ellipsoid =
+      p.shape == GrainShape::ellipsoid
+          ? shape::sh_fit([&](const Eigen::Vector3d& d) {
+              return 1.0 / std::sqrt(d.x() * d.x() / (ell_a * ell_a) + (d.y() * d.y() + d.z() * d.z()) / (ell_b * ell_b));
+            }, degree, 2 * shape::sh_count(degree))
+          : Eigen::VectorXd();
   std::atomic<std::size_t> done{0};
   std::exception_ptr failure;
 #pragma omp parallel for schedule(dynamic)
@@ -56,11 +65,8 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
         c = shape::random_sand_coeffs(p.sand, rng) * r;
         t = shape::radial_table_from_sh(c, degree, nodes);
       } else if (p.shape == GrainShape::ellipsoid) {
-        const double a = r * std::pow(p.aspect_ratio, 2.0 / 3.0), b = r * std::pow(p.aspect_ratio, -1.0 / 3.0);
-        t = shape::ellipsoid_table(a, b, b, nodes);
-        c = shape::sh_fit([&](const Eigen::Vector3d& d) {
-              return 1.0 / std::sqrt(d.x() * d.x() / (a * a) + (d.y() * d.y() + d.z() * d.z()) / (b * b));
-            }, degree, 2 * shape::sh_count(degree));
+        t = shape::ellipsoid_table(r * ell_a, r * ell_b, r * ell_b, nodes);
+        c = r * unit_ellipsoid;
       } else {
         c = shape::sphere_coeffs(r, degree);
         t = shape::RadialTable::from_function([r](const Eigen::Vector3d&) { return r; }, 8);

@@ -32,6 +32,18 @@ class RadialTable {
   /// order; evaluate r there (e.g. in parallel) and pass the values to from_node_radii().
   static std::vector<Eigen::Vector3d> node_directions(int n);
 
+  /// The frame of cube face f (0..5): node (i, j) of the face (padded indices 0..n+1, in
+  /// node_directions() order face by face, j slowest) points along u e_a + v e_b + sign e_k,
+  /// normalised, with u = -1 + (i - 1) 2 / (n - 1) and v = -1 + (j - 1) 2 / (n - 1). Lets a
+  /// caller evaluate r on the nodes row by row (radial_table_from_sh does).
+  struct FaceAxes {
+    int k;
+    double sign;
+    int a;
+    int b;
+  };
+  static FaceAxes face_axes(int face);
+
   /// Builds a table from radii (metres, > 0) at node_directions(n), same order and size.
   static RadialTable from_node_radii(int n, std::vector<double> radii);
 
@@ -49,6 +61,11 @@ class RadialTable {
   /// Smallest / largest tabulated radius (metres) over the face nodes.
   double min_radius() const { return min_radius_; }
   double max_radius() const { return max_radius_; }
+
+  /// Smallest cosine of the angle between the outward normal and the radial direction over the
+  /// bilinear body (at its integration points; 1 for a sphere). A point at radial distance s
+  /// from the surface is roughly at least s times this from it.
+  double min_normal_cosine() const { return min_normal_cosine_; }
 
   /// Volume (m^3): integral of r^3/3 over the unit sphere, for the bilinear body.
   double volume() const { return volume_; }
@@ -87,7 +104,8 @@ class RadialTable {
     double u = 0.0, v = 0.0, t = 0.0, w = 0.0;
   };
   Cell cell_of(const Eigen::Vector3d& d) const;
-  // Integrates volume, centroid, area and inertia from the table (2 x 2 Gauss points per cell).
+  // Integrates volume, centroid, area and inertia from the table (2 x 2 Gauss points per cell),
+  // and finds the smallest normal cosine.
   void integrate();
 
   int n_ = 0;
@@ -96,6 +114,7 @@ class RadialTable {
   std::vector<double> r_;    // 6 * stride^2 radii (m)
   double min_radius_ = 0.0;
   double max_radius_ = 0.0;
+  double min_normal_cosine_ = 1.0;
   double volume_ = 0.0;
   Eigen::Vector3d centroid_ = Eigen::Vector3d::Zero();
   double surface_area_ = 0.0;

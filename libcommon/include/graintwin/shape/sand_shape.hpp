@@ -44,7 +44,7 @@ struct SandShapeParams {
 ///
 /// With the default parameters and degree 15, 200 grains measured (RadialTable n = 64) aspect ratio
 /// 1.34 +- 0.09 and sphericity 0.886 +- 0.037 (mean +- standard deviation; Ottawa sand: about
-/// 1.2-1.5 and 0.85-0.92 on average). A grain takes ~10-25 ms.
+/// 1.2-1.5 and 0.85-0.92 on average). A grain takes 1-2 ms (one core).
 Eigen::VectorXd random_sand_coeffs(const SandShapeParams& params, std::mt19937_64& rng);
 
 /// Coefficients of a sphere of the given radius (metres, > 0): c_00 = radius sqrt(4 pi), all
