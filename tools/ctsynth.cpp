@@ -41,7 +41,7 @@ struct Options {
   std::string voxel_size = "27.5um";
   double margin_vox = 4.0;
   std::string membrane_thickness = "0.3mm";
-  int supersample = 4;
+  int supersample = 0;
   double blur = 0.8, noise = 0.05, photons = 0.0, rings = 0.0, beam_hardening = 0.0;
   double grey_void = 0.10, grey_grain = 0.75, grey_membrane = 0.35;
   double grey_scale = 50000.0, grey_offset = 5000.0;
@@ -99,8 +99,10 @@ int main(int argc, char** argv) {
   app.add_option("--margin-vox", o.margin_vox, "Air around the sample and membrane (voxels)")->capture_default_str();
   app.add_option("--membrane-thickness", o.membrane_thickness, "Latex membrane around a cylinder (0 = none)")
       ->capture_default_str();
-  app.add_option("--supersample", o.supersample, "Partial-volume sub-samples per voxel edge")
-      ->check(CLI::Range(1, 16))->capture_default_str();
+  app.add_option("--supersample", o.supersample,
+                 "Partial volumes: 0 = analytic (secant plane per boundary voxel, exact for a plane), "
+                 "k = k^3 point samples per boundary voxel")
+      ->check(CLI::Range(0, 16))->capture_default_str();
   app.add_option("--blur", o.blur, "Point-spread sigma (voxels)")->capture_default_str();
   app.add_option("--noise", o.noise, "Gaussian noise sigma / (grain - void) contrast")->capture_default_str();
   app.add_option("--photons", o.photons, "Mean photon count at grain grey for Poisson noise (0 = none)")
@@ -289,7 +291,7 @@ int main(int argc, char** argv) {
         shell.thickness = membrane_t;
         shell.z0 = 0.0;
         shell.z1 = height_k;
-        membrane = render_shell(shell, shape, vs, origin, o.supersample);
+        membrane = render_shell(shell, shape, vs, origin, RenderParams{o.supersample});
       }
       const Volume<std::uint16_t> scan = simulate_scan(images.fraction, membrane_t > 0.0 ? &membrane : nullptr, sp);
       const fs::path scan_path = out.temp_path() / scan_name("scan", k);

@@ -58,25 +58,59 @@ std::vector<Eigen::Vector3d> subsample_offsets(int k, const Vec3& voxel_size) {
   return off;
 }
 
-// Smallest cos(angle) between the surface normal and the radial direction over a grain: the
-// radial distance to the surface overestimates the true distance by at most 1 / that factor.
-double min_normal_cosine(const shape::RadialTable& t) {
-  double c = 1.0;
-  const int n = 4000;
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = golden * i;
-    const Eigen::Vector3d d(r * std::cos(phi), r * std::sin(phi), z);
-    c = std::min(c, t.surface_normal(d).dot(d));
+// Body-frame offsets that drive the analytic partial volume of one grain's voxels: the voxel's
+// 2 x 2 x 2 Gauss points (at +-edge / (2 sqrt 3) from the centre) and the centres of its 8 halves
+// (+-edge / 4); world edge lengths; the spread of secant offsets that triggers a split.
+struct SecantFrame {
+  Eigen::Matrix3d body_to_world;
+  Eigen::Vector3d gauss[8], half[8];
+  Eigen::Vector3d edges;
+  double split_spread = 0.0;
+  double margin = 0.0;  // beyond its half extent plus this, a voxel is whole by its tangent plane
+};
+
+// Unit direction of body-frame point p (+z for p = 0).
+Eigen::Vector3d direction_of(const Eigen::Vector3d& p) {
+  const double len = p.norm();
+  return len > 0.0 ? Eigen::Vector3d(p / len) : Eigen::Vector3d::UnitZ();
+}
+
+// Analytic partial volume of the voxel (or, at scale 0.5, the half-voxel) centred at body-frame
+// point q, given the table's normal there: the fraction below the secant plane (RenderParams).
+// The plane's offset is the mean of the offsets through the 8 Gauss points' surface points; for
+// a quadratic surface that averages the sagitta the way the voxel's volume integral does, which a
+// tangent plane (one point) would miss by ~ curvature x voxel^2. A spread of those offsets
+// beyond frame.split_spread means the surface bends within the voxel: the halves are done
+// separately (once).
+double secant_fraction(const shape::RadialTable& t, const Eigen::Vector3d& q, const Eigen::Vector3d& normal,
+                       const SecantFrame& frame, double scale, bool may_split) {
+  double sum = 0.0, lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (const Eigen::Vector3d& g : frame.gauss) {
+    const Eigen::Vector3d d = direction_of(q + scale * g);
+    const double a = normal.dot(t.radius(d) * d - q);
+    sum += a;
+    lo = std::min(lo, a);
+    hi = std::max(hi, a);
   }
-  return std::max(c, 0.1);
+  if (may_split && hi - lo > scale * frame.split_spread) {
+    double f = 0.0;
+    for (const Eigen::Vector3d& c : frame.half) {
+      const Eigen::Vector3d qc = q + scale * c;
+      f += secant_fraction(t, qc, t.surface_normal(direction_of(qc)), frame, 0.5 * scale, false);
+    }
+    return 0.125 * f;
+  }
+  return box_fraction_below_plane(frame.body_to_world * normal, 0.125 * sum, scale * frame.edges);
 }
 
 struct GrainPrep {
   Eigen::Matrix3d world_to_body;
   Eigen::Vector3d position;
-  std::vector<Eigen::Vector3d> body_offsets;  // sub-sample offsets in the body frame
+  std::vector<Eigen::Vector3d> body_offsets;  // point-sample offsets in the body frame (supersample > 0)
+  SecantFrame secant;                         // analytic partial volume (supersample 0)
   double threshold = 0.0;                     // |radial distance| beyond which a voxel is whole
+  double reach = 0.0;                         // voxel centres farther from the grain centre are empty
+  double core = 0.0;                          // voxel centres nearer to it are whole
   long z0 = 0, z1 = -1, y0 = 0, y1 = -1, x0 = 0, x1 = -1;
 };
 
@@ -86,15 +120,60 @@ long clamp_index(double v, std::size_t n) {
 
 }  // namespace
 
+double box_fraction_below_plane(const Eigen::Vector3d& normal, double offset, const Eigen::Vector3d& edges) {
+  // Box coordinates xi in [0, 1]^3 (x = (xi - 1/2) e, an axis flipped where n_i < 0): the region
+  // is m . xi <= alpha with m_i = |n_i| e_i >= 0 and alpha = offset + sum(m) / 2.
+  double m1 = std::abs(normal.x()) * edges.x(), m2 = std::abs(normal.y()) * edges.y(),
+         m3 = std::abs(normal.z()) * edges.z();
+  const double sum = m1 + m2 + m3;
+  const double alpha = offset + 0.5 * sum;
+  if (alpha <= 0.0) return 0.0;
+  if (alpha >= sum) return 1.0;
+  m1 /= sum;
+  m2 /= sum;
+  m3 /= sum;
+  if (m1 > m2) std::swap(m1, m2);
+  if (m2 > m3) std::swap(m2, m3);
+  if (m1 > m2) std::swap(m1, m2);
+  // V(a) = [a^3 - sum_i (a - m_i)_+^3 + sum_i<j (a - m_i - m_j)_+^3 - ...] / (6 m1 m2 m3) for the
+  // normalised a <= 1/2 (V(a) = 1 - V(1 - a)), written per range of a so that nothing is divided
+  // by a vanishing m1 (in the last two ranges a - m2 and a - m3 are below m1, so their cubes over
+  // m1 stay small).
+  const double a_in = alpha / sum;
+  const bool flip = a_in > 0.5;
+  const double a = flip ? 1.0 - a_in : a_in;
+  double v;
+  if (a < m1) {
+    v = a * a * a / (6.0 * m1 * m2 * m3);
+  } else if (a < m2) {
+    v = (3.0 * a * (a - m1) + m1 * m1) / (6.0 * m2 * m3);
+  } else if (a < std::min(m1 + m2, m3)) {
+    const double c2 = a - m2;
+    v = (3.0 * a * a - 3.0 * a * m1 + m1 * m1 - c2 * c2 * c2 / m1) / (6.0 * m2 * m3);
+  } else if (m1 + m2 < m3) {
+    v = (a - 0.5 * (m1 + m2)) / m3;  // the plane crosses the box's four long edges
+  } else if (m1 > 0.0) {
+    const double c2 = a - m2, c3 = a - m3;
+    v = (3.0 * a * a - 3.0 * a * m1 + m1 * m1 - (c2 * c2 * c2 + c3 * c3 * c3) / m1) / (6.0 * m2 * m3);
+  } else {
+    v = 0.5;  // m1 = 0 and m2 = m3 = a = 1/2: the plane halves the box
+  }
+  v = std::clamp(v, 0.0, 1.0);
+  return flip ? 1.0 - v : v;
+}
+
 GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& shape, const Vec3& voxel_size,
                           const Vec3& origin, const RenderParams& params, const std::function<void(double)>& progress) {
-  if (params.supersample < 1 || params.supersample > 16)
-    throw UsageError("supersampling must be between 1 and 16 samples per voxel edge (got " +
+  if (params.supersample < 0 || params.supersample > 16)
+    throw UsageError("supersample must be 0 (analytic partial volumes) or 1 to 16 samples per voxel edge (got " +
                      std::to_string(params.supersample) + ")");
   GrainImages out{Volume<float>(shape, voxel_size, origin), Volume<std::uint32_t>(shape, voxel_size, origin)};
   const double half_diagonal =
       0.5 * std::sqrt(voxel_size[0] * voxel_size[0] + voxel_size[1] * voxel_size[1] + voxel_size[2] * voxel_size[2]);
-  const auto offsets = subsample_offsets(params.supersample, voxel_size);
+  const bool analytic = params.supersample == 0;
+  const auto offsets = analytic ? std::vector<Eigen::Vector3d>{} : subsample_offsets(params.supersample, voxel_size);
+  const Eigen::Vector3d edges(voxel_size[2], voxel_size[1], voxel_size[0]);
+  const double gauss = 0.5 / std::sqrt(3.0);
 
   std::vector<GrainPrep> prep(grains.size());
 #pragma omp parallel for schedule(dynamic)
@@ -105,8 +184,24 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
     p.position = pg.position;
     p.body_offsets.reserve(offsets.size());
     for (const auto& o : offsets) p.body_offsets.push_back(p.world_to_body * o);
-    p.threshold = half_diagonal / min_normal_cosine(*pg.shape);
-    const double rmax = pg.shape->max_radius() + half_diagonal;
+    if (analytic) {
+      SecantFrame& f = p.secant;
+      f.body_to_world = p.world_to_body.transpose();
+      f.edges = edges;
+      f.split_spread = 0.1 * std::cbrt(edges.prod());
+      f.margin = 0.25 * std::cbrt(edges.prod());
+      for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3d sign(k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0);
+        f.gauss[k] = p.world_to_body * (gauss * sign.cwiseProduct(edges));
+        f.half[k] = p.world_to_body * (0.25 * sign.cwiseProduct(edges));
+      }
+    }
+    // The radial distance to the surface overestimates the true distance by at most 1 / the
+    // smallest normal cosine (floored, for safety, at a slope of 84 degrees).
+    p.threshold = half_diagonal / std::max(pg.shape->min_normal_cosine(), 0.1);
+    p.reach = pg.shape->max_radius() + half_diagonal;
+    p.core = pg.shape->min_radius() - half_diagonal;
+    const double rmax = p.reach;
     // Index range of voxel centres within rmax of the grain centre.
     p.x0 = clamp_index((pg.position.x() - rmax - origin[2]) / voxel_size[2], shape[2]);
     p.x1 = clamp_index((pg.position.x() + rmax - origin[2]) / voxel_size[2] + 1.0, shape[2]);
@@ -120,7 +215,7 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
   for (std::size_t g = 0; g < grains.size(); ++g)
     for (long z = prep[g].z0; z <= prep[g].z1; ++z) per_slice[z].push_back(static_cast<std::uint32_t>(g));
 
-  const double inv_samples = 1.0 / static_cast<double>(offsets.size());
+  const double inv_samples = analytic ? 0.0 : 1.0 / static_cast<double>(offsets.size());
   std::size_t slices_done = 0;
 #pragma omp parallel
   {
@@ -132,25 +227,47 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
         const GrainPrep& p = prep[g];
         const shape::RadialTable& t = *grains[g].shape;
         const double wz = origin[0] + static_cast<double>(z) * voxel_size[0];
+        const double dz = wz - p.position.z();
         for (long y = p.y0; y <= p.y1; ++y) {
           const double wy = origin[1] + static_cast<double>(y) * voxel_size[1];
-          for (long x = p.x0; x <= p.x1; ++x) {
+          // Only the row's voxel centres within reach of the grain centre.
+          const double dy = wy - p.position.y();
+          const double across2 = p.reach * p.reach - dy * dy - dz * dz;
+          if (across2 < 0.0) continue;
+          const double across = std::sqrt(across2);
+          const long xa = std::max(p.x0, static_cast<long>(std::ceil((p.position.x() - across - origin[2]) / voxel_size[2])));
+          const long xb = std::min(p.x1, static_cast<long>(std::floor((p.position.x() + across - origin[2]) / voxel_size[2])));
+          for (long x = xa; x <= xb; ++x) {
             const Eigen::Vector3d q = p.world_to_body *
                                       (Eigen::Vector3d(origin[2] + static_cast<double>(x) * voxel_size[2], wy, wz) - p.position);
             const double dist = q.norm();
-            const double s = dist > 0.0 ? t.radius(q) - dist : t.radius(Eigen::Vector3d::UnitZ());
-            if (s < -p.threshold) continue;
-            const std::size_t i = out.fraction.index(z, static_cast<std::size_t>(y), static_cast<std::size_t>(x));
-            double f = 1.0;
-            if (s < p.threshold) {
-              int inside = 0;
-              for (const auto& o : p.body_offsets) {
-                const Eigen::Vector3d qs = q + o;
-                const double r = t.radius(qs);
-                inside += qs.squaredNorm() <= r * r;
+            double s, f = 1.0;  // s: radial depth of the centre inside the grain
+            if (dist < p.core) {
+              s = t.min_radius() - dist;  // a lower bound, enough to rank it against other grains
+            } else {
+              s = dist > 0.0 ? t.radius(q) - dist : t.radius(Eigen::Vector3d::UnitZ());
+              if (s < -p.threshold) continue;
+              if (s < p.threshold && analytic) {
+                // The tangent plane settles most of the voxels the radial test leaves open (its
+                // bound holds for the steepest spot of the grain, not for this one); the margin
+                // covers the surface's bending away from that plane within the voxel.
+                const Eigen::Vector3d d = direction_of(q);
+                const Eigen::Vector3d normal = t.surface_normal(d);
+                const double tangent_offset = s * normal.dot(d);
+                const double extent = 0.5 * (p.secant.body_to_world * normal).cwiseAbs().dot(edges) + p.secant.margin;
+                if (tangent_offset < -extent) continue;
+                if (tangent_offset <= extent) f = secant_fraction(t, q, normal, p.secant, 1.0, true);
+              } else if (s < p.threshold) {
+                int inside = 0;
+                for (const auto& o : p.body_offsets) {
+                  const Eigen::Vector3d qs = q + o;
+                  const double r = t.radius(qs);
+                  inside += qs.squaredNorm() <= r * r;
+                }
+                f = inside * inv_samples;
               }
-              f = inside * inv_samples;
             }
+            const std::size_t i = out.fraction.index(z, static_cast<std::size_t>(y), static_cast<std::size_t>(x));
             out.fraction.values()[i] += static_cast<float>(f);
             const std::size_t j = static_cast<std::size_t>(y) * shape[2] + static_cast<std::size_t>(x);
             if (s > 0.0 && s > depth[j]) {
@@ -174,9 +291,9 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
 }
 
 Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& voxel_size, const Vec3& origin,
-                           int supersample) {
+                           const RenderParams& params) {
   Volume<float> out(shape, voxel_size, origin);
-  const auto offsets = subsample_offsets(supersample, voxel_size);
+  const auto offsets = subsample_offsets(params.supersample > 0 ? params.supersample : 4, voxel_size);
   const double h = 0.5 * std::sqrt(voxel_size[0] * voxel_size[0] + voxel_size[1] * voxel_size[1] +
                                    voxel_size[2] * voxel_size[2]);
   auto inside = [&](double x, double y, double z) {
