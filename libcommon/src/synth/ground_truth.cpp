@@ -1,9 +1,6 @@
 #include "graintwin/synth/ground_truth.hpp"
 
-#include <algorithm>
 #include <cmath>
-#include <map>
-#include <tuple>
 
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -14,51 +11,17 @@ namespace graintwin::synth {
 
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
                                        const std::vector<PackedGrain>& poses, double search_gap, double tolerance) {
-  const std::size_t n = shapes.size();
-  double rmax = 0.0;
-  for (const auto* s : shapes) rmax = std::max(rmax, s->max_radius());
-  const double cell = 2.0 * rmax + search_gap;
-  using Key = std::tuple<long, long, long>;
-  std::map<Key, std::vector<std::uint32_t>> grid;
-  auto key_of = [&](const Eigen::Vector3d& x) {
-    return Key{static_cast<long>(std::floor(x.x() / cell)), static_cast<long>(std::floor(x.y() / cell)),
-               static_cast<long>(std::floor(x.z() / cell))};
-  };
-  for (std::uint32_t i = 0; i < n; ++i) grid[key_of(poses[i].position)].push_back(i);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> candidates;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const auto [cx, cy, cz] = key_of(poses[i].position);
-    for (long dx = -1; dx <= 1; ++dx)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dz = -1; dz <= 1; ++dz) {
-          const auto it = grid.find(Key{cx + dx, cy + dy, cz + dz});
-          if (it == grid.end()) continue;
-          for (std::uint32_t j : it->second) {
-            if (j <= i) continue;
-            const double reach = shapes[i]->max_radius() + shapes[j]->max_radius() + search_gap;
-            if ((poses[i].position - poses[j].position).squaredNorm() <= reach * reach) candidates.emplace_back(i, j);
-          }
-        }
-  }
-  std::sort(candidates.begin(), candidates.end());
-  std::vector<std::optional<TrueContact>> found(candidates.size());
-#pragma omp parallel for schedule(dynamic, 16)
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
-    const auto [i, j] = candidates[k];
-    const auto c = pair_contact(*shapes[i], poses[i], *shapes[j], poses[j], search_gap);
-    if (!c) continue;
-    TrueContact t;
-    t.low = i + 1;
-    t.high = j + 1;
-    t.overlap = c->overlap;
-    t.point = c->point;
-    t.normal = c->normal;
-    t.touching = std::abs(c->overlap) <= tolerance;
-    found[k] = t;
-  }
   std::vector<TrueContact> out;
-  for (auto& f : found)
-    if (f) out.push_back(*f);
+  for (const GrainContact& c : find_contacts(shapes, poses, search_gap)) {
+    TrueContact t;
+    t.low = static_cast<std::uint32_t>(c.a + 1);
+    t.high = static_cast<std::uint32_t>(c.b + 1);
+    t.overlap = c.contact.overlap;
+    t.point = c.contact.point;
+    t.normal = c.contact.normal;
+    t.touching = std::abs(c.contact.overlap) <= tolerance;
+    out.push_back(t);
+  }
   return out;
 }
 

@@ -24,8 +24,9 @@ struct TrueContact {
   bool touching = false;              ///< |overlap| <= the packing tolerance
 };
 
-/// Every pair closer than `search_gap` (m), found through a cell grid (never all pairs).
-/// Labels are index + 1. Parallel and deterministic (sorted by (low, high)).
+/// Every pair closer than `search_gap` (m), overlapping pairs included: find_contacts() (the
+/// packer's contact search) with labels index + 1 and `touching` set for |overlap| <= tolerance.
+/// Parallel and deterministic (sorted by (low, high)).
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
                                        const std::vector<PackedGrain>& poses, double search_gap,
                                        double tolerance);
