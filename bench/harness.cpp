@@ -94,6 +94,8 @@ std::string Report::markdown(const std::string& reference) const {
   return s.str();
 }
 
+std::filesystem::path bin_dir() { return std::filesystem::read_symlink("/proc/self/exe").parent_path(); }
+
 std::string machine_summary() {
   std::ifstream cpu("/proc/cpuinfo");
   std::string line, model = "unknown CPU";

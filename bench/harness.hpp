@@ -43,6 +43,9 @@ class Report {
   std::vector<Row> rows_;
 };
 
+/// The folder of the running benchmark executable (build/bin), where the tools are too.
+std::filesystem::path bin_dir();
+
 /// Machine line for the report: CPU model, cores, date.
 std::string machine_summary();
 
