@@ -35,3 +35,44 @@ inline constexpr const char* history = "/provenance/history";
 }  // namespace path
 
 }  // namespace graintwin::schema
+
+// kind=contacts (labels2contacts), layout in docs/formats.md.
+namespace graintwin::schema::contacts {
+inline constexpr const char* group = "/contacts";
+inline constexpr const char* pair = "/contacts/pair";                  ///< uint32 (M x 2), low first
+inline constexpr const char* normal = "/contacts/normal";              ///< (M x 3) unit, low -> high: refined, else PCA
+inline constexpr const char* normal_pca = "/contacts/normal_pca";      ///< (M x 3) unit, PCA of the contact voxels
+inline constexpr const char* vector_area = "/contacts/vector_area";    ///< (M x 3) m^2, oriented faces low -> high
+inline constexpr const char* area = "/contacts/area";                  ///< (M) m^2
+inline constexpr const char* centroid = "/contacts/centroid";          ///< (M x 3) m, mean of the contact voxels
+inline constexpr const char* point = "/contacts/point";                ///< (M x 3) m, refined contact point, else centroid
+inline constexpr const char* branch = "/contacts/branch";              ///< (M x 3) m, centroid(high) - centroid(low)
+inline constexpr const char* voxels = "/contacts/voxels";              ///< uint64 (M x 2), contact voxels of low, high
+inline constexpr const char* confidence = "/contacts/confidence";      ///< (M) P(gap < tolerance); NaN unknown
+inline constexpr const char* gap = "/contacts/gap";                    ///< (M) m, fitted surface gap; NaN unknown
+inline constexpr const char* gap_sd = "/contacts/gap_sd";              ///< (M) m
+inline constexpr const char* radius = "/contacts/radius";              ///< (M x 2) m, fitted local radii of low, high
+inline constexpr const char* blur = "/contacts/blur";                  ///< (M) m, fitted edge width
+inline constexpr const char* fit_rms = "/contacts/fit_rms";            ///< (M) residual rms / contrast
+inline constexpr const char* fit_status = "/contacts/fit_status";      ///< uint8 (M), codes in its attribute
+inline constexpr const char* accepted = "/contacts/accepted";          ///< uint8 (M), counted in Z, fabric, roses
+inline constexpr const char* grain_label = "/grains/label";            ///< uint32 (N)
+inline constexpr const char* grain_coordination = "/grains/coordination";  ///< uint32 (N)
+inline constexpr const char* grain_touches_edge = "/grains/touches_edge";  ///< uint8 (N)
+inline constexpr const char* coordination_z = "/coordination/z";       ///< uint32: Z = 0 .. max
+inline constexpr const char* coordination_count = "/coordination/count";  ///< uint64: grains with that Z
+inline constexpr const char* fabric_normal = "/fabric/normal";         ///< group: fabric of the normals
+inline constexpr const char* fabric_branch = "/fabric/branch";         ///< group: fabric of the branch vectors
+inline constexpr const char* rose_normal = "/rose/normal";             ///< group: rose counts of the normals
+inline constexpr const char* rose_branch = "/rose/branch";             ///< group: rose counts of the branch vectors
+// Members of each fabric group and each rose group.
+inline constexpr const char* tensor = "tensor";                        ///< (3 x 3)
+inline constexpr const char* principal_values = "principal_values";    ///< (3), descending
+inline constexpr const char* principal_directions = "principal_directions";  ///< (3 x 3), row k = direction k
+inline constexpr const char* anisotropy = "anisotropy";                ///< scalar a
+inline constexpr const char* count = "count";                          ///< scalar, directions used
+inline constexpr const char* theta_edges = "theta_edges";              ///< (n_theta + 1) rad
+inline constexpr const char* phi_edges = "phi_edges";                  ///< (n_phi + 1) rad
+inline constexpr const char* counts = "counts";                        ///< uint64 (n_theta x n_phi)
+inline constexpr const char* density = "density";                      ///< (n_theta x n_phi) 1/sr
+}  // namespace graintwin::schema::contacts
