@@ -153,8 +153,8 @@ Fit fit_model(const std::vector<Sample>& samples, Model m, double contrast, doub
   Fit out;
   fit_levels(samples, m);
   if (!(m.g1 * contrast > 0.0)) m.g1 = contrast, m.g0 = 0.0;
-  ParamMat jtj;
-  ParamVec jtr;
+  ParamMat jtj, trial_jtj;
+  ParamVec jtr, trial_jtr;
   double cost = evaluate(samples, m, &jtj, &jtr);
   double lambda = 1e-3;
   bool converged = false;
@@ -166,11 +166,16 @@ Fit fit_model(const std::vector<Sample>& samples, Model m, double contrast, doub
       a.diagonal() += lambda * (jtj.diagonal().array() + 1e-12).matrix();
       const ParamVec d = a.ldlt().solve(-jtr);
       const Model trial = stepped(m, d);
-      const double c = trial.g1 * contrast > 0.0 ? evaluate(samples, trial, nullptr, nullptr) : cost;
+      // The trial's derivatives come with its cost: an accepted step needs no second pass.
+      const double c = trial.g1 * contrast > 0.0 ? evaluate(samples, trial, &trial_jtj, &trial_jtr) : cost;
       if (c < cost) {
-        converged = cost - c < 1e-10 * cost || d.norm() < 1e-7;
+        // Converged once the geometry moves by less than 1e-3 voxel and 1e-4 rad (far below the
+        // accuracy the noise allows), or the cost stops falling.
+        converged = (d.segment<3>(0).norm() < 1e-3 && d.segment<2>(3).norm() < 1e-4 && std::abs(d[7]) < 1e-3) ||
+                    cost - c < 1e-10 * cost;
         m = trial;
         cost = c;
+        jtj = trial_jtj, jtr = trial_jtr;
         lambda = std::max(lambda / 4.0, 1e-9);
         accepted = true;
       } else {
@@ -178,7 +183,6 @@ Fit fit_model(const std::vector<Sample>& samples, Model m, double contrast, doub
       }
     }
     if (!accepted) converged = true;  // no step lowers the cost: at a minimum to rounding
-    else cost = evaluate(samples, m, &jtj, &jtr);
   }
   out.model = m;
   out.cost = cost;
