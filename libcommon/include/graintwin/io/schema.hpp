@@ -76,3 +76,20 @@ inline constexpr const char* phi_edges = "phi_edges";                  ///< (n_p
 inline constexpr const char* counts = "counts";                        ///< uint64 (n_theta x n_phi)
 inline constexpr const char* density = "density";                      ///< (n_theta x n_phi) 1/sr
 }  // namespace graintwin::schema::contacts
+
+// kind=tracks (shapes2tracks), layout in docs/formats.md. N tracks, T scans.
+namespace graintwin::schema::tracks {
+inline constexpr const char* label = "/tracks/label";                  ///< uint32 (N x T), label in each scan, 0 = missing
+inline constexpr const char* centroid = "/tracks/centroid";            ///< (N x T x 3) m, NaN where missing
+inline constexpr const char* displacement = "/tracks/displacement";    ///< (N x T x 3) m, from the track's first scan
+inline constexpr const char* increment = "/tracks/increment";          ///< (N x T x 3) m, from the track's previous scan
+inline constexpr const char* rotation = "/tracks/rotation";            ///< (N x T x 4) quaternion (w, x, y, z) from the first scan
+inline constexpr const char* rotation_step = "/tracks/rotation_step";  ///< (N x T x 4) quaternion from the previous scan
+inline constexpr const char* rotation_defined = "/tracks/rotation_defined";  ///< uint8 (N x T)
+inline constexpr const char* rotation_misfit = "/tracks/rotation_misfit";    ///< (N x T) surface misfit / equivalent radius
+inline constexpr const char* confidence = "/tracks/confidence";        ///< (N x T) of the match into scan t
+inline constexpr const char* parameters = "/tracks/parameters";        ///< string (1), JSON
+inline constexpr const char* steps = "/steps";                         ///< group: per-scan counts (T)
+inline constexpr const char* scan_file = "/scans/file";                ///< string (T)
+inline constexpr const char* scan_d50 = "/scans/d50";                  ///< (T) m
+}  // namespace graintwin::schema::tracks
