@@ -49,8 +49,9 @@ int main(int argc, char** argv) {
                  "Candidate window (d50 of the reference scan): paper and baselines; improved's first pass and its largest window")
       ->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--volume-tol", co.match.volume_tol,
-                 "Largest relative volume change |v_j - v_i| / v_i of a candidate (negative: no volume filter)")
-      ->capture_default_str();
+                 "Largest relative volume change |v_j - v_i| / v_i of a candidate (negative: no filter); default 0.10 "
+                 "for paper and volume (the paper's), none for improved (its cost weighs the volume change); nearest "
+                 "never filters");
   app.add_option("--passes", co.match.passes, "improved: prediction and assignment passes")
       ->check(CLI::Range(1, 10))->capture_default_str();
   app.add_option("--local-radius", co.match.local_radius_d50, "improved: radius of the local affine fits (d50)")
@@ -147,7 +148,7 @@ int main(int argc, char** argv) {
 
     nlohmann::json p = {{"method", method_name(co.match.method)},
                         {"window_d50", co.match.window_d50},
-                        {"volume_tol", co.match.volume_tol},
+                        {"volume_tol", volume_filter(co.match)},
                         {"max_gap", co.max_gap},
                         {"backward_check", co.match.backward_check},
                         {"rotation", rotation},

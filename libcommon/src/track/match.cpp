@@ -36,7 +36,7 @@ bool volume_ok(const ScanGrains& ref, std::size_t i, const ScanGrains& def, std:
 }
 
 /// C1 and C2 of Algorithm 1 with the given score: every grain of `def` within `window` of each
-/// reference grain's own position whose volume passes the filter.
+/// reference grain's own position whose volume passes the filter (negative: none).
 Candidates window_candidates(const ScanGrains& ref, const ScanGrains& def, const PointGrid& grid, Method method,
                              double window, double volume_tol) {
   Candidates c;
@@ -44,7 +44,7 @@ Candidates window_candidates(const ScanGrains& ref, const ScanGrains& def, const
   for (std::size_t i = 0; i < ref.size(); ++i) {
     row.clear();
     grid.for_each_within(ref.centroid[i], window, [&](std::size_t j, double d2) {
-      if (method != Method::nearest && !volume_ok(ref, i, def, j, volume_tol)) return;
+      if (!volume_ok(ref, i, def, j, volume_tol)) return;
       const double s = method == Method::nearest  ? std::sqrt(d2)
                        : method == Method::volume ? std::abs(def.volume[j] - ref.volume[i]) / ref.volume[i]
                                                   : invariant_distance(ref, i, def, j);
@@ -95,7 +95,7 @@ Matching greedy_match(const ScanGrains& ref, const ScanGrains& def, const MatchO
   m.predicted = ref.centroid;
   const double window = o.window_d50 * ref.d50;
   const PointGrid grid(def.centroid, ref.d50);
-  const Candidates c = window_candidates(ref, def, grid, o.method, window, o.volume_tol);
+  const Candidates c = window_candidates(ref, def, grid, o.method, window, volume_filter(o));
   m.partner = deferred_acceptance(c, def.size(), m.score);
   m.diagnostics.mean_candidates = ref.size() ? static_cast<double>(c.column.size()) / ref.size() : 0.0;
   m.confidence.assign(ref.size(), nan);
@@ -126,7 +126,7 @@ struct Anchors {
 
 /// The bootstrap anchors: pairs that are each other's best by the paper's criteria (C1, C2, D).
 Anchors mutual_best(const ScanGrains& ref, const ScanGrains& def, const PointGrid& grid, const MatchOptions& o) {
-  const Candidates c = window_candidates(ref, def, grid, Method::paper, o.window_d50 * ref.d50, o.volume_tol);
+  const Candidates c = window_candidates(ref, def, grid, Method::paper, o.window_d50 * ref.d50, volume_filter(o));
   std::vector<int> best_ref(def.size(), -1);
   std::vector<double> best_score(def.size(), std::numeric_limits<double>::infinity());
   for (std::size_t i = 0; i < ref.size(); ++i)
@@ -158,7 +158,7 @@ struct Predictor {
 
 Predictor build_predictor(const Anchors& an, double d50, const MatchOptions& o) {
   Predictor p;
-  p.floor = 0.01 * d50;
+  p.floor = 0.02 * d50;  // a third of a voxel at 16 voxels per d50: segmented centroids repeat no better
   p.clip = 0.5 * d50;
   const std::size_t n = an.size();
   const Affine base = robust_affine(an.from, an.to, 0.25 * d50, 128, 1);
@@ -226,6 +226,7 @@ Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& 
   std::vector<std::size_t> self(ref.size(), none);
   for (std::size_t a = 0; a < an.size(); ++a)
     if (an.ref_index[a] != none) self[an.ref_index[a]] = a;
+  const double gate = volume_filter(o);
   Pass pass;
   pass.predicted.resize(ref.size());
   std::vector<std::vector<std::pair<std::uint32_t, double>>> rows(ref.size());
@@ -237,7 +238,7 @@ Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& 
     const double window = std::clamp(o.window_sigmas * sigma, o.min_window_d50 * d50, o.window_d50 * d50);
     pass.predicted[i] = e.position;
     grid.for_each_within(e.position, window, [&](std::size_t j, double d2) {
-      if (!volume_ok(ref, i, def, j, o.volume_tol)) return;
+      if (!volume_ok(ref, i, def, j, gate)) return;
       const double zs = shape_term(ref, i, def, j) / k.shape;
       const double zv = (std::log(def.volume[j] / ref.volume[i]) - k.volume_mean) / k.volume;
       rows[i].push_back({static_cast<std::uint32_t>(j), zs * zs + zv * zv + d2 / (sigma * sigma)});
@@ -389,6 +390,11 @@ ScanGrains subset(const ScanGrains& scan, const std::vector<std::size_t>& index)
 double invariant_distance(const ScanGrains& a, std::size_t i, const ScanGrains& b, std::size_t j) {
   const Eigen::Index k = std::min(a.invariants.cols(), b.invariants.cols());
   return (a.invariants.row(static_cast<Eigen::Index>(i)).head(k) - b.invariants.row(static_cast<Eigen::Index>(j)).head(k)).norm();
+}
+
+double volume_filter(const MatchOptions& o) {
+  if (o.method == Method::nearest) return -1.0;
+  return o.volume_tol.value_or(o.method == Method::improved ? -1.0 : 0.10);
 }
 
 std::string method_name(Method m) {

@@ -121,8 +121,9 @@ RotationEstimate RotationEstimator::estimate(const shape::GrainShape& a, const s
   if (options_.method == RotationMethod::axes) {
     result = starts;
   } else {
-    // Surface alignment. Extra starts turned about each principal axis by 45-degree steps cover
-    // grains whose ellipsoid is nearly symmetric; the best few distinct starts are refined by
+    // Surface alignment. Extra starts turned about each principal axis by odd multiples of 45
+    // degrees (the sign choices hold the 180-degree turns) cover grains whose ellipsoid is nearly
+    // symmetric, whose axes may be swapped; the best few distinct starts are refined by
     // Levenberg-Marquardt on the radial differences over rotation vectors (numerical Jacobian).
     const std::size_t base = starts.size();
     for (std::size_t s = 0; s < base; ++s)

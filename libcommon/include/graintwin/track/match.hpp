@@ -18,6 +18,7 @@
 // Candidates always come from a spatial index (PointGrid), never from all pairs.
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,15 +55,25 @@ Method parse_method(const std::string& name);
 struct MatchOptions {
   Method method = Method::improved;
   double window_d50 = 3.0;     ///< C1: candidate radius in d50 of the reference scan (improved: first pass)
-  double volume_tol = 0.10;    ///< C2: largest |v_j - v_i| / v_i; negative = no volume filter
+  /// C2: largest |v_j - v_i| / v_i of a candidate; negative = no filter. Unset: 0.10 for paper and
+  /// volume (the paper's); none for improved, whose cost weighs the volume change (segmentation
+  /// changes a grain's volume by more than 10 % between scans more often than that filter allows,
+  /// and the cost alone still reports merged or split grains lost); nearest never filters.
+  std::optional<double> volume_tol;
   // The improved mode.
   int passes = 2;              ///< prediction + assignment passes (the first seeded by the bootstrap pairs)
   double local_radius_d50 = 3.0;  ///< neighbourhood of the local affine fit
   double window_sigmas = 6.0;  ///< candidate window = this many position residual spreads ...
   double min_window_d50 = 0.5; ///< ... but at least this (and at most window_d50)
-  double lost_cost = 36.0;     ///< cost of leaving a reference grain unmatched (a right match costs ~5 on average, like chi^2 with 5 degrees of freedom)
+  /// Cost of leaving a reference grain unmatched. A right match costs about 5 (like chi^2 with 5
+  /// degrees of freedom); 144 was chosen on ctsynth series (docs/shapes2tracks.md): it keeps grains
+  /// whose segmentation changed a little and still reports merged or split grains lost.
+  double lost_cost = 144.0;
   bool backward_check = true;  ///< match the scans the other way round too; disagreeing matches get confidence 0
 };
+
+/// The volume filter options.method uses (see MatchOptions::volume_tol); negative = none.
+double volume_filter(const MatchOptions& options);
 
 /// Figures of one matching, for logs and benchmarks.
 struct MatchDiagnostics {
