@@ -1,0 +1,90 @@
+#pragma once
+// FDEM contact (SPEC.md section 7): surface nodes of one grain against the surface triangles of
+// another, penalty normal force with a dashpot (never attractive), Coulomb friction with a
+// tangential spring history per node contact, rigid platens with friction. Broad phase: a uniform
+// cell grid over skin-inflated grain boxes, rebuilt only when a node moved more than skin / 2.
+// Narrow phase: a per-grain AABB tree over its surface triangles, refitted every step.
+// Rules, equations and measured costs: docs/fdem_contact.md.
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "graintwin/fdem/model.hpp"
+
+namespace graintwin::io {
+class H5File;
+}
+
+namespace graintwin::fdem {
+
+struct ContactOptions {
+  /// Verlet skin, m: grain boxes are inflated by it and the candidate pairs are rebuilt once some
+  /// node moved more than skin / 2. 0 = automatic, 0.05 x the smallest grain's box diagonal.
+  double skin = 0;
+  bool enabled = true;
+};
+
+/// A platen's current state, as the loading protocol moves it.
+struct PlatenState {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();      ///< m, a point on the plane
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();    ///< unit, into the sample
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   ///< m/s
+  double friction = 0;                                  ///< Coulomb coefficient
+};
+
+/// Resultant of one grain pair (or grain-platen pair) over its node contacts.
+struct ContactRecord {
+  std::uint32_t a = 0, b = 0;  ///< grain indices, a < b; b = grains.size() + platen index for platens
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< m, normal-force-weighted mean contact point
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, a -> b (direction of the normal force on b)
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();   ///< N, total force on b (minus that on a)
+  double overlap = 0;                                ///< m, deepest node penetration of the pair
+};
+
+struct ContactStepStats {
+  std::size_t pairs = 0;          ///< candidate grain pairs of the broad phase
+  std::size_t node_contacts = 0;  ///< active node contacts after this step
+  bool rebuilt = false;           ///< the broad phase was rebuilt in this step
+  double elastic_energy = 0;      ///< J, stored in the normal and tangential penalty springs now
+  double dissipated = 0;          ///< J, by dashpots and friction slip during this step
+  double max_overlap = 0;         ///< m
+};
+
+class ContactModel {
+ public:
+  /// `node_mass` has one lumped mass (kg) per model node; the reference node positions of `model`
+  /// give the node areas A_node. Throws DataError when the model has no surface or node masses do
+  /// not match the nodes.
+  ContactModel(const Model& model, std::span<const double> node_mass, const ContactOptions& options);
+  ~ContactModel();
+  ContactModel(ContactModel&&) noexcept;
+  ContactModel& operator=(ContactModel&&) noexcept;
+
+  /// Adds penalty + dashpot normal forces and Coulomb friction (tangential spring history per
+  /// node contact) to f (one entry per model node) for the current node positions x and
+  /// velocities v; platen contacts too. Deterministic for a given thread count.
+  ContactStepStats add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                              std::span<const PlatenState> platens, double dt,
+                              std::span<Eigen::Vector3d> f);
+  /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
+  std::vector<ContactRecord> contacts() const;
+  /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).
+  double stable_time_step() const;
+  /// Number of broad-phase builds so far.
+  std::size_t rebuild_count() const;
+  /// The skin in use, m (options.skin or the automatic value).
+  double skin() const;
+  /// Writes / reads the friction history under `group`, for checkpoints: a restart continues
+  /// exactly like the uninterrupted run.
+  void save(io::H5File& file, const std::string& group) const;
+  void load(const io::H5File& file, const std::string& group);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace graintwin::fdem
