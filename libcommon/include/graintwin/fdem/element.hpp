@@ -1,0 +1,104 @@
+#pragma once
+// Elastic tetrahedra for FDEM grains (SPEC.md section 7): total-Lagrangian St Venant-Kirchhoff
+// 4-node (one quadrature point) and 10-node (4-point degree-2 rule) tetrahedra. Reference shape-
+// function gradients dN/dX are precomputed per quadrature point, so a step needs only the current
+// node positions: F = sum_a x_a (dN_a/dX)^T, E = (F^T F - I) / 2, S = lambda tr(E) I + 2 mu E,
+// internal force f_a = sum_q w_q F S dN_a/dX. A rigid motion gives F = R, E = 0: no stress at any
+// rotation angle. Node order is gmsh's (model.hpp). Units: m, Pa, N, J.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "graintwin/fdem/model.hpp"
+
+namespace graintwin::fdem {
+
+/// Lame constants of a material, Pa.
+struct Lame {
+  double lambda = 0, mu = 0;
+};
+Lame lame_constants(const Material& material);
+/// P-wave (dilatational) speed sqrt(E (1 - nu) / (rho (1 + nu) (1 - 2 nu))), m/s.
+double dilatational_wave_speed(const Material& material);
+
+/// The two mid-edge node rules of the gmsh 10-node tetrahedron: node 4 + k sits on edge kTet10Edges[k].
+inline constexpr std::array<std::array<int, 2>, 6> kTet10Edges{{{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}}};
+
+/// Shape functions N (4 or 10 values) at natural coordinates xi (corner k at xi = e_k, corner 0 at 0).
+void tet_shape_functions(int nodes, const Eigen::Vector3d& xi, double* N);
+/// dN/dxi, one row per node (4 or 10 rows written into `dN`, 3 columns).
+void tet_shape_derivatives(int nodes, const Eigen::Vector3d& xi, Eigen::Matrix<double, 10, 3>& dN);
+
+/// A quadrature rule on the reference tetrahedron (volume 1/6): points in natural coordinates.
+struct TetRule {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> weights;
+};
+/// The rule the element forces use: 1 point for 4 nodes, the 4-point degree-2 rule for 10.
+const TetRule& stiffness_rule(int nodes);
+/// Collapsed (Duffy) Gauss-Legendre rule with 5 points per direction, exact to polynomial degree
+/// 7: consistent-mass diagonals and inertia tensors of curved 10-node tetrahedra.
+const TetRule& exact_rule();
+
+/// Physical points and weights (w |det J|) of `rule` mapped through element e's reference shape.
+void map_rule(const Model& model, std::size_t element, const TetRule& rule, std::vector<Eigen::Vector3d>& points,
+              std::vector<double>& weights);
+
+/// Signed reference volume of element e, m^3 (exact for curved 10-node elements).
+double element_volume(const Model& model, std::size_t element);
+/// Smallest altitude of element e's corner tetrahedron (3 V / largest face area), m.
+double element_min_altitude(const Model& model, std::size_t element);
+
+/// Precomputed reference gradients of the elements of the model's deformable grains (tet4/tet10);
+/// elements of rigid grains are skipped (they carry no stress).
+class ElasticElements {
+ public:
+  /// Throws DataError naming the element when one is inverted or degenerate in the reference.
+  explicit ElasticElements(const Model& model);
+
+  /// Subtracts the internal forces of elements [begin, end) at node positions x from f and returns
+  /// their strain energy, J. Elements of rigid grains contribute nothing.
+  double add_internal_forces(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end,
+                             std::span<Eigen::Vector3d> f) const;
+  /// Strain energy of elements [begin, end), J.
+  double strain_energy(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const;
+  /// Cauchy stress (tension positive, Pa) at each quadrature point of element e: sigma = F S F^T / J.
+  std::vector<Eigen::Matrix3d> cauchy_stress(std::span<const Eigen::Vector3d> x, std::size_t element) const;
+  /// Deformation gradient at each quadrature point of element e.
+  std::vector<Eigen::Matrix3d> deformation_gradient(std::span<const Eigen::Vector3d> x, std::size_t element) const;
+  /// Volume-averaged Cauchy stress over the current volume of elements [begin, end) (tension
+  /// positive, Pa): sum_q w_q F S F^T / sum_q w_q det F. Zero for rigid grains.
+  Eigen::Matrix3d average_cauchy_stress(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const;
+
+  bool is_elastic(std::size_t element) const { return quad_end_[element] > quad_begin_[element]; }
+
+ private:
+  template <class Visit>
+  void for_each_point(std::span<const Eigen::Vector3d> x, std::size_t element, Visit&& visit) const;
+
+  const Model* model_;
+  std::vector<Lame> lame_;                   ///< per material
+  std::vector<std::uint32_t> quad_begin_, quad_end_;  ///< per element, range of quadrature points
+  std::vector<double> weight_;               ///< per quadrature point: w |det J| (reference volume share), m^3
+  std::vector<std::size_t> gradient_begin_;  ///< per quadrature point: offset into gradient_
+  std::vector<double> gradient_;             ///< dN_a/dX, 3 per node per quadrature point, 1/m
+};
+
+/// Lumped node masses, kg, one per model node: row sums (rho V / 4) for 4-node elements; HRZ
+/// diagonal scaling for 10-node elements (consistent diagonal scaled to the element's mass, so
+/// every node gets a positive mass and the total is exact: straight-edged, corners m/36 and
+/// mid-edge nodes 4m/27). Rigid grains' nodes get the lumping of their mesh kind.
+std::vector<double> lumped_masses(const Model& model);
+
+/// Mass properties of one grain's mesh, exact for straight and curved elements.
+struct BodyProperties {
+  double mass = 0;                                           ///< kg
+  double volume = 0;                                         ///< m^3
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();        ///< m
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();         ///< kg m^2, about the centroid, world axes
+};
+BodyProperties body_properties(const Model& model, std::size_t grain);
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,307 @@
+#include "graintwin/fdem/element.hpp"
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <cmath>
+#include <string>
+
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::fdem {
+namespace {
+
+using Gradients = Eigen::Matrix<double, 10, 3>;
+
+/// Barycentric coordinates L0..L3 of natural coordinates xi and their (constant) derivatives.
+std::array<double, 4> barycentric(const Eigen::Vector3d& xi) { return {1.0 - xi.sum(), xi[0], xi[1], xi[2]}; }
+Eigen::RowVector3d barycentric_derivative(int k) {
+  return k == 0 ? Eigen::RowVector3d(-1, -1, -1) : Eigen::RowVector3d::Unit(k - 1);
+}
+
+const std::uint32_t* element_nodes(const Model& model, std::size_t e) {
+  return model.element_nodes.data() + model.element_offset[e];
+}
+
+/// dX/dxi of element e at xi (reference positions).
+Eigen::Matrix3d reference_jacobian(const Model& model, std::size_t e, const Gradients& dN, int n) {
+  const std::uint32_t* nodes = element_nodes(model, e);
+  Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+  for (int a = 0; a < n; ++a) J += model.nodes[nodes[a]] * dN.row(a);
+  return J;
+}
+
+std::string element_name(const Model& model, std::size_t e) {
+  return "element " + std::to_string(e) + " (grain label " + std::to_string(model.grains[model.element_grain[e]].label) + ")";
+}
+
+int checked_node_count(const Model& model, std::size_t e) {
+  const std::size_t n = model.nodes_of(e);
+  if (n != 4 && n != 10)
+    throw DataError(element_name(model, e) + " has " + std::to_string(n) + " nodes; FDEM takes 4- or 10-node tetrahedra only");
+  return static_cast<int>(n);
+}
+
+}  // namespace
+
+Lame lame_constants(const Material& m) {
+  const double nu = m.poisson, E = m.young;
+  return {E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))};
+}
+
+double dilatational_wave_speed(const Material& m) {
+  const double nu = m.poisson;
+  return std::sqrt(m.young * (1 - nu) / (m.density * (1 + nu) * (1 - 2 * nu)));
+}
+
+void tet_shape_functions(int nodes, const Eigen::Vector3d& xi, double* N) {
+  const auto L = barycentric(xi);
+  if (nodes == 4) {
+    for (int k = 0; k < 4; ++k) N[k] = L[k];
+    return;
+  }
+  for (int k = 0; k < 4; ++k) N[k] = L[k] * (2 * L[k] - 1);
+  for (int k = 0; k < 6; ++k) N[4 + k] = 4 * L[kTet10Edges[k][0]] * L[kTet10Edges[k][1]];
+}
+
+void tet_shape_derivatives(int nodes, const Eigen::Vector3d& xi, Gradients& dN) {
+  const auto L = barycentric(xi);
+  if (nodes == 4) {
+    for (int k = 0; k < 4; ++k) dN.row(k) = barycentric_derivative(k);
+    return;
+  }
+  for (int k = 0; k < 4; ++k) dN.row(k) = (4 * L[k] - 1) * barycentric_derivative(k);
+  for (int k = 0; k < 6; ++k) {
+    const int i = kTet10Edges[k][0], j = kTet10Edges[k][1];
+    dN.row(4 + k) = 4 * (L[j] * barycentric_derivative(i) + L[i] * barycentric_derivative(j));
+  }
+}
+
+const TetRule& stiffness_rule(int nodes) {
+  static const TetRule one{{Eigen::Vector3d(0.25, 0.25, 0.25)}, {1.0 / 6.0}};
+  static const TetRule four = [] {
+    const double a = 0.5854101966249685, b = 0.1381966011250105;
+    return TetRule{{Eigen::Vector3d(b, b, b), Eigen::Vector3d(a, b, b), Eigen::Vector3d(b, a, b), Eigen::Vector3d(b, b, a)},
+                   {1.0 / 24, 1.0 / 24, 1.0 / 24, 1.0 / 24}};
+  }();
+  return nodes == 4 ? one : four;
+}
+
+const TetRule& exact_rule() {
+  static const TetRule rule = [] {
+    // Gauss-Legendre on [0, 1]; the map xi = (u, v (1 - u), w (1 - u)(1 - v)) has Jacobian (1 - u)^2 (1 - v).
+    const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+    const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
+                         0.2369268850561891};
+    TetRule r;
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j)
+        for (int k = 0; k < 5; ++k) {
+          const double u = 0.5 * (x[i] + 1), v = 0.5 * (x[j] + 1), t = 0.5 * (x[k] + 1);
+          r.points.emplace_back(u, v * (1 - u), t * (1 - u) * (1 - v));
+          r.weights.push_back(0.125 * w[i] * w[j] * w[k] * (1 - u) * (1 - u) * (1 - v));
+        }
+    return r;
+  }();
+  return rule;
+}
+
+void map_rule(const Model& model, std::size_t e, const TetRule& rule, std::vector<Eigen::Vector3d>& points,
+              std::vector<double>& weights) {
+  const int n = checked_node_count(model, e);
+  const std::uint32_t* nodes = element_nodes(model, e);
+  points.clear();
+  weights.clear();
+  Gradients dN;
+  double N[10];
+  for (std::size_t q = 0; q < rule.points.size(); ++q) {
+    tet_shape_functions(n, rule.points[q], N);
+    tet_shape_derivatives(n, rule.points[q], dN);
+    Eigen::Vector3d X = Eigen::Vector3d::Zero();
+    for (int a = 0; a < n; ++a) X += N[a] * model.nodes[nodes[a]];
+    points.push_back(X);
+    weights.push_back(rule.weights[q] * std::abs(reference_jacobian(model, e, dN, n).determinant()));
+  }
+}
+
+double element_volume(const Model& model, std::size_t e) {
+  const int n = checked_node_count(model, e);
+  // Degree of det J: 0 for straight elements, 3 for curved 10-node ones.
+  const TetRule& rule = n == 4 ? stiffness_rule(4) : exact_rule();
+  Gradients dN;
+  double v = 0;
+  for (std::size_t q = 0; q < rule.points.size(); ++q) {
+    tet_shape_derivatives(n, rule.points[q], dN);
+    v += rule.weights[q] * reference_jacobian(model, e, dN, n).determinant();
+  }
+  return v;
+}
+
+double element_min_altitude(const Model& model, std::size_t e) {
+  const std::uint32_t* c = element_nodes(model, e);
+  const Eigen::Vector3d& p0 = model.nodes[c[0]];
+  const Eigen::Vector3d &p1 = model.nodes[c[1]], &p2 = model.nodes[c[2]], &p3 = model.nodes[c[3]];
+  const double volume = std::abs((p1 - p0).cross(p2 - p0).dot(p3 - p0)) / 6;
+  const double area = 0.5 * std::max({(p1 - p0).cross(p2 - p0).norm(), (p1 - p0).cross(p3 - p0).norm(),
+                                      (p2 - p0).cross(p3 - p0).norm(), (p2 - p1).cross(p3 - p1).norm()});
+  return area > 0 ? 3 * volume / area : 0.0;
+}
+
+ElasticElements::ElasticElements(const Model& model) : model_(&model) {
+  for (const Material& m : model.materials) lame_.push_back(lame_constants(m));
+  const std::size_t elements = model.element_count();
+  quad_begin_.resize(elements);
+  quad_end_.resize(elements);
+  Gradients dN;
+  for (std::size_t e = 0; e < elements; ++e) {
+    quad_begin_[e] = static_cast<std::uint32_t>(weight_.size());
+    const Grain& grain = model.grains[model.element_grain[e]];
+    if (grain.kind != GrainKind::rigid) {
+      const int n = checked_node_count(model, e);
+      if ((n == 10) != (grain.kind == GrainKind::tet10))
+        throw DataError(element_name(model, e) + " has " + std::to_string(n) + " nodes but its grain is declared " +
+                        (grain.kind == GrainKind::tet10 ? "tet10" : "tet4") + "; rebuild the model with one element order per grain");
+      const TetRule& rule = stiffness_rule(n);
+      for (std::size_t q = 0; q < rule.points.size(); ++q) {
+        tet_shape_derivatives(n, rule.points[q], dN);
+        const Eigen::Matrix3d J = reference_jacobian(model, e, dN, n);
+        const double det = J.determinant();
+        if (!(det > 0))
+          throw DataError(element_name(model, e) + " is inverted or flat in the reference mesh (det J = " + std::to_string(det) +
+                          "); remesh the grain");
+        const Eigen::Matrix3d Jinv = J.inverse();
+        gradient_begin_.push_back(gradient_.size());
+        weight_.push_back(rule.weights[q] * det);
+        for (int a = 0; a < n; ++a) {
+          const Eigen::RowVector3d g = dN.row(a) * Jinv;
+          gradient_.insert(gradient_.end(), {g[0], g[1], g[2]});
+        }
+      }
+    }
+    quad_end_[e] = static_cast<std::uint32_t>(weight_.size());
+  }
+}
+
+template <class Visit>
+void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::size_t e, Visit&& visit) const {
+  const std::uint32_t* nodes = element_nodes(*model_, e);
+  const int n = static_cast<int>(model_->nodes_of(e));
+  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  for (std::uint32_t q = quad_begin_[e]; q < quad_end_[e]; ++q) {
+    const double* G = gradient_.data() + gradient_begin_[q];
+    Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
+    for (int a = 0; a < n; ++a) F += x[nodes[a]] * Eigen::Map<const Eigen::RowVector3d>(G + 3 * a);
+    const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
+    const double trE = E.trace();
+    Eigen::Matrix3d S = 2 * L.mu * E;
+    S.diagonal().array() += L.lambda * trE;
+    const double energy_density = 0.5 * L.lambda * trE * trE + L.mu * E.squaredNorm();
+    visit(nodes, n, G, weight_[q], F, S, energy_density);
+  }
+}
+
+double ElasticElements::add_internal_forces(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end,
+                                            std::span<Eigen::Vector3d> f) const {
+  double energy = 0;
+  for (std::size_t e = begin; e < end; ++e)
+    for_each_point(x, e, [&](const std::uint32_t* nodes, int n, const double* G, double w, const Eigen::Matrix3d& F,
+                             const Eigen::Matrix3d& S, double psi) {
+      const Eigen::Matrix3d P = w * (F * S);  // first Piola-Kirchhoff stress times the point's volume
+      for (int a = 0; a < n; ++a) f[nodes[a]] -= P * Eigen::Map<const Eigen::Vector3d>(G + 3 * a);
+      energy += w * psi;
+    });
+  return energy;
+}
+
+double ElasticElements::strain_energy(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const {
+  double energy = 0;
+  for (std::size_t e = begin; e < end; ++e)
+    for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double w, const Eigen::Matrix3d&,
+                             const Eigen::Matrix3d&, double psi) { energy += w * psi; });
+  return energy;
+}
+
+std::vector<Eigen::Matrix3d> ElasticElements::cauchy_stress(std::span<const Eigen::Vector3d> x, std::size_t e) const {
+  std::vector<Eigen::Matrix3d> out;
+  for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double, const Eigen::Matrix3d& F,
+                           const Eigen::Matrix3d& S, double) { out.push_back(F * S * F.transpose() / F.determinant()); });
+  return out;
+}
+
+std::vector<Eigen::Matrix3d> ElasticElements::deformation_gradient(std::span<const Eigen::Vector3d> x, std::size_t e) const {
+  std::vector<Eigen::Matrix3d> out;
+  for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double, const Eigen::Matrix3d& F,
+                           const Eigen::Matrix3d&, double) { out.push_back(F); });
+  return out;
+}
+
+Eigen::Matrix3d ElasticElements::average_cauchy_stress(std::span<const Eigen::Vector3d> x, std::size_t begin,
+                                                       std::size_t end) const {
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  double volume = 0;
+  for (std::size_t e = begin; e < end; ++e)
+    for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double w, const Eigen::Matrix3d& F,
+                             const Eigen::Matrix3d& S, double) {
+      sum += w * (F * S * F.transpose());  // sigma J dV0 = sigma dv
+      volume += w * F.determinant();
+    });
+  return volume > 0 ? Eigen::Matrix3d(sum / volume) : Eigen::Matrix3d::Zero();
+}
+
+std::vector<double> lumped_masses(const Model& model) {
+  std::vector<double> mass(model.nodes.size(), 0.0);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> weights;
+  double N[10];
+  for (std::size_t e = 0; e < model.element_count(); ++e) {
+    const int n = checked_node_count(model, e);
+    const double rho = model.materials[model.grains[model.element_grain[e]].material].density;
+    const std::uint32_t* nodes = element_nodes(model, e);
+    if (n == 4) {
+      const double share = rho * std::abs(element_volume(model, e)) / 4;
+      for (int a = 0; a < 4; ++a) mass[nodes[a]] += share;
+      continue;
+    }
+    // HRZ: the consistent mass diagonal int rho N_a^2 dV, scaled so that it sums to the element mass.
+    const TetRule& rule = exact_rule();
+    map_rule(model, e, rule, points, weights);
+    double diagonal[10] = {}, total = 0, element_mass = 0;
+    for (std::size_t q = 0; q < rule.points.size(); ++q) {
+      tet_shape_functions(10, rule.points[q], N);
+      for (int a = 0; a < 10; ++a) diagonal[a] += rho * weights[q] * N[a] * N[a];
+      element_mass += rho * weights[q];
+    }
+    for (double d : diagonal) total += d;
+    for (int a = 0; a < 10; ++a) mass[nodes[a]] += diagonal[a] * element_mass / total;
+  }
+  return mass;
+}
+
+BodyProperties body_properties(const Model& model, std::size_t grain) {
+  const Grain& g = model.grains[grain];
+  const double rho = model.materials[g.material].density;
+  BodyProperties b;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> weights;
+  // Moments about the first node keep the second moments well conditioned far from the origin.
+  const Eigen::Vector3d origin = model.nodes[g.node_begin];
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  for (std::size_t e = g.element_begin; e < g.element_end; ++e) {
+    map_rule(model, e, exact_rule(), points, weights);
+    for (std::size_t q = 0; q < points.size(); ++q) {
+      const Eigen::Vector3d r = points[q] - origin;
+      b.volume += weights[q];
+      first += weights[q] * r;
+      second += weights[q] * r * r.transpose();
+    }
+  }
+  if (!(b.volume > 0)) throw DataError("grain label " + std::to_string(g.label) + " has no volume; check its mesh");
+  b.mass = rho * b.volume;
+  const Eigen::Vector3d c = first / b.volume;
+  b.centroid = origin + c;
+  const Eigen::Matrix3d second_c = rho * (second - b.volume * c * c.transpose());  // int rho r r^T about the centroid
+  b.inertia = second_c.trace() * Eigen::Matrix3d::Identity() - second_c;
+  return b;
+}
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,192 @@
+// fdem/ elements, masses and primitive grains: the patch test (a linear displacement field gives
+// uniform strain and exactly balanced internal forces), zero stress under large rigid rotations,
+// HRZ lumping of 10-node tetrahedra, exact mass properties, closed outward box surfaces.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numeric>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/element.hpp"
+#include "graintwin/fdem/primitives.hpp"
+
+using namespace graintwin;
+using namespace graintwin::fdem;
+
+namespace {
+
+Model box_model(GrainKind kind, const Eigen::Vector3d& size = {2e-3, 1e-3, 1.5e-3}, double h = 0.5e-3) {
+  Model m;
+  add_grain(m, box_mesh(size, h), Eigen::Vector3d(0.01, -0.02, 0.03), kind, 0, 7);
+  return m;
+}
+
+std::vector<Eigen::Vector3d> mapped(const Model& m, const Eigen::Matrix3d& A, const Eigen::Vector3d& b) {
+  std::vector<Eigen::Vector3d> x;
+  for (const auto& X : m.nodes) x.push_back(A * X + b);
+  return x;
+}
+
+/// Second Piola-Kirchhoff stress of St Venant-Kirchhoff for a uniform deformation gradient F.
+Eigen::Matrix3d svk_pk2(const Material& mat, const Eigen::Matrix3d& F) {
+  const Lame L = lame_constants(mat);
+  const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
+  return L.lambda * E.trace() * Eigen::Matrix3d::Identity() + 2 * L.mu * E;
+}
+
+class Kinds : public ::testing::TestWithParam<GrainKind> {};
+
+}  // namespace
+
+TEST(FdemShape, PartitionOfUnityAndDerivatives) {
+  for (int n : {4, 10}) {
+    const Eigen::Vector3d xi(0.2, 0.3, 0.1);
+    double N[10], Np[10];
+    Eigen::Matrix<double, 10, 3> dN;
+    tet_shape_functions(n, xi, N);
+    tet_shape_derivatives(n, xi, dN);
+    EXPECT_NEAR(std::accumulate(N, N + n, 0.0), 1.0, 1e-15);
+    for (int k = 0; k < 3; ++k) {
+      const double h = 1e-6;
+      tet_shape_functions(n, xi + h * Eigen::Vector3d::Unit(k), Np);
+      for (int a = 0; a < n; ++a) EXPECT_NEAR((Np[a] - N[a]) / h, dN(a, k), 1e-5) << "node " << a;
+    }
+  }
+}
+
+TEST(FdemQuadrature, ExactRuleIntegratesDegreeSeven) {
+  // int over the unit tetrahedron of x^a y^b z^c = a! b! c! / (a + b + c + 3)!
+  const TetRule& r = exact_rule();
+  const auto fact = [](int k) { return std::tgamma(k + 1.0); };
+  for (auto [a, b, c] : {std::array{0, 0, 0}, {2, 3, 2}, {7, 0, 0}, {1, 4, 2}}) {
+    double sum = 0;
+    for (std::size_t q = 0; q < r.points.size(); ++q)
+      sum += r.weights[q] * std::pow(r.points[q][0], a) * std::pow(r.points[q][1], b) * std::pow(r.points[q][2], c);
+    EXPECT_NEAR(sum, fact(a) * fact(b) * fact(c) / fact(a + b + c + 3), 1e-15);
+  }
+}
+
+TEST_P(Kinds, BoxSurfaceIsClosedOutwardAndExact) {
+  const Eigen::Vector3d size(2e-3, 1e-3, 1.5e-3);
+  const Model m = box_model(GetParam(), size);
+  ASSERT_EQ(m.grains.size(), 1u);
+  double area = 0, volume = 0;
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d n = (m.nodes[t[1]] - m.nodes[t[0]]).cross(m.nodes[t[2]] - m.nodes[t[0]]);
+    area += 0.5 * n.norm();
+    volume += m.nodes[t[0]].dot(n) / 6;  // divergence theorem: positive only if the surface faces outward
+  }
+  EXPECT_NEAR(area, 2 * (size[0] * size[1] + size[1] * size[2] + size[0] * size[2]), 1e-15);
+  EXPECT_NEAR(volume, size.prod(), 1e-18);
+  double element_sum = 0;
+  for (std::size_t e = 0; e < m.element_count(); ++e) element_sum += element_volume(m, e);
+  EXPECT_NEAR(element_sum, size.prod(), 1e-18);
+  EXPECT_EQ(m.element_offset.size(), m.element_count() + 1);
+  EXPECT_EQ(m.nodes_of(0), GetParam() == GrainKind::tet10 ? 10u : 4u);
+}
+
+TEST_P(Kinds, PatchTestLinearFieldGivesUniformStressAndBalancedForces) {
+  const Model m = box_model(GetParam());
+  const ElasticElements el(m);
+  Eigen::Matrix3d A;
+  A << 1.002, 0.001, -0.0005, 0.0007, 0.998, 0.0012, -0.0003, 0.0004, 1.0015;
+  const Eigen::Vector3d b(1e-4, -2e-4, 3e-4);
+  const auto x = mapped(m, A, b);
+  for (std::size_t e = 0; e < m.element_count(); ++e)
+    for (const Eigen::Matrix3d& F : el.deformation_gradient(x, e)) EXPECT_LT((F - A).norm(), 1e-12);
+  std::vector<Eigen::Vector3d> f(m.nodes.size(), Eigen::Vector3d::Zero());
+  const double energy = el.add_internal_forces(x, 0, m.element_count(), f);
+  // Uniform stress: the energy is psi V, and every interior node is in equilibrium.
+  const Eigen::Matrix3d S = svk_pk2(m.materials[0], A);
+  const Lame L = lame_constants(m.materials[0]);
+  const Eigen::Matrix3d E = 0.5 * (A.transpose() * A - Eigen::Matrix3d::Identity());
+  const double V = 2e-3 * 1e-3 * 1.5e-3;
+  EXPECT_NEAR(energy, V * (0.5 * L.lambda * E.trace() * E.trace() + L.mu * E.squaredNorm()), 1e-9 * energy);
+  const Eigen::Vector3d centre(0.01, -0.02, 0.03);
+  const Eigen::Vector3d half(1e-3, 0.5e-3, 0.75e-3);
+  const double scale = S.norm() * 0.5e-3 * 0.5e-3;  // stress times an element face area
+  Eigen::Vector3d total = Eigen::Vector3d::Zero(), face_x = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    const Eigen::Vector3d r = (m.nodes[i] - centre).cwiseAbs();
+    const bool interior = (r.array() < half.array() - 1e-12).all();
+    if (interior) {
+      EXPECT_LT(f[i].norm(), 1e-9 * scale) << "interior node " << i;
+    }
+    if (m.nodes[i][0] - centre[0] > half[0] - 1e-12) face_x += f[i];
+    total += f[i];
+  }
+  EXPECT_LT(total.norm(), 1e-9 * scale);
+  // Nodal forces on the face x = +a equal minus the traction resultant P n A0 (first Piola-Kirchhoff).
+  const Eigen::Vector3d traction = A * S * Eigen::Vector3d::UnitX() * (1e-3 * 1.5e-3);
+  EXPECT_LT((face_x + traction).norm(), 1e-9 * traction.norm());
+  // Volume-averaged Cauchy stress is the uniform one.
+  const Eigen::Matrix3d sigma = A * S * A.transpose() / A.determinant();
+  EXPECT_LT((el.average_cauchy_stress(x, 0, m.element_count()) - sigma).norm(), 1e-9 * sigma.norm());
+}
+
+TEST_P(Kinds, LargeRigidRotationGivesZeroStress) {
+  const Model m = box_model(GetParam());
+  const ElasticElements el(m);
+  for (double angle : {0.3, 1.7, 3.0}) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, Eigen::Vector3d(1, 2, -0.5).normalized()).toRotationMatrix();
+    const auto x = mapped(m, R, Eigen::Vector3d(0.1, 0.2, -0.3));
+    std::vector<Eigen::Vector3d> f(m.nodes.size(), Eigen::Vector3d::Zero());
+    EXPECT_NEAR(el.add_internal_forces(x, 0, m.element_count(), f), 0.0, 1e-15);
+    for (const auto& fi : f) EXPECT_LT(fi.norm(), 1e-3);  // E = 92 GPa: 1e-3 N is a strain of 1e-14 on 1 mm^2
+    EXPECT_LT(el.average_cauchy_stress(x, 0, m.element_count()).norm(), 1e-2);
+  }
+  // A small-strain element would see a strain of 1 - cos(angle) here; this one must not.
+}
+
+TEST(FdemMass, HrzTet10CornersPositiveAndTotalExact) {
+  Model m;
+  TetMesh one;
+  one.nodes = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1e-3, 0, 0), Eigen::Vector3d(0.2e-3, 1.1e-3, 0),
+               Eigen::Vector3d(0.3e-3, 0.2e-3, 0.9e-3)};
+  one.tets = {{0, 1, 2, 3}};
+  add_grain(m, one, Eigen::Vector3d::Zero(), GrainKind::tet10, 0, 1);
+  const auto mass = lumped_masses(m);
+  const double total = m.materials[0].density * element_volume(m, 0);
+  const std::uint32_t* n = m.element_nodes.data();
+  for (int a = 0; a < 4; ++a) EXPECT_NEAR(mass[n[a]], total / 36, 1e-12 * total);
+  for (int a = 4; a < 10; ++a) EXPECT_NEAR(mass[n[a]], 4 * total / 27, 1e-12 * total);
+  // A curved element (one mid-edge node pushed out) still gets positive masses summing to its mass.
+  m.nodes[n[4]] += Eigen::Vector3d(0, -0.15e-3, 0);
+  const auto curved = lumped_masses(m);
+  double sum = 0;
+  for (double v : curved) {
+    EXPECT_GT(v, 0);
+    sum += v;
+  }
+  EXPECT_NEAR(sum, m.materials[0].density * element_volume(m, 0), 1e-12 * total);
+}
+
+TEST_P(Kinds, LumpedMassTotalAndBodyProperties) {
+  const Eigen::Vector3d size(2e-3, 1e-3, 1.5e-3);
+  const Model m = box_model(GetParam(), size);
+  const auto mass = lumped_masses(m);
+  const double expected = m.materials[0].density * size.prod();
+  EXPECT_NEAR(std::accumulate(mass.begin(), mass.end(), 0.0), expected, 1e-12 * expected);
+  for (double v : mass) EXPECT_GT(v, 0);
+  const BodyProperties b = body_properties(m, 0);
+  EXPECT_NEAR(b.mass, expected, 1e-12 * expected);
+  EXPECT_LT((b.centroid - Eigen::Vector3d(0.01, -0.02, 0.03)).norm(), 1e-15);
+  const Eigen::Vector3d s2 = size.cwiseProduct(size);
+  const Eigen::Vector3d I = expected / 12 * Eigen::Vector3d(s2[1] + s2[2], s2[0] + s2[2], s2[0] + s2[1]);
+  EXPECT_LT((b.inertia - Eigen::Matrix3d(I.asDiagonal())).norm(), 1e-9 * I.norm());
+}
+
+TEST(FdemElements, InvertedElementIsRefusedWithItsName) {
+  Model m = box_model(GrainKind::tet4);
+  std::swap(m.element_nodes[1], m.element_nodes[2]);
+  try {
+    ElasticElements el(m);
+    FAIL() << "an inverted element was accepted";
+  } catch (const DataError& e) {
+    EXPECT_NE(e.message().find("element 0 (grain label 7) is inverted"), std::string::npos) << e.message();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Fdem, Kinds, ::testing::Values(GrainKind::tet4, GrainKind::tet10),
+                         [](const auto& info) { return info.param == GrainKind::tet4 ? "tet4" : "tet10"; });
