@@ -41,3 +41,36 @@ TEST(Vtk, RefusesInconsistentArrays) {
   d.cell_data.push_back({"x", 1, {1, 2}});
   EXPECT_THROW(io::write_vtp(dir / "b.vtp", d), UsageError);
 }
+
+TEST(Vtk, UnstructuredGridOfLinearAndQuadraticTetsReadsBackInVtk) {
+  test::TempDir dir;
+  io::VtkUnstructuredGrid g;
+  // A unit corner tetrahedron as a 4-node cell and as a 10-node cell (VTK order) over the same points.
+  g.points = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, .5, 0, 0, .5, .5, 0, 0, .5, 0, 0, 0, .5, .5, 0, .5, 0, .5, .5};
+  g.add_cell(io::kVtkTetra, {0, 1, 2, 3});
+  g.add_cell(io::kVtkQuadraticTetra, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9});
+  g.point_data.push_back({"u", 3, std::vector<double>(30, 1.0)});
+  g.cell_data.push_back({"grain", 1, {3, 4}});
+  io::write_vtu(dir / "g.vtu", g);
+  const auto s = vtk_summary(dir / "g.vtu");
+  EXPECT_EQ(s["points"], 10);
+  EXPECT_EQ(s["cells"], 2);
+  EXPECT_EQ(s["point_data"]["u"]["components"], 3);
+  EXPECT_DOUBLE_EQ(s["cell_data"]["grain"]["range"][1].get<double>(), 4.0);
+  EXPECT_DOUBLE_EQ(s["bounds"][5].get<double>(), 1.0);
+  // VTK's own volumes: both cells are the corner tetrahedron (a wrong mid-node order gives 1/24).
+  EXPECT_NEAR(s["volume"].get<double>(), 2.0 / 6.0, 1e-12);
+}
+
+TEST(Vtk, UnstructuredGridRefusesWrongNodeCountsAndTypes) {
+  test::TempDir dir;
+  io::VtkUnstructuredGrid g;
+  g.points = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  g.add_cell(io::kVtkQuadraticTetra, {0, 1, 2, 3});
+  EXPECT_THROW(io::write_vtu(dir / "g.vtu", g), UsageError);
+  g = {};
+  g.points = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  g.add_cell(42, {0, 1, 2, 3});
+  EXPECT_THROW(io::write_vtu(dir / "g.vtu", g), UsageError);
+  EXPECT_FALSE(std::filesystem::exists(dir / "g.vtu"));
+}

@@ -28,4 +28,15 @@ summary = {"points": data.GetNumberOfPoints(), "cells": data.GetNumberOfCells(),
            "point_data": arrays(data.GetPointData()), "cell_data": arrays(data.GetCellData())}
 if path.endswith(".vtp"):
     summary.update(verts=data.GetNumberOfVerts(), lines=data.GetNumberOfLines(), polys=data.GetNumberOfPolys())
+else:
+    # VTK's own cell volumes (quadratic cells split through their mid-edge nodes): a wrong node
+    # order shows up as a wrong total.
+    sizes = vtk.vtkCellSizeFilter()
+    sizes.SetInputData(data)
+    sizes.ComputeVertexCountOff()
+    sizes.ComputeLengthOff()
+    sizes.ComputeAreaOff()
+    sizes.Update()
+    volumes = sizes.GetOutput().GetCellData().GetArray("Volume")
+    summary["volume"] = sum(volumes.GetValue(i) for i in range(volumes.GetNumberOfTuples()))
 print(json.dumps(summary))

@@ -93,3 +93,31 @@ inline constexpr const char* steps = "/steps";                         ///< grou
 inline constexpr const char* scan_file = "/scans/file";                ///< string (T)
 inline constexpr const char* scan_d50 = "/scans/d50";                  ///< (T) m
 }  // namespace graintwin::schema::tracks
+
+// kind=fdem_model (shapes2mesh, fdemrun scenes), layout in docs/formats.md. Nn nodes, E elements,
+// T surface triangles, G grains, K materials, P platens.
+namespace graintwin::schema::fdem_model {
+inline constexpr const char* nodes = "/nodes";                      ///< (Nn x 3) m, reference positions
+inline constexpr const char* elements = "/elements";                ///< uint32 (E x W), gmsh order, W = 4 or 10, padding 2^32-1
+inline constexpr const char* element_nodes = "/element_nodes";      ///< uint8 (E), 4 or 10
+inline constexpr const char* element_grain = "/element_grain";      ///< uint32 (E), grain index
+inline constexpr const char* triangles = "/triangles";              ///< uint32 (T x 3), outward, counter-clockwise
+inline constexpr const char* triangle_grain = "/triangle_grain";    ///< uint32 (T), grain index
+inline constexpr const char* grain_label = "/grains/label";         ///< uint32 (G)
+inline constexpr const char* grain_kind = "/grains/kind";           ///< uint8 (G): 0 rigid, 1 tet4, 2 tet10
+inline constexpr const char* grain_material = "/grains/material";   ///< uint32 (G), row of /materials
+inline constexpr const char* grain_nodes = "/grains/node_range";    ///< uint32 (G x 2), half-open
+inline constexpr const char* grain_elements = "/grains/element_range";    ///< uint32 (G x 2), half-open
+inline constexpr const char* grain_triangles = "/grains/triangle_range";  ///< uint32 (G x 2), half-open
+inline constexpr const char* materials = "/materials";              ///< group of (K) columns, names as fdem::Material
+inline constexpr const char* material_name = "/materials/name";     ///< string (K)
+inline constexpr const char* platen_name = "/platens/name";         ///< string (P)
+inline constexpr const char* platen_point = "/platens/point";       ///< (P x 3) m
+inline constexpr const char* platen_normal = "/platens/normal";     ///< (P x 3) unit, into the sample
+inline constexpr const char* platen_friction = "/platens/friction"; ///< (P)
+inline constexpr const char* sample = "/sample";                    ///< group, attrs below; absent = no sample cylinder
+inline constexpr const char* sample_axis_xy = "axis_xy";            ///< float64[2] m
+inline constexpr const char* sample_radius = "radius";              ///< m
+inline constexpr const char* sample_z_range = "z_range";            ///< float64[2] m
+inline constexpr const char* membrane_thickness = "membrane_thickness";  ///< m
+}  // namespace graintwin::schema::fdem_model

@@ -1,0 +1,43 @@
+#pragma once
+// `kind=fdem_model` files (docs/formats.md): the FDEM model of fdem/model.hpp on disk (nodes,
+// mixed 4/10-node tetrahedra, grain ranges, surfaces, materials, platens, sample cylinder), plus
+// the viewing exports: gmsh .msh (format 2.2, ASCII) and VTK .vtu. Written by shapes2mesh (and
+// fdemrun for its scenes), read by fdemrun.
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "graintwin/fdem/model.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/vtk.hpp"
+
+namespace graintwin::fdem {
+
+/// Checks the model's internal consistency (ranges contiguous and grain-owned, 4 or 10 nodes per
+/// element, indices in range, one grain per element and triangle, materials referenced exist);
+/// throws DataError naming `what` (a file or "model") and the first problem found.
+void validate_model(const Model& model, const std::string& what);
+
+/// Writes `model` (validated first) with `history` as /provenance/history. `extra` (optional)
+/// adds datasets of the writing tool (e.g. shapes2mesh's /mesh report) before the file closes.
+void write_model_file(const std::filesystem::path& path, const Model& model, const std::vector<std::string>& history,
+                      const std::function<void(io::H5File&)>& extra = {});
+
+/// Reads a `kind=fdem_model` file; UsageError in one sentence if it is another kind, DataError if
+/// its tables disagree.
+Model read_model_file(const std::filesystem::path& path);
+
+/// The model as a VTK unstructured grid (VTK_TETRA / VTK_QUADRATIC_TETRA, gmsh node order mapped
+/// to VTK's) at node positions `positions` (empty: the reference positions); point data `grain`,
+/// cell data `grain` and `label`. Callers may append arrays before io::write_vtu.
+io::VtkUnstructuredGrid model_grid(const Model& model, std::span<const Eigen::Vector3d> positions = {});
+
+/// gmsh MSH 2.2 ASCII: nodes, then the tetrahedra (type 4 or 11) with physical tag = grain label
+/// and elementary tag = grain index + 1, then the surface triangles (type 2) with the same tags.
+void write_model_msh(const std::filesystem::path& path, const Model& model);
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,68 @@
+#pragma once
+// One grain's tetrahedral mesh (4- or 10-node, gmsh node order as in fdem/model.hpp), what we
+// measure on it ourselves (gmsh 4.8 has no element-quality call): volume, gamma quality, Jacobian
+// validity of curved elements, its boundary surface; and how it joins an fdem::Model.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "graintwin/fdem/model.hpp"
+#include "graintwin/mesh/surface.hpp"
+
+namespace graintwin::mesh {
+
+struct TetMesh {
+  std::vector<Eigen::Vector3d> nodes;   ///< m
+  int nodes_per_element = 4;            ///< 4 or 10
+  std::vector<std::uint32_t> elements;  ///< flat, nodes_per_element per element, positive orientation
+  std::size_t element_count() const { return elements.size() / static_cast<std::size_t>(nodes_per_element); }
+  const std::uint32_t* element(std::size_t e) const { return elements.data() + e * static_cast<std::size_t>(nodes_per_element); }
+};
+
+/// gmsh's gamma of a linear tetrahedron: 3 x inradius / circumradius (1 equilateral, 0 flat),
+/// negative when the corners are inverted. For 10-node elements, of the corner tetrahedron.
+double tet_gamma(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d);
+
+/// det J of a 10-node tetrahedron (gmsh order) at natural coordinates (xi, eta, zeta) of the unit
+/// tetrahedron; equals 6 x volume for straight-sided elements.
+double tet10_det_jacobian(const std::array<Eigen::Vector3d, 10>& x, double xi, double eta, double zeta);
+
+/// min det J / max det J of an element over its 10 nodes and 4 Gauss points (1 for a straight
+/// 10-node element or any positive 4-node one; <= 0: inverted somewhere).
+double jacobian_ratio(const TetMesh& mesh, std::size_t element);
+
+struct MeshQuality {
+  std::size_t elements = 0, nodes = 0, surface_nodes = 0;
+  double min_gamma = 0.0, mean_gamma = 0.0;
+  double min_jacobian_ratio = 0.0;   ///< over all elements
+  std::size_t inverted = 0;          ///< elements with jacobian_ratio <= 0
+  std::size_t below_floor = 0;       ///< elements with gamma below the floor passed to mesh_quality
+  double volume = 0.0;               ///< m^3, exact for the (curved) elements
+  double surface_area = 0.0;         ///< m^2, of the linear boundary triangles
+};
+MeshQuality mesh_quality(const TetMesh& mesh, double gamma_floor);
+
+/// Volume of the mesh (curved 10-node elements integrated exactly, 5-point cubic rule).
+double mesh_volume(const TetMesh& mesh);
+
+/// The boundary (faces used by one element) as outward linear triangles over the mesh's node
+/// indices; a 10-node face is split into 4 through its mid-edge nodes.
+std::vector<std::array<std::uint32_t, 3>> boundary_triangles(const TetMesh& mesh);
+/// The same as a stand-alone surface (only the boundary nodes, in order of first use).
+TriangleSurface boundary_surface(const TetMesh& mesh);
+
+/// Appends one grain to `model`: its nodes, elements and boundary triangles as a new grain-owned
+/// block. kind must agree with the mesh's nodes per element unless it is rigid.
+void append_grain(fdem::Model& model, const TetMesh& mesh, std::uint32_t label, fdem::GrainKind kind,
+                  std::uint32_t material = 0);
+
+/// The vertical cylinder around all nodes of `model`: axis through the mean node position (x, y),
+/// radius the largest node distance from it, z range of the nodes.
+fdem::SampleCylinder enclosing_cylinder(const fdem::Model& model, double membrane_thickness);
+
+/// Rigid platens at the cylinder's ends: "bottom" at z_min facing +z, "top" at z_max facing -z.
+std::vector<fdem::Platen> end_platens(const fdem::SampleCylinder& sample, double friction);
+
+}  // namespace graintwin::mesh

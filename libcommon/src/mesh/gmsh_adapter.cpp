@@ -1,0 +1,213 @@
+#include "graintwin/mesh/gmsh_adapter.hpp"
+
+#include <gmsh.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+#include <fmt/format.h>
+
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::mesh {
+namespace {
+
+std::mutex& gmsh_lock() {
+  static std::mutex m;
+  return m;
+}
+
+/// gmsh::initialize once per process, quiet; never finalised (gmsh's own statics outlive ours).
+void ensure_initialized() {
+  static const bool done = [] {
+    gmsh::initialize(0, nullptr, false);
+    gmsh::option::setNumber("General.Terminal", 0);
+    gmsh::option::setNumber("General.Verbosity", 1);
+    gmsh::option::setNumber("General.NumThreads", 1);
+    return true;
+  }();
+  (void)done;
+}
+
+std::string last_gmsh_error() {
+  std::string e;
+  try {
+    gmsh::logger::getLastError(e);
+  } catch (...) {
+  }
+  return e.empty() ? "no message" : e;
+}
+
+/// The current gmsh model's 3-D elements of `order` as a TetMesh (nodes used by them only, in tag
+/// order), every element turned to positive orientation.
+TetMesh extract(int order) {
+  const int type = order == 2 ? 11 : 4;
+  std::vector<std::size_t> element_tags, element_nodes;
+  gmsh::model::mesh::getElementsByType(type, element_tags, element_nodes, -1);
+  std::vector<std::size_t> node_tags;
+  std::vector<double> coords, parametric;
+  gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
+  std::map<std::size_t, std::size_t> row;  // tag -> row of coords
+  for (std::size_t i = 0; i < node_tags.size(); ++i) row[node_tags[i]] = i;
+  std::map<std::size_t, std::uint32_t> index;  // used tags -> compact index, in tag order
+  for (std::size_t t : element_nodes) index.emplace(t, 0);
+  TetMesh m;
+  m.nodes_per_element = order == 2 ? 10 : 4;
+  for (auto& [tag, i] : index) {
+    const auto r = row.find(tag);
+    if (r == row.end()) throw DataError("gmsh returned an element with an unknown node");
+    i = static_cast<std::uint32_t>(m.nodes.size());
+    m.nodes.emplace_back(coords[3 * r->second], coords[3 * r->second + 1], coords[3 * r->second + 2]);
+  }
+  m.elements.reserve(element_nodes.size());
+  for (std::size_t t : element_nodes) m.elements.push_back(index[t]);
+  for (std::size_t e = 0; e < m.element_count(); ++e) {
+    std::uint32_t* n = m.elements.data() + e * static_cast<std::size_t>(m.nodes_per_element);
+    const Eigen::Vector3d& a = m.nodes[n[0]];
+    if ((m.nodes[n[1]] - a).cross(m.nodes[n[2]] - a).dot(m.nodes[n[3]] - a) < 0) {
+      // Swapping corners 1 and 2 swaps the mid-edge nodes of 01/20 and 31/32 (gmsh order).
+      std::swap(n[1], n[2]);
+      if (m.nodes_per_element == 10) std::swap(n[4], n[6]), std::swap(n[8], n[9]);
+    }
+  }
+  return m;
+}
+
+std::size_t count_inverted(const TetMesh& m) {
+  std::size_t n = 0;
+  for (std::size_t e = 0; e < m.element_count(); ++e) n += jacobian_ratio(m, e) <= 0.0;
+  return n;
+}
+
+/// Last resort for curved elements gmsh could not untangle: their mid-edge nodes go back to the
+/// edge midpoints (a straight element with valid corners is valid), repeated since a moved node
+/// is shared by neighbours.
+std::size_t straighten_inverted(TetMesh& m) {
+  static constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
+  std::size_t moved = 0;
+  for (int pass = 0; pass < 4; ++pass) {
+    bool any = false;
+    for (std::size_t e = 0; e < m.element_count(); ++e) {
+      if (jacobian_ratio(m, e) > 0.0) continue;
+      any = true;
+      const std::uint32_t* n = m.element(e);
+      for (int k = 0; k < 6; ++k) {
+        const Eigen::Vector3d mid = 0.5 * (m.nodes[n[kEdges[k][0]]] + m.nodes[n[kEdges[k][1]]]);
+        if (m.nodes[n[4 + k]] != mid) m.nodes[n[4 + k]] = mid, ++moved;
+      }
+    }
+    if (!any) break;
+  }
+  return moved;
+}
+
+/// Meshes the current gmsh model's volume at the options' size and order, with the Jacobian check.
+TetMesh generate(const TetOptions& o, TetReport& report) {
+  gmsh::option::setNumber("Mesh.MeshSizeMin", o.size);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", o.size);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+  gmsh::model::mesh::generate(3);
+  if (o.order == 1) return extract(1);
+  gmsh::model::mesh::setOrder(2);
+  TetMesh m = extract(2);
+  report.inverted_after_curving = count_inverted(m);
+  if (report.inverted_after_curving > 0 && o.fix_inverted) {
+    report.optimized = true;
+    try {
+      gmsh::model::mesh::optimize("HighOrder");
+    } catch (...) {
+      // It throws when it cannot reach its target everywhere but still improves the mesh; what is
+      // left inverted is straightened below.
+    }
+    m = extract(2);
+  }
+  if (count_inverted(m) > 0) report.straightened = straighten_inverted(m);
+  report.inverted = count_inverted(m);
+  return m;
+}
+
+/// Runs `build` (which sets up the current model) and `generate` under the lock, in a fresh model
+/// that is removed afterwards; gmsh's exceptions become one DataError naming `what`.
+template <class Build>
+TetMesh run_in_model(const TetOptions& o, TetReport* report, const std::string& what, Build&& build) {
+  if (!(o.size > 0.0) || (o.order != 1 && o.order != 2))
+    throw UsageError(fmt::format("tetrahedralize: the element size must be positive and the order 1 or 2 (got {} and {})", o.size, o.order));
+  std::lock_guard lock(gmsh_lock());
+  ensure_initialized();
+  const auto t0 = std::chrono::steady_clock::now();
+  TetReport local;
+  TetReport& r = report ? *report : local;
+  r = TetReport{};
+  gmsh::model::add("graintwin");
+  TetMesh m;
+  try {
+    build();
+    m = generate(o, r);
+    gmsh::model::remove();
+  } catch (...) {
+    const std::string message = last_gmsh_error();
+    try {
+      gmsh::model::remove();
+    } catch (...) {
+    }
+    throw DataError(fmt::format("gmsh could not mesh {} ({}); check the surface or try another element size", what, message));
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (m.element_count() == 0)
+    throw DataError(fmt::format("gmsh made no tetrahedra for {}; the element size may be larger than the body", what));
+  return m;
+}
+
+}  // namespace
+
+TetMesh tetrahedralize(const TriangleSurface& surface, const TetOptions& options, TetReport* report) {
+  return run_in_model(options, report, "the surface", [&] {
+    const int s = gmsh::model::addDiscreteEntity(2);
+    std::vector<std::size_t> tags(surface.vertices.size());
+    std::vector<double> xyz;
+    xyz.reserve(3 * tags.size());
+    for (std::size_t i = 0; i < tags.size(); ++i) {
+      tags[i] = i + 1;
+      xyz.insert(xyz.end(), {surface.vertices[i].x(), surface.vertices[i].y(), surface.vertices[i].z()});
+    }
+    gmsh::model::mesh::addNodes(2, s, tags, xyz);
+    std::vector<std::size_t> connectivity;
+    connectivity.reserve(3 * surface.triangles.size());
+    for (const auto& t : surface.triangles)
+      for (int k : t) connectivity.push_back(static_cast<std::size_t>(k) + 1);
+    gmsh::model::mesh::addElementsByType(s, 2, {}, connectivity);
+    // forReparametrization splits the closed surface into patches that each have one map.
+    gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
+    gmsh::model::mesh::createGeometry();
+    gmsh::vectorpair surfaces;
+    gmsh::model::getEntities(surfaces, 2);
+    std::vector<int> loop;
+    for (const auto& [dim, tag] : surfaces) loop.push_back(tag);
+    const int l = gmsh::model::geo::addSurfaceLoop(loop);
+    gmsh::model::geo::addVolume({l});
+    gmsh::model::geo::synchronize();
+  });
+}
+
+TetMesh mesh_ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& semi_axes, const Eigen::Quaterniond& rotation,
+                       const TetOptions& options, TetReport* report) {
+  if (!(semi_axes.minCoeff() > 0.0)) throw UsageError("mesh_ellipsoid: the semi-axes must be positive");
+  // Meshed as the unit-radius-scaled body so the size is in its own units, then scaled back.
+  const double scale = semi_axes.maxCoeff();
+  const Eigen::Vector3d unit = semi_axes / scale;
+  TetOptions o = options;
+  o.size = options.size / scale;
+  TetMesh m = run_in_model(o, report, "the ellipsoid", [&] {
+    const int v = gmsh::model::occ::addSphere(0, 0, 0, 1);
+    if (unit != Eigen::Vector3d::Ones()) gmsh::model::occ::dilate({{3, v}}, 0, 0, 0, unit.x(), unit.y(), unit.z());
+    gmsh::model::occ::synchronize();
+  });
+  const Eigen::Matrix3d r = rotation.normalized().toRotationMatrix();
+  for (Eigen::Vector3d& p : m.nodes) p = centre + r * (scale * p);
+  return m;
+}
+
+}  // namespace graintwin::mesh

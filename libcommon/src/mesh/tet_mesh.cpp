@@ -1,0 +1,245 @@
+#include "graintwin/mesh/tet_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::mesh {
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+/// Corners of every face, outward for a positively oriented element.
+constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+/// gmsh's 10-node edges: node 4 + k lies on the edge kEdges[k].
+constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
+
+int mid_node(int a, int b) {
+  for (int k = 0; k < 6; ++k)
+    if ((kEdges[k][0] == a && kEdges[k][1] == b) || (kEdges[k][0] == b && kEdges[k][1] == a)) return 4 + k;
+  return -1;
+}
+
+std::array<Vec, 10> element_nodes(const TetMesh& m, std::size_t e) {
+  std::array<Vec, 10> x;
+  const std::uint32_t* n = m.element(e);
+  for (int k = 0; k < 4; ++k) x[static_cast<std::size_t>(k)] = m.nodes[n[k]];
+  for (int k = 0; k < 6; ++k)
+    x[static_cast<std::size_t>(4 + k)] = m.nodes_per_element == 10
+                                             ? m.nodes[n[4 + k]]
+                                             : 0.5 * (m.nodes[n[kEdges[k][0]]] + m.nodes[n[kEdges[k][1]]]);
+  return x;
+}
+
+/// Natural coordinates (xi, eta, zeta) of the nodes and of the 4-point Gauss rule.
+const std::array<Vec, 14>& jacobian_samples() {
+  static const std::array<Vec, 14> s = [] {
+    const double a = 0.5854101966249685, b = 0.1381966011250105;
+    std::array<Vec, 14> p{Vec(0, 0, 0), Vec(1, 0, 0), Vec(0, 1, 0), Vec(0, 0, 1)};
+    for (int k = 0; k < 6; ++k) {
+      const auto corner = [&](int c) { return p[static_cast<std::size_t>(c)]; };
+      p[static_cast<std::size_t>(4 + k)] = 0.5 * (corner(kEdges[k][0]) + corner(kEdges[k][1]));
+    }
+    p[10] = Vec(b, b, b), p[11] = Vec(a, b, b), p[12] = Vec(b, a, b), p[13] = Vec(b, b, a);
+    return p;
+  }();
+  return s;
+}
+
+}  // namespace
+
+double tet_gamma(const Vec& a, const Vec& b, const Vec& c, const Vec& d) {
+  const Vec u = b - a, v = c - a, w = d - a;
+  const double six_v = u.dot(v.cross(w));
+  const double faces = (v - u).cross(w - u).norm() + u.cross(v).norm() + u.cross(w).norm() + v.cross(w).norm();  // 2 x area sum
+  if (faces <= 0.0) return 0.0;
+  const double inradius = six_v / faces;  // 3 V / A with V = six_v / 6 and A = faces / 2
+  const Vec num = u.squaredNorm() * v.cross(w) + v.squaredNorm() * w.cross(u) + w.squaredNorm() * u.cross(v);
+  if (six_v == 0.0) return 0.0;
+  const double circumradius = num.norm() / (2.0 * std::abs(six_v));
+  return 3.0 * inradius / circumradius;
+}
+
+double tet10_det_jacobian(const std::array<Vec, 10>& x, double xi, double eta, double zeta) {
+  const double l[4] = {1.0 - xi - eta - zeta, xi, eta, zeta};
+  Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
+  // dN/dL_k for every node, then d/dxi_q = dN/dL_{q+1} - dN/dL_0.
+  for (int node = 0; node < 10; ++node) {
+    double g[4] = {0, 0, 0, 0};
+    if (node < 4) {
+      g[node] = 4.0 * l[node] - 1.0;
+    } else {
+      const int p = kEdges[node - 4][0], q = kEdges[node - 4][1];
+      g[p] = 4.0 * l[q];
+      g[q] = 4.0 * l[p];
+    }
+    for (int c = 0; c < 3; ++c) j.col(c) += x[static_cast<std::size_t>(node)] * (g[c + 1] - g[0]);
+  }
+  return j.determinant();
+}
+
+double jacobian_ratio(const TetMesh& m, std::size_t e) {
+  const auto x = element_nodes(m, e);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vec& s : jacobian_samples()) {
+    const double d = tet10_det_jacobian(x, s.x(), s.y(), s.z());
+    lo = std::min(lo, d), hi = std::max(hi, d);
+  }
+  return hi > 0.0 ? lo / hi : -1.0;
+}
+
+double mesh_volume(const TetMesh& m) {
+  // Keast's 5-point rule is exact for det J of a 10-node element (a cubic).
+  const double sixth = 1.0 / 6.0;
+  const std::array<std::pair<Vec, double>, 5> rule{{{Vec(0.25, 0.25, 0.25), -0.8},
+                                                     {Vec(sixth, sixth, sixth), 0.45},
+                                                     {Vec(0.5, sixth, sixth), 0.45},
+                                                     {Vec(sixth, 0.5, sixth), 0.45},
+                                                     {Vec(sixth, sixth, 0.5), 0.45}}};
+  double v = 0.0;
+  for (std::size_t e = 0; e < m.element_count(); ++e) {
+    const auto x = element_nodes(m, e);
+    for (const auto& [p, w] : rule) v += w * tet10_det_jacobian(x, p.x(), p.y(), p.z()) / 6.0;
+  }
+  return v;
+}
+
+std::vector<std::array<std::uint32_t, 3>> boundary_triangles(const TetMesh& m) {
+  struct FaceUse {
+    std::size_t element;
+    int face, count;
+  };
+  if (m.nodes.size() >= (1u << 21)) throw UsageError("boundary_triangles: a grain mesh of over 2 million nodes");
+  std::unordered_map<std::uint64_t, FaceUse> faces;  // key: sorted corner triple (21 bits each)
+  faces.reserve(2 * m.element_count());
+  const auto key = [](std::array<std::uint32_t, 3> c) {
+    std::sort(c.begin(), c.end());
+    return static_cast<std::uint64_t>(c[0]) << 42 | static_cast<std::uint64_t>(c[1]) << 21 | c[2];
+  };
+  for (std::size_t e = 0; e < m.element_count(); ++e) {
+    const std::uint32_t* n = m.element(e);
+    for (int f = 0; f < 4; ++f) {
+      auto [it, fresh] = faces.try_emplace(key({n[kFaces[f][0]], n[kFaces[f][1]], n[kFaces[f][2]]}), FaceUse{e, f, 0});
+      ++it->second.count;
+    }
+  }
+  std::vector<std::pair<std::size_t, int>> boundary;  // sorted, so the result is deterministic
+  for (const auto& [k, use] : faces)
+    if (use.count == 1) boundary.emplace_back(use.element, use.face);
+  std::sort(boundary.begin(), boundary.end());
+  std::vector<std::array<std::uint32_t, 3>> out;
+  for (const auto& [e, f] : boundary) {
+    const std::uint32_t* n = m.element(e);
+    const int a = kFaces[f][0], b = kFaces[f][1], c = kFaces[f][2];
+    if (m.nodes_per_element == 4) {
+      out.push_back({n[a], n[b], n[c]});
+      continue;
+    }
+    const std::uint32_t ab = n[mid_node(a, b)], bc = n[mid_node(b, c)], ca = n[mid_node(c, a)];
+    out.insert(out.end(), {{n[a], ab, ca}, {ab, n[b], bc}, {ca, bc, n[c]}, {ab, bc, ca}});
+  }
+  return out;
+}
+
+TriangleSurface boundary_surface(const TetMesh& m) {
+  TriangleSurface s;
+  std::vector<int> index(m.nodes.size(), -1);
+  for (const auto& t : boundary_triangles(m)) {
+    std::array<int, 3> tri;
+    for (int k = 0; k < 3; ++k) {
+      int& i = index[t[static_cast<std::size_t>(k)]];
+      if (i < 0) {
+        i = static_cast<int>(s.vertices.size());
+        s.vertices.push_back(m.nodes[t[static_cast<std::size_t>(k)]]);
+      }
+      tri[static_cast<std::size_t>(k)] = i;
+    }
+    s.triangles.push_back(tri);
+  }
+  return s;
+}
+
+MeshQuality mesh_quality(const TetMesh& m, double gamma_floor) {
+  MeshQuality q;
+  q.elements = m.element_count();
+  q.nodes = m.nodes.size();
+  q.min_gamma = q.min_jacobian_ratio = std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (std::size_t e = 0; e < q.elements; ++e) {
+    const std::uint32_t* n = m.element(e);
+    const double g = tet_gamma(m.nodes[n[0]], m.nodes[n[1]], m.nodes[n[2]], m.nodes[n[3]]);
+    const double r = jacobian_ratio(m, e);
+    q.min_gamma = std::min(q.min_gamma, g);
+    q.min_jacobian_ratio = std::min(q.min_jacobian_ratio, r);
+    q.inverted += r <= 0.0;
+    q.below_floor += g < gamma_floor;
+    sum += g;
+  }
+  q.mean_gamma = q.elements ? sum / static_cast<double>(q.elements) : 0.0;
+  if (q.elements == 0) q.min_gamma = q.min_jacobian_ratio = 0.0;
+  const TriangleSurface b = boundary_surface(m);
+  q.surface_nodes = b.vertices.size();
+  q.surface_area = surface_area(b);
+  q.volume = mesh_volume(m);
+  return q;
+}
+
+void append_grain(fdem::Model& model, const TetMesh& mesh, std::uint32_t label, fdem::GrainKind kind, std::uint32_t material) {
+  const int want = kind == fdem::GrainKind::tet10 ? 10 : kind == fdem::GrainKind::tet4 ? 4 : mesh.nodes_per_element;
+  if (mesh.nodes_per_element != want || mesh.element_count() == 0)
+    throw UsageError(fmt::format("append_grain: grain {} has {} elements of {} nodes, which do not fit its kind", label,
+                                 mesh.element_count(), mesh.nodes_per_element));
+  const auto grain_index = static_cast<std::uint32_t>(model.grains.size());
+  fdem::Grain g;
+  g.label = label;
+  g.kind = kind;
+  g.material = material;
+  g.node_begin = static_cast<std::uint32_t>(model.nodes.size());
+  g.element_begin = static_cast<std::uint32_t>(model.element_grain.size());
+  g.triangle_begin = static_cast<std::uint32_t>(model.triangles.size());
+  model.nodes.insert(model.nodes.end(), mesh.nodes.begin(), mesh.nodes.end());
+  if (model.element_offset.empty()) model.element_offset.push_back(0);
+  for (std::size_t e = 0; e < mesh.element_count(); ++e) {
+    const std::uint32_t* n = mesh.element(e);
+    for (int k = 0; k < mesh.nodes_per_element; ++k) model.element_nodes.push_back(g.node_begin + n[k]);
+    model.element_offset.push_back(static_cast<std::uint32_t>(model.element_nodes.size()));
+    model.element_grain.push_back(grain_index);
+  }
+  for (const auto& t : boundary_triangles(mesh)) {
+    model.triangles.push_back({g.node_begin + t[0], g.node_begin + t[1], g.node_begin + t[2]});
+    model.triangle_grain.push_back(grain_index);
+  }
+  g.node_end = static_cast<std::uint32_t>(model.nodes.size());
+  g.element_end = static_cast<std::uint32_t>(model.element_grain.size());
+  g.triangle_end = static_cast<std::uint32_t>(model.triangles.size());
+  model.grains.push_back(g);
+}
+
+fdem::SampleCylinder enclosing_cylinder(const fdem::Model& model, double membrane_thickness) {
+  if (model.nodes.empty()) throw DataError("enclosing_cylinder: the model has no nodes");
+  fdem::SampleCylinder c;
+  c.membrane_thickness = membrane_thickness;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  c.z_min = std::numeric_limits<double>::infinity(), c.z_max = -c.z_min;
+  for (const Vec& p : model.nodes) {
+    sum += p.head<2>();
+    c.z_min = std::min(c.z_min, p.z()), c.z_max = std::max(c.z_max, p.z());
+  }
+  c.axis_xy = sum / static_cast<double>(model.nodes.size());
+  for (const Vec& p : model.nodes) c.radius = std::max(c.radius, (p.head<2>() - c.axis_xy).norm());
+  return c;
+}
+
+std::vector<fdem::Platen> end_platens(const fdem::SampleCylinder& s, double friction) {
+  const Vec centre(s.axis_xy.x(), s.axis_xy.y(), 0.0);
+  return {fdem::Platen{"bottom", centre + Vec(0, 0, s.z_min), Vec::UnitZ(), friction},
+          fdem::Platen{"top", centre + Vec(0, 0, s.z_max), -Vec::UnitZ(), friction}};
+}
+
+}  // namespace graintwin::mesh

@@ -1,0 +1,163 @@
+// mesh/: surface checks, tetrahedral meshes through gmsh (4 and 10 node), our quality measures,
+// and grains joining an fdem::Model; accuracy against analytic volumes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/model_file.hpp"
+#include "graintwin/mesh/gmsh_adapter.hpp"
+#include "graintwin/mesh/surface.hpp"
+#include "graintwin/mesh/tet_mesh.hpp"
+#include "graintwin/shape/sh_surface.hpp"
+
+using namespace graintwin;
+using Eigen::Vector3d;
+
+namespace {
+
+mesh::TriangleSurface sphere_surface(double radius, int subdivisions) {
+  const shape::SphereMesh s = shape::icosphere(subdivisions);
+  mesh::TriangleSurface m;
+  for (const Vector3d& d : s.directions) m.vertices.push_back(radius * d);
+  m.triangles = s.triangles;
+  return m;
+}
+
+void expect_valid(const mesh::TetMesh& m) {
+  for (std::size_t e = 0; e < m.element_count(); ++e) {
+    const std::uint32_t* n = m.element(e);
+    const Vector3d& a = m.nodes[n[0]];
+    ASSERT_GT((m.nodes[n[1]] - a).cross(m.nodes[n[2]] - a).dot(m.nodes[n[3]] - a), 0.0) << "element " << e;
+    ASSERT_GT(mesh::jacobian_ratio(m, e), 0.0) << "element " << e;
+  }
+  const mesh::SurfaceCheck c = mesh::check_surface(mesh::boundary_surface(m));
+  EXPECT_TRUE(c.ok()) << c.problems();
+}
+
+}  // namespace
+
+TEST(Surface, IcosphereIsClosedManifoldAndOutward) {
+  const auto s = sphere_surface(1.0, 3);
+  const mesh::SurfaceCheck c = mesh::check_surface(s);
+  EXPECT_TRUE(c.ok()) << c.problems();
+  EXPECT_EQ(c.euler_characteristic, 2);
+  EXPECT_NEAR(c.volume, 4.0 / 3.0 * M_PI, 0.02 * 4.0 / 3.0 * M_PI);
+}
+
+TEST(Surface, FindsHolesFlipsAndSelfIntersections) {
+  auto holed = sphere_surface(1.0, 2);
+  holed.triangles.pop_back();
+  EXPECT_EQ(mesh::check_surface(holed).open_edges, 3u);
+  EXPECT_NE(mesh::check_surface(holed).problems().find("open edges"), std::string::npos);
+
+  auto flipped = sphere_surface(1.0, 2);
+  std::swap(flipped.triangles[0][1], flipped.triangles[0][2]);
+  EXPECT_EQ(mesh::check_surface(flipped).misoriented_edges, 3u);
+
+  auto inside_out = sphere_surface(1.0, 2);
+  for (auto& t : inside_out.triangles) std::swap(t[1], t[2]);
+  EXPECT_LT(mesh::check_surface(inside_out).volume, 0.0);
+  EXPECT_FALSE(mesh::check_surface(inside_out).ok());
+
+  // One vertex pushed through the far side: its fan now crosses the opposite triangles.
+  auto pierced = sphere_surface(1.0, 2);
+  pierced.vertices[0] = -1.5 * pierced.vertices[0];
+  const mesh::SurfaceCheck c = mesh::check_surface(pierced);
+  EXPECT_GT(c.intersecting_pairs, 0u);
+  EXPECT_NE(c.problems().find("cross each other"), std::string::npos);
+}
+
+TEST(TetQuality, GammaAndJacobianOfKnownElements) {
+  const Vector3d a(1, 1, 1), b(1, -1, -1), c(-1, 1, -1), d(-1, -1, 1);  // regular tetrahedron
+  EXPECT_NEAR(mesh::tet_gamma(a, c, b, d), 1.0, 1e-12);
+  EXPECT_NEAR(mesh::tet_gamma(a, b, c, d), -1.0, 1e-12);
+  EXPECT_LT(mesh::tet_gamma(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0.3, 0.3, 1e-3)), 0.01);
+
+  mesh::TetMesh t;
+  t.nodes_per_element = 10;
+  t.nodes = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
+  const int edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
+  for (const auto& e : edges) t.nodes.push_back(0.5 * (t.nodes[static_cast<std::size_t>(e[0])] + t.nodes[static_cast<std::size_t>(e[1])]));
+  for (std::uint32_t k = 0; k < 10; ++k) t.elements.push_back(k);
+  EXPECT_NEAR(mesh::jacobian_ratio(t, 0), 1.0, 1e-12);
+  EXPECT_NEAR(mesh::mesh_volume(t), 1.0 / 6.0, 1e-15);
+  // Bulging the mid-node of edge 01 outwards adds exactly the volume of the quadratic bump.
+  t.nodes[4] += Vector3d(0, 0, -0.1);
+  EXPECT_GT(mesh::jacobian_ratio(t, 0), 0.0);
+  // Pulling it past the opposite corner folds the element.
+  t.nodes[4] = Vector3d(0.5, 1.2, 1.2);
+  EXPECT_LE(mesh::jacobian_ratio(t, 0), 0.0);
+}
+
+TEST(Gmsh, SphereFromExactGeometryMeetsItsVolumeInBothOrders) {
+  const double r = 0.5e-3, exact = 4.0 / 3.0 * M_PI * r * r * r;
+  for (int order : {1, 2}) {
+    mesh::TetReport report;
+    const mesh::TetMesh m = mesh::mesh_ellipsoid(Vector3d(1e-3, 2e-3, 3e-3), Vector3d(r, r, r), Eigen::Quaterniond::Identity(),
+                                                 {0.3 * r, order, true}, &report);
+    SCOPED_TRACE(order);
+    expect_valid(m);
+    EXPECT_EQ(report.inverted, 0u);
+    // Linear facets at h = 0.3 r lose about 2 % of the volume; curved 10-node faces under 0.1 %.
+    EXPECT_NEAR(mesh::mesh_volume(m), exact, (order == 1 ? 0.03 : 0.001) * exact);
+    const mesh::MeshQuality q = mesh::mesh_quality(m, 0.1);
+    EXPECT_GT(q.min_gamma, 0.1);
+    EXPECT_GT(q.mean_gamma, 0.6);
+  }
+}
+
+TEST(Gmsh, TriangulatedSurfaceBecomesValidTetsOfItsVolume) {
+  const auto s = sphere_surface(1.0, 4);
+  const double surface_volume = mesh::enclosed_volume(s);
+  for (int order : {1, 2}) {
+    mesh::TetReport report;
+    const mesh::TetMesh m = mesh::tetrahedralize(s, {0.35, order, true}, &report);
+    SCOPED_TRACE(order);
+    expect_valid(m);
+    // Chords of length h = 0.35 sag by h^2 / 8 = 1.5 % of the radius: about 3 % of the volume for
+    // linear facets; curved faces follow the (finer) input surface.
+    EXPECT_NEAR(mesh::mesh_volume(m), surface_volume, (order == 1 ? 0.045 : 0.005) * surface_volume);
+    EXPECT_GT(m.element_count(), 50u);
+  }
+}
+
+TEST(Gmsh, EllipsoidIsRotatedAndPlaced) {
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
+  const Vector3d c(1, -2, 0.5), axes(2, 1, 0.5);
+  const mesh::TetMesh m = mesh::mesh_ellipsoid(c, axes, q, {0.2, 2, true});
+  expect_valid(m);
+  EXPECT_NEAR(mesh::mesh_volume(m), 4.0 / 3.0 * M_PI * 2 * 1 * 0.5, 0.002 * 4.0 / 3.0 * M_PI);
+  for (const Vector3d& p : m.nodes) {
+    const Vector3d body = q.conjugate() * (p - c);
+    EXPECT_LE(body.cwiseQuotient(axes).norm(), 1.0 + 1e-6);
+  }
+}
+
+TEST(Gmsh, RefusesBadSizesAndOrders) {
+  const auto s = sphere_surface(1.0, 2);
+  EXPECT_THROW(mesh::tetrahedralize(s, {0.0, 1, true}), UsageError);
+  EXPECT_THROW(mesh::tetrahedralize(s, {0.3, 3, true}), UsageError);
+}
+
+TEST(Model, GrainsJoinAsContiguousBlocksWithOutwardSurfaces) {
+  fdem::Model model;
+  const mesh::TetMesh a = mesh::mesh_ellipsoid(Vector3d::Zero(), Vector3d(1, 1, 1), Eigen::Quaterniond::Identity(), {0.5, 1, true});
+  const mesh::TetMesh b = mesh::mesh_ellipsoid(Vector3d(3, 0, 0), Vector3d(1, 1, 1), Eigen::Quaterniond::Identity(), {0.5, 2, true});
+  mesh::append_grain(model, a, 7, fdem::GrainKind::tet4);
+  mesh::append_grain(model, b, 9, fdem::GrainKind::tet10);
+  EXPECT_NO_THROW(fdem::validate_model(model, "test"));
+  ASSERT_EQ(model.grains.size(), 2u);
+  EXPECT_EQ(model.grains[1].node_begin, a.nodes.size());
+  EXPECT_EQ(model.nodes_of(model.grains[1].element_begin), 10u);
+  // Each grain's triangles enclose its volume (outward) and, for the 10-node grain, 4 per face.
+  for (std::size_t g = 0; g < 2; ++g) {
+    mesh::TriangleSurface s;
+    s.vertices = model.nodes;
+    for (std::uint32_t t = model.grains[g].triangle_begin; t < model.grains[g].triangle_end; ++t)
+      s.triangles.push_back({static_cast<int>(model.triangles[t][0]), static_cast<int>(model.triangles[t][1]),
+                             static_cast<int>(model.triangles[t][2])});
+    EXPECT_NEAR(mesh::enclosed_volume(s), 4.0 / 3.0 * M_PI, 0.1 * 4.0 / 3.0 * M_PI);
+  }
+  EXPECT_THROW(mesh::append_grain(model, a, 1, fdem::GrainKind::tet10), UsageError);
+}
