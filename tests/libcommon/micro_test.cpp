@@ -1,6 +1,7 @@
 // micro/: local deformation (D2min, affine tensor, local strain) against exact affine and
 // single-grain motions; histograms; power-law fits on samples drawn from known laws; clusters and
-// radii of gyration; g(r) of a lattice and of an ideal gas in a cylinder; coordination numbers.
+// radii of gyration; g(r) of a lattice and of an ideal gas in a cylinder; coordination numbers;
+// force statistics, grain stress q, volatility and Pearson's r with its p-value.
 #include <gtest/gtest.h>
 #include <gsl/gsl_sf_zeta.h>
 
@@ -12,6 +13,7 @@
 
 #include "graintwin/micro/clusters.hpp"
 #include "graintwin/micro/distributions.hpp"
+#include "graintwin/micro/forces.hpp"
 #include "graintwin/micro/local_deformation.hpp"
 #include "graintwin/micro/structure.hpp"
 
@@ -291,4 +293,57 @@ TEST(Structure, DisplacementDistributionsAreOverD50) {
   EXPECT_EQ(d.component[2].count[7], 1u);  // +0.22
   EXPECT_EQ(d.magnitude.count[2], 2u);
   EXPECT_EQ(d.magnitude.count[4], 1u);
+}
+
+TEST(Forces, DistributionAndWeakForceFit) {
+  // Weak forces drawn from (theta + 1) f^theta on (0, 1]: inverse transform f = u^(1 / (theta + 1)).
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double theta = 0.4;
+  std::vector<double> weak;
+  for (int i = 0; i < 5000; ++i) weak.push_back(std::pow(1.0 - u(rng), 1.0 / (theta + 1.0)));
+  const WeakForceFit w = fit_weak_forces(weak);
+  ASSERT_TRUE(w.valid);
+  EXPECT_NEAR(w.theta, theta, 3.0 * w.theta_error) << w.theta << " +- " << w.theta_error;
+  // Forces in N, zero and negative ones (no contact) left out; normalised by their mean.
+  const ForceDistribution d = force_distribution({2.0, 4.0, 6.0, 0.0, -1.0, std::nan("")}, 5);
+  EXPECT_DOUBLE_EQ(d.mean, 4.0);
+  EXPECT_EQ(d.normalised, (std::vector<double>{0.5, 1.0, 1.5}));
+  EXPECT_EQ(d.pdf.used, 3u);
+  EXPECT_EQ(d.strong.count, 2u);  // f >= 1
+  EXPECT_NEAR(d.strong.scale, 0.25, 1e-15);
+}
+
+TEST(Forces, RoseOfMeanNormalForce) {
+  // Two contacts along z (one pointing down: the same axis) and one along x.
+  const ForceRose r = force_rose({{0, 0, 1}, {0, 0, -1}, {1, 0, 0}}, {2.0, 4.0, 1.0}, 3, 4);
+  ASSERT_EQ(r.mean_force.size(), 12u);
+  EXPECT_EQ(r.counts[0], 2u);
+  EXPECT_DOUBLE_EQ(r.mean_force[0], 3.0);
+  EXPECT_EQ(r.counts[2 * 4 + 0], 1u);  // theta = pi/2 sits in the last theta bin, phi = 0 in the first
+  EXPECT_DOUBLE_EQ(r.mean_force[2 * 4 + 0], 1.0);
+  EXPECT_TRUE(std::isnan(r.mean_force[5]));
+}
+
+TEST(Forces, GrainStressVolatilityAndCorrelation) {
+  const double s = 2e5;
+  EXPECT_NEAR(deviatoric_stress_q(Eigen::Vector3d(0, 0, s).asDiagonal()), s / std::sqrt(3.0), 1e-9);
+  Eigen::Matrix3d shear = Eigen::Matrix3d::Zero();
+  shear(0, 1) = shear(1, 0) = s;
+  EXPECT_NEAR(deviatoric_stress_q(shear), s, 1e-9);
+  EXPECT_NEAR(deviatoric_stress_q(Eigen::Matrix3d::Identity() * s), 0.0, 1e-9);
+  // Returns ln2, -ln2, ln2: sample standard deviation 2 ln2 / sqrt 3. A geometric series has none.
+  EXPECT_NEAR(volatility({1.0, 2.0, 1.0, 2.0}), 2.0 * std::log(2.0) / std::sqrt(3.0), 1e-15);
+  EXPECT_NEAR(volatility({1.0, 1.1, 1.21, 1.331}), 0.0, 1e-12);
+  EXPECT_TRUE(std::isnan(volatility({1.0, 2.0})));
+  EXPECT_TRUE(std::isnan(volatility({1.0, 0.0, 1.0})));
+  // r = 6 / sqrt 60; t = 3 / sqrt 2 with 3 degrees of freedom, whose tail has a closed form:
+  // P(T > t) = 1/2 - (atan(t / sqrt 3) + (t / sqrt 3) / (1 + t^2 / 3)) / pi.
+  const Correlation c = pearson({1, 2, 3, 4, 5, std::nan("")}, {2, 4, 5, 4, 5, 1});
+  EXPECT_EQ(c.count, 5u);
+  EXPECT_NEAR(c.r, 6.0 / std::sqrt(60.0), 1e-15);
+  const double x = 3.0 / std::sqrt(2.0) / std::sqrt(3.0);
+  EXPECT_NEAR(c.p_value, 2.0 * (0.5 - (std::atan(x) + x / (1.0 + x * x)) / std::numbers::pi), 1e-10);
+  EXPECT_EQ(pearson({1, 2, 3}, {2, 4, 6}).p_value, 0.0);
+  EXPECT_TRUE(std::isnan(pearson({1, 2}, {1, 2}).r));
 }

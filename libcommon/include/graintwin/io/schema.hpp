@@ -15,6 +15,7 @@ inline constexpr const char* tracks = "tracks";
 inline constexpr const char* fdem_model = "fdem_model";
 inline constexpr const char* fdem_results = "fdem_results";
 inline constexpr const char* ground_truth = "ground_truth";
+inline constexpr const char* micro = "micro";
 }  // namespace kind
 
 namespace attr {
@@ -121,3 +122,28 @@ inline constexpr const char* sample_radius = "radius";              ///< m
 inline constexpr const char* sample_z_range = "z_range";            ///< float64[2] m
 inline constexpr const char* membrane_thickness = "membrane_thickness";  ///< m
 }  // namespace graintwin::schema::fdem_model
+
+// kind=micro (tracks2micro), layout in docs/formats.md. N grains (tracks), T states, K increments.
+namespace graintwin::schema::micro {
+inline constexpr const char* grain_label = "/grains/label";            ///< uint32 (N x T), label in each state, 0 = absent
+inline constexpr const char* grain_d2min = "/grains/d2min";            ///< (N x K) D2min / d50^2
+inline constexpr const char* grain_affine = "/grains/affine";          ///< (N x K x 3 x 3) Lambda
+inline constexpr const char* grain_strain = "/grains/strain";          ///< (N x K x 6) eps^L, Voigt xx yy zz yz xz xy
+inline constexpr const char* grain_eps_q = "/grains/eps_q";            ///< (N x K)
+inline constexpr const char* grain_neighbours = "/grains/neighbours";  ///< uint32 (N x K)
+inline constexpr const char* grain_status = "/grains/status";          ///< uint8 (N x K), codes in its attribute
+inline constexpr const char* grain_cluster = "/grains/cluster";        ///< int32 (N x K), -1 = not in the top fraction
+inline constexpr const char* grain_coordination = "/grains/coordination";  ///< uint32 (N x T)
+inline constexpr const char* increment_from = "/increments/from";      ///< uint64 (K), state
+inline constexpr const char* increment_to = "/increments/to";          ///< uint64 (K), state
+inline constexpr const char* increment_d50 = "/increments/d50";        ///< (K) m, of the first state
+inline constexpr const char* increments = "/increments";               ///< group; /increments/<k>/... per increment
+inline constexpr const char* states = "/states";                       ///< group; /states/<t>/... per state
+inline constexpr const char* state_file = "/states/file";              ///< string (T)
+inline constexpr const char* state_d50 = "/states/d50";                ///< (T) m
+inline constexpr const char* parameters = "/micro/parameters";         ///< string (1), JSON
+// Members of each histogram group (pdf_d2min, pdf_eps_q, displacement/x, ...).
+inline constexpr const char* edges = "edges";
+inline constexpr const char* density = "density";
+inline constexpr const char* count = "count";
+}  // namespace graintwin::schema::micro

@@ -1,0 +1,225 @@
+// tracks2micro: micro-mechanics of a tracked series (SPEC.md section 9, issue 11).
+//   tracks2micro runs/sand_small/tracks.h5 micro.h5 --vtk micro.vtp
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <map>
+#include <optional>
+
+#include "graintwin/cli/tool.hpp"
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/atomic_output.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/micro/micro_file.hpp"
+#include "graintwin/shape/shapes_file.hpp"
+#include "graintwin/track/tracks_file.hpp"
+
+namespace fs = std::filesystem;
+using namespace graintwin;
+using namespace graintwin::micro;
+
+namespace {
+
+void check_exists(const fs::path& p, const std::string& what) {
+  std::error_code ec;
+  if (!fs::exists(p, ec)) throw UsageError(what + " " + p.string() + " does not exist; check the path");
+}
+
+/// Per grain (track) of one state, a value looked up by the grain's label in that state.
+template <class T, class F>
+void by_label(const track::TracksTable& tr, std::size_t t, const std::vector<std::uint32_t>& labels, F&& set) {
+  std::map<std::uint32_t, std::size_t> row;
+  for (std::size_t k = 0; k < labels.size(); ++k) row[labels[k]] = k;
+  for (std::size_t i = 0; i < tr.tracks; ++i) {
+    const std::uint32_t l = tr.label[i * tr.scans + t];
+    if (l == 0) continue;
+    const auto it = row.find(l);
+    if (it != row.end()) set(i, it->second);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Tool tool(
+      "tracks2micro",
+      "Micro-mechanics of a tracked series (kind=tracks, from shapes2tracks; the scans' shapes files it lists give the "
+      "grain volumes, d50 and PSD): per grain and increment (consecutive scans, or --from/--to) the Falk-Langer D2min "
+      "over the neighbours within --radius-d50 (reported over d50^2), the affine tensor Lambda, the local strain "
+      "eps^L = I - (Lambda + Lambda^T)/2 (compression positive) and eps_q = sqrt(2/3 e_dev:e_dev); log-binned PDFs of "
+      "D2min and eps_q; clusters of the --top-fraction highest D2min linked by contact distance, their sizes, "
+      "volume-weighted R_g, a maximum-likelihood power-law fit of P(s) (Clauset-Shalizi-Newman) and the fractal "
+      "dimension from R_g ~ s^(1/d_f); incremental displacement distributions over d50; per scan g(r) with Ripley's "
+      "edge correction in the region the centres fill, the coordination-number distribution (from --contacts files, "
+      "else by centroid distance) and the PSD. Writes kind=micro (.h5) and, with --vtk, grain points with D2min and "
+      "eps_q for ParaView. Simulation frames (kind=fdem_results) are not read yet: that format has not landed.");
+  fs::path input, output, vtk;
+  std::vector<fs::path> shapes_override, contacts;
+  long long from = -1, to = -1;
+  std::string region = "cylinder";
+  MicroOptions o;
+  auto& app = tool.cli();
+  tool.add_input("tracks", input, "Tracks file (.h5, kind=tracks, from shapes2tracks)");
+  tool.add_output("micro", output, "Micro-mechanics file to write (.h5, kind=micro)");
+  app.add_option("--from", from, "First scan of one increment (with --to; default: every pair of consecutive scans)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--to", to, "Second scan of that increment")->check(CLI::NonNegativeNumber);
+  app.add_option("--shapes", shapes_override,
+                 "The scans' shapes files in order, in place of the paths stored in the tracks file (when it was moved)")
+      ->expected(2, -1);
+  app.add_option("--contacts", contacts,
+                 "One contacts file per scan (kind=contacts, from labels2contacts): coordination numbers from its "
+                 "contacts; without it, grains whose centroids are within --contact-factor (r_i + r_j) count as touching")
+      ->expected(2, -1);
+  app.add_option("--radius-d50", o.radius_d50, "D2min neighbourhood radius (d50 of the first scan of the increment)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--min-neighbours", o.min_neighbours, "Fewest neighbours for a local deformation (fewer: flagged, NaN)")
+      ->check(CLI::Range(3, 1000))->capture_default_str();
+  app.add_option("--top-fraction", o.clusters.top_fraction, "Share of grains with the highest D2min that form clusters")
+      ->check(CLI::Range(1e-6, 1.0))->capture_default_str();
+  app.add_option("--contact-factor", o.contact_factor,
+                 "Grains touch when their centroids are within this factor times the sum of their volume-equivalent "
+                 "radii (cluster links; coordination without --contacts)")
+      ->check(CLI::Range(0.5, 3.0))->capture_default_str();
+  app.add_option("--min-tail", o.clusters.min_tail, "Fewest clusters in the power-law tail of P(s)")
+      ->check(CLI::Range(2, 1000000))->capture_default_str();
+  app.add_option("--pdf-bins-per-decade", o.pdf_per_decade, "Log bins per decade of the D2min and eps_q PDFs")
+      ->check(CLI::Range(1.0, 100.0))->capture_default_str();
+  app.add_option("--rdf-max-d50", o.rdf_max_d50, "g(r) up to this distance (d50)")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--rdf-bins", o.rdf_bins, "Bins of g(r)")->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--region", region, "Region the grain centres fill, for g(r)'s edge correction: cylinder or box")
+      ->capture_default_str();
+  app.add_option("--displacement-bins", o.displacement_bins, "Bins of the displacement distributions")
+      ->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--displacement-range-d50", o.displacement_range_d50,
+                 "Displacement distributions over [-range, range] d50 (0: the largest component of each increment)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--vtk", vtk, "Also write the grains as VTK points with D2min, eps_q and cluster per increment (.vtp, ParaView)");
+  tool.set_examples({"tracks2micro runs/sand_small/tracks.h5 runs/sand_small/micro.h5 --vtk runs/sand_small/micro.vtp",
+                     "tracks2micro tracks.h5 micro.h5 --from 0 --to 2 --contacts scan_000/contacts.h5 scan_001/contacts.h5 scan_002/contacts.h5"});
+
+  return tool.run(argc, argv, [&](cli::RunContext& ctx) {
+    // Options and files first, before reading any table.
+    o.region = parse_region_kind(region);
+    o.clusters.link_factor = o.contact_factor;  // one definition of touching for cluster links and coordination
+    if (output.extension() != ".h5") throw UsageError("the micro file " + output.string() + " must end in .h5");
+    if (!vtk.empty() && vtk.extension() != ".vtp") throw UsageError("--vtk " + vtk.string() + " must end in .vtp");
+    if ((from < 0) != (to < 0)) throw UsageError("--from and --to go together: give both scans of the increment");
+    if (from >= 0 && from == to) throw UsageError("--from and --to name the same scan; give two different scans");
+    io::AtomicOutput out(output, ctx.force());
+    std::optional<io::AtomicOutput> vtk_out;
+    if (!vtk.empty()) vtk_out.emplace(vtk, ctx.force());
+    const io::H5File tracks_h5 = io::open_kind(input, schema::kind::tracks, "pass the output of shapes2tracks");
+    ctx.add_input_history(tracks_h5);
+    const track::TracksTable tr = track::read_tracks_file(input);
+    const std::vector<double> d50 = tracks_h5.read<double>(schema::tracks::scan_d50);
+    if (tr.scans < 2)
+      throw UsageError(input.string() + " holds a single scan; micro-mechanics needs two states, so track two scans or more with shapes2tracks");
+    if (d50.size() != tr.scans) throw DataError(input.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
+    if (to >= static_cast<long long>(tr.scans) || from >= static_cast<long long>(tr.scans))
+      throw UsageError("--from/--to must name scans 0.." + std::to_string(tr.scans - 1) + " of " + input.string());
+    std::vector<fs::path> shapes_paths(tr.scan_files.begin(), tr.scan_files.end());
+    if (!shapes_override.empty()) {
+      if (shapes_override.size() != tr.scans)
+        throw UsageError("--shapes lists " + std::to_string(shapes_override.size()) + " files but " + input.string() + " has " +
+                         std::to_string(tr.scans) + " scans; give one per scan");
+      shapes_paths = shapes_override;
+    }
+    for (const fs::path& p : shapes_paths) {
+      std::error_code ec;
+      if (!fs::exists(p, ec))
+        throw UsageError("the shapes file " + p.string() + " listed in " + input.string() +
+                         " does not exist; run from the directory shapes2tracks ran in, or pass --shapes");
+    }
+    if (!contacts.empty() && contacts.size() != tr.scans)
+      throw UsageError("--contacts lists " + std::to_string(contacts.size()) + " files but " + input.string() + " has " +
+                       std::to_string(tr.scans) + " scans; give one per scan");
+    for (const fs::path& p : contacts) check_exists(p, "contacts file");
+
+    MicroFile content;
+    SeriesStates& s = content.series;
+    s.grains = tr.tracks, s.states = tr.scans, s.d50 = d50;
+    s.position.resize(tr.tracks * tr.scans);
+    for (std::size_t c = 0; c < s.position.size(); ++c)
+      s.position[c] = Eigen::Vector3d(tr.centroid[3 * c], tr.centroid[3 * c + 1], tr.centroid[3 * c + 2]);
+    s.volume.assign(s.position.size(), std::nan(""));
+    for (std::size_t t = 0; t < tr.scans; ++t) {
+      ctx.add_input_history(io::open_kind(shapes_paths[t], schema::kind::shapes, "pass the labels2shapes output of that scan"));
+      const shape::ShapesFile sh = shape::read_shapes_file(shapes_paths[t]);
+      std::vector<std::uint32_t> labels;
+      for (const auto& g : sh.grains) labels.push_back(g.label);
+      std::size_t found = 0;
+      by_label<double>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.volume[i * s.states + t] = sh.grains[k].volume, ++found; });
+      std::size_t present = 0;
+      for (std::size_t i = 0; i < tr.tracks; ++i) present += tr.label[i * tr.scans + t] != 0;
+      if (found != present)
+        throw DataError(shapes_paths[t].string() + " lacks " + std::to_string(present - found) + " grains the tracks name in scan " +
+                        std::to_string(t) + "; pass the shapes files the tracks were made from (--shapes)");
+      s.psd.push_back(sh.psd);
+      content.state_files.push_back(shapes_paths[t].string());
+    }
+    if (!contacts.empty()) {
+      s.coordination.resize(tr.scans);
+      for (std::size_t t = 0; t < tr.scans; ++t) {
+        const io::H5File cf = io::open_kind(contacts[t], schema::kind::contacts, "pass the labels2contacts output of that scan");
+        ctx.add_input_history(cf);
+        const auto labels = cf.read<std::uint32_t>(schema::contacts::grain_label);
+        const auto z = cf.read<std::uint32_t>(schema::contacts::grain_coordination);
+        if (labels.size() != z.size()) throw DataError(contacts[t].string() + ": /grains/label and /grains/coordination differ in length; rewrite it with labels2contacts");
+        s.coordination[t].assign(tr.tracks, 0);
+        by_label<std::uint32_t>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.coordination[t][i] = z[k]; });
+      }
+    }
+    content.label = tr.label;
+    const auto increments = from >= 0 ? std::vector<std::pair<std::size_t, std::size_t>>{{std::size_t(from), std::size_t(to)}}
+                                      : consecutive_increments(tr.scans);
+    spdlog::info("{} grains over {} scans (d50 {:.4g} mm in scan 0), {} increment(s)", tr.tracks, tr.scans, d50[0] * 1e3, increments.size());
+    content.result = analyse_series(s, increments, o, ctx.progress_callback("micro-mechanics"));
+
+    for (const IncrementResult& r : content.result.increments) {
+      std::size_t ok = 0, few = 0, singular = 0;
+      double sum_d2 = 0.0, sum_q = 0.0;
+      for (const auto& g : r.grains) {
+        ok += g.status == DeformationStatus::ok, few += g.status == DeformationStatus::too_few_neighbours;
+        singular += g.status == DeformationStatus::singular;
+        if (g.status == DeformationStatus::ok) sum_d2 += g.d2min, sum_q += g.eps_q;
+      }
+      spdlog::info("{} -> {}: local deformation of {} grains ({} with too few neighbours, {} singular); mean D2min/d50^2 {:.3g}, "
+                   "mean eps_q {:.3g}", r.from, r.to, ok, few, singular, ok ? sum_d2 / double(ok) : 0.0, ok ? sum_q / double(ok) : 0.0);
+      const ClusterStatistics& c = r.clusters;
+      spdlog::info("  {} clusters of the {} highest-D2min grains (D2min/d50^2 >= {:.3g}); P(s) power law {}; d_f {}", c.size.size(),
+                   c.selected, c.threshold,
+                   c.size_fit.valid ? fmt::format("alpha {:.2f} +- {:.2f} for s >= {:g}", c.size_fit.alpha, c.size_fit.alpha_error, c.size_fit.x_min)
+                                    : "not fitted (too few clusters)",
+                   std::isfinite(c.fractal_dimension) ? fmt::format("{:.2f} +- {:.2f}", c.fractal_dimension, c.fractal_dimension_error)
+                                                      : "not fitted (too few clusters of 2 or more)");
+    }
+    for (std::size_t t = 0; t < content.result.states.size(); ++t) {
+      const StateResult& r = content.result.states[t];
+      spdlog::info("scan {}: mean coordination {:.2f} ({}), g(r) over {} grains", t, r.coordination_distribution.mean,
+                   r.coordination_from_contacts ? "contacts" : "distance criterion", r.rdf.points);
+    }
+    nlohmann::json p = {{"source", "tracks"},
+                        {"increments", increments},
+                        {"radius_d50", o.radius_d50},
+                        {"min_neighbours", o.min_neighbours},
+                        {"top_fraction", o.clusters.top_fraction},
+                        {"contact_factor", o.contact_factor},
+                        {"cluster_links", "contact distance"},
+                        {"coordination", contacts.empty() ? "distance" : "contacts"},
+                        {"min_tail", o.clusters.min_tail},
+                        {"pdf_bins_per_decade", o.pdf_per_decade},
+                        {"rdf_max_d50", o.rdf_max_d50},
+                        {"rdf_bins", o.rdf_bins},
+                        {"region", region},
+                        {"displacement_bins", o.displacement_bins},
+                        {"displacement_range_d50", o.displacement_range_d50}};
+    content.parameters_json = p.dump();
+    write_micro_file(out.temp_path(), content, ctx.history());
+    if (vtk_out) write_micro_vtp(vtk_out->temp_path(), content);
+    out.commit();
+    if (vtk_out) vtk_out->commit();
+  });
+}
