@@ -9,6 +9,8 @@ PACKAGES=(
   # libraries (docs/dependencies.md says why each is there)
   libhdf5-dev libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libeigen3-dev libgsl-dev
   libtiff-dev libpng-dev libgtest-dev
+  # fdemrun scene files (TOML with arrays of tables)
+  libtomlplusplus-dev
   # tetrahedral meshing of grains (shapes2mesh, fdemrun): only the mesh/ library links it
   libgmsh-dev
   # Python from Debian for the h5py interoperability checks, reference baselines and plots;

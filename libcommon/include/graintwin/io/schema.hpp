@@ -147,3 +147,41 @@ inline constexpr const char* edges = "edges";
 inline constexpr const char* density = "density";
 inline constexpr const char* count = "count";
 }  // namespace graintwin::schema::micro
+
+// kind=fdem_results (fdemrun), layout in docs/formats.md. R series rows, P platens, G grains,
+// M contacts of a frame; frames are groups /frames/000000, /frames/000001, ...
+namespace graintwin::schema::fdem_results {
+inline constexpr const char* checkpoint_kind = "fdem_checkpoint";    ///< kind of fdemrun's checkpoint files
+inline constexpr const char* series = "/series";                      ///< group of (R) columns
+inline constexpr const char* series_time = "/series/time";            ///< (R) s
+inline constexpr const char* series_step = "/series/step";            ///< uint64 (R)
+inline constexpr const char* series_stage = "/series/stage";          ///< uint32 (R), row of /stages
+inline constexpr const char* series_kinetic = "/series/kinetic";      ///< (R) J
+inline constexpr const char* series_strain = "/series/strain";        ///< (R) J
+inline constexpr const char* series_contact_elastic = "/series/contact_elastic";  ///< (R) J
+inline constexpr const char* series_dissipated = "/series/dissipated";            ///< (R) J, cumulative
+inline constexpr const char* series_external_work = "/series/external_work";      ///< (R) J, cumulative
+inline constexpr const char* series_node_contacts = "/series/node_contacts";      ///< uint64 (R)
+inline constexpr const char* series_platen_force = "/series/platen_force";        ///< (R x P x 3) N, grains on platen
+inline constexpr const char* series_platen_position = "/series/platen_position";  ///< (R x P x 3) m, platen point
+inline constexpr const char* grain_label = "/grains/label";           ///< uint32 (G)
+inline constexpr const char* grain_kind = "/grains/kind";             ///< uint8 (G): 0 rigid, 1 tet4, 2 tet10
+inline constexpr const char* grain_mass = "/grains/mass";             ///< (G) kg
+inline constexpr const char* grain_volume = "/grains/volume";         ///< (G) m^3
+inline constexpr const char* platen_name = "/platens/name";           ///< string (P)
+inline constexpr const char* stage_name = "/stages/name";             ///< string (S)
+inline constexpr const char* stage_start = "/stages/start";           ///< (S) s
+inline constexpr const char* parameters = "/run/parameters";          ///< string (1), JSON
+inline constexpr const char* frames = "/frames";                      ///< group; attrs time, step per frame group
+// Members of each frame group.
+inline constexpr const char* frame_centroid = "grains/centroid";      ///< (G x 3) m
+inline constexpr const char* frame_rotation = "grains/rotation";      ///< (G x 4) quaternion (w, x, y, z) from the reference
+inline constexpr const char* frame_stress = "grains/stress";          ///< (G x 3 x 3) Pa, compression positive, volume average
+inline constexpr const char* frame_velocity = "grains/velocity";      ///< (G x 3) m/s, centroid velocity (half step)
+inline constexpr const char* contact_pair = "contacts/pair";          ///< uint32 (M x 2) labels, low first; platen contacts: (label, 0)
+inline constexpr const char* contact_platen = "contacts/platen";      ///< int32 (M), platen row, -1 for grain pairs
+inline constexpr const char* contact_point = "contacts/point";        ///< (M x 3) m
+inline constexpr const char* contact_normal = "contacts/normal";      ///< (M x 3) unit, first -> second (grain -> platen)
+inline constexpr const char* contact_force = "contacts/force";        ///< (M x 3) N, on the second (the platen)
+inline constexpr const char* contact_overlap = "contacts/overlap";    ///< (M) m
+}  // namespace graintwin::schema::fdem_results

@@ -1,0 +1,194 @@
+#include "graintwin/fdem/results_file.hpp"
+
+#include <fmt/format.h>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+
+namespace graintwin::fdem {
+namespace sr = schema::fdem_results;
+using io::units;
+
+namespace {
+
+std::string frame_group(std::size_t k) { return fmt::format("{}/{:06d}", sr::frames, k); }
+
+void push(std::vector<double>& out, const Eigen::Vector3d& v) { out.insert(out.end(), {v[0], v[1], v[2]}); }
+
+}  // namespace
+
+ResultsWriter::ResultsWriter(const std::filesystem::path& path, const Solver& solver, const Scene& scene,
+                             const std::string& parameters_json)
+    : file_(io::H5File::create(path)), platens_(solver.model().platens.size()) {
+  io::write_root_attrs(file_, schema::kind::fdem_results);
+  const Model& m = solver.model();
+  std::vector<std::uint32_t> label;
+  std::vector<std::uint8_t> kind;
+  std::vector<double> mass, volume;
+  for (std::size_t g = 0; g < m.grains.size(); ++g) {
+    label.push_back(m.grains[g].label);
+    kind.push_back(static_cast<std::uint8_t>(m.grains[g].kind));
+    mass.push_back(solver.body(g).mass);
+    volume.push_back(solver.body(g).volume);
+  }
+  file_.write(sr::grain_label, label);
+  file_.write(sr::grain_kind, kind);
+  file_.write(sr::grain_mass, mass, units("kg"));
+  file_.write(sr::grain_volume, volume, units("m^3"));
+  std::vector<std::string> names;
+  for (const Platen& p : m.platens) names.push_back(p.name);
+  file_.write_strings(sr::platen_name, names);
+  std::vector<std::string> stages;
+  std::vector<double> start;
+  double t = 0;
+  for (const StageSpec& s : scene.stages) stages.push_back(s.name), start.push_back(t), t += s.duration;
+  file_.write_strings(sr::stage_name, stages);
+  file_.write(sr::stage_start, start, units("s"));
+  file_.write_strings(sr::parameters, {parameters_json});
+  file_.ensure_group(sr::frames);
+}
+
+void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std::uint32_t stage, double dt) {
+  SeriesRow r;
+  r.step = solver.state().step - 1;  // the report is of the step just taken
+  r.time = solver.state().time - dt;
+  r.stage = stage;
+  r.energies = report.energies;
+  r.node_contacts = report.contact.node_contacts;
+  for (std::size_t p = 0; p < platens_; ++p) {
+    r.platen_force.push_back(solver.platen_force(p));
+    r.platen_position.push_back(solver.state().platens[p].point);
+  }
+  rows_.push_back(std::move(r));
+}
+
+void ResultsWriter::add_frame(const Solver& solver) {
+  const std::string group = frame_group(frames_++);
+  file_.ensure_group(group);
+  file_.set_attr(group, "time", solver.state().time);
+  file_.set_attr(group, "step", static_cast<long long>(solver.state().step));
+  const Model& m = solver.model();
+  const hsize_t G = m.grains.size();
+  std::vector<double> centroid, rotation, stress, velocity;
+  for (std::size_t g = 0; g < G; ++g) {
+    push(centroid, solver.grain_centroid(g));
+    push(velocity, solver.grain_velocity(g));
+    const Eigen::Quaterniond q = solver.grain_rotation(g);
+    rotation.insert(rotation.end(), {q.w(), q.x(), q.y(), q.z()});
+    const Eigen::Matrix3d s = -solver.grain_stress(g);  // compression positive (docs/conventions.md)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) stress.push_back(s(i, j));
+  }
+  file_.write(group + "/" + sr::frame_centroid, centroid.data(), {G, 3}, units("m"));
+  file_.write(group + "/" + sr::frame_rotation, rotation.data(), {G, 4}, units("1"));
+  file_.write(group + "/" + sr::frame_stress, stress.data(), {G, 3, 3}, units("Pa"));
+  file_.write(group + "/" + sr::frame_velocity, velocity.data(), {G, 3}, units("m/s"));
+  std::vector<std::uint32_t> pair;
+  std::vector<std::int32_t> platen;
+  std::vector<double> point, normal, force, overlap;
+  for (const ContactRecord& c : solver.contacts()) {
+    const bool with_platen = c.b >= G;
+    pair.insert(pair.end(), {m.grains[c.a].label, with_platen ? 0u : m.grains[c.b].label});
+    platen.push_back(with_platen ? static_cast<std::int32_t>(c.b - G) : -1);
+    push(point, c.point);
+    push(normal, c.normal);
+    push(force, c.force);
+    overlap.push_back(c.overlap);
+  }
+  const hsize_t M = platen.size();
+  file_.write(group + "/" + sr::contact_pair, pair.data(), {M, 2});
+  file_.write(group + "/" + sr::contact_platen, platen.data(), {M});
+  file_.write(group + "/" + sr::contact_point, point.data(), {M, 3}, units("m"));
+  file_.write(group + "/" + sr::contact_normal, normal.data(), {M, 3}, units("1"));
+  file_.write(group + "/" + sr::contact_force, force.data(), {M, 3}, units("N"));
+  file_.write(group + "/" + sr::contact_overlap, overlap.data(), {M}, units("m"));
+}
+
+void ResultsWriter::finish(const std::vector<std::string>& history) {
+  const hsize_t R = rows_.size(), P = platens_;
+  const auto column = [&](const char* name, auto get, const char* unit) {
+    std::vector<decltype(get(rows_.front()))> v;
+    for (const SeriesRow& r : rows_) v.push_back(get(r));
+    file_.write(name, v.data(), {R}, unit ? units(unit) : io::DatasetOptions{});
+  };
+  if (R > 0) {
+    column(sr::series_time, [](const SeriesRow& r) { return r.time; }, "s");
+    column(sr::series_step, [](const SeriesRow& r) { return r.step; }, nullptr);
+    column(sr::series_stage, [](const SeriesRow& r) { return r.stage; }, nullptr);
+    column(sr::series_kinetic, [](const SeriesRow& r) { return r.energies.kinetic; }, "J");
+    column(sr::series_strain, [](const SeriesRow& r) { return r.energies.strain; }, "J");
+    column(sr::series_contact_elastic, [](const SeriesRow& r) { return r.energies.contact_elastic; }, "J");
+    column(sr::series_dissipated, [](const SeriesRow& r) { return r.energies.dissipated; }, "J");
+    column(sr::series_external_work, [](const SeriesRow& r) { return r.energies.external_work; }, "J");
+    column(sr::series_node_contacts, [](const SeriesRow& r) { return r.node_contacts; }, nullptr);
+  }
+  std::vector<double> force, position;
+  for (const SeriesRow& r : rows_)
+    for (std::size_t p = 0; p < P; ++p) push(force, r.platen_force[p]), push(position, r.platen_position[p]);
+  file_.write(sr::series_platen_force, force.data(), {R, P, 3}, units("N"));
+  file_.write(sr::series_platen_position, position.data(), {R, P, 3}, units("m"));
+  io::write_history(file_, history);
+}
+
+ResultsSeries read_results_series(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
+  ResultsSeries s;
+  if (!f.exists(sr::series_time)) return s;  // a run shorter than one series interval
+  s.time = f.read<double>(sr::series_time);
+  s.step = f.read<std::uint64_t>(sr::series_step);
+  s.kinetic = f.read<double>(sr::series_kinetic);
+  s.strain = f.read<double>(sr::series_strain);
+  s.contact_elastic = f.read<double>(sr::series_contact_elastic);
+  s.dissipated = f.read<double>(sr::series_dissipated);
+  s.external_work = f.read<double>(sr::series_external_work);
+  s.platen_force = f.read<double>(sr::series_platen_force);
+  s.platen_position = f.read<double>(sr::series_platen_position);
+  if (s.step.size() != s.time.size() || s.kinetic.size() != s.time.size())
+    throw DataError(path.string() + " has series columns of different lengths; rerun fdemrun");
+  return s;
+}
+
+std::size_t results_frame_count(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
+  return f.list(sr::frames).size();
+}
+
+ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k) {
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
+  const std::string g = frame_group(k);
+  if (!f.exists(g)) throw DataError(path.string() + " has no frame " + std::to_string(k) + "; it holds " +
+                                    std::to_string(f.list(sr::frames).size()));
+  ResultsFrame r;
+  r.time = f.attr_doubles(g, "time").at(0);
+  r.step = static_cast<std::uint64_t>(f.attr_int(g, "step").value_or(0));
+  const auto at = [&](const char* member) { return g + "/" + member; };
+  r.centroid = f.read<double>(at(sr::frame_centroid));
+  r.rotation = f.read<double>(at(sr::frame_rotation));
+  r.stress = f.read<double>(at(sr::frame_stress));
+  r.velocity = f.read<double>(at(sr::frame_velocity));
+  r.pair = f.read<std::uint32_t>(at(sr::contact_pair));
+  r.platen = f.read<std::int32_t>(at(sr::contact_platen));
+  r.point = f.read<double>(at(sr::contact_point));
+  r.normal = f.read<double>(at(sr::contact_normal));
+  r.force = f.read<double>(at(sr::contact_force));
+  r.overlap = f.read<double>(at(sr::contact_overlap));
+  return r;
+}
+
+void write_checkpoint(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest) {
+  io::H5File f = io::H5File::create(path);
+  io::write_root_attrs(f, sr::checkpoint_kind);
+  f.set_attr("/", "scene_digest", scene_digest);
+  solver.save(f, "/state");
+}
+
+void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest) {
+  const io::H5File f = io::open_kind(path, sr::checkpoint_kind, "pass a checkpoint written by fdemrun --checkpoint");
+  if (f.attr_string("/", "scene_digest").value_or("") != scene_digest)
+    throw UsageError("checkpoint " + path.string() + " was written for another scene or model; restart with the scene that wrote it");
+  solver.load(f, "/state");
+}
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,259 @@
+#include "graintwin/fdem/scene.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <set>
+#include <string>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/primitives.hpp"
+
+namespace graintwin::fdem {
+namespace {
+
+/// One TOML table with the name it is reported under ("scene.toml: [[grains]] 2").
+class Table {
+ public:
+  Table(const toml::table& t, std::string where, std::initializer_list<const char*> keys) : t_(t), where_(std::move(where)) {
+    const std::set<std::string> known(keys.begin(), keys.end());
+    for (auto&& [k, v] : t)
+      if (!known.count(std::string(k.str()))) {
+        std::string list;
+        for (const char* key : keys) list += (list.empty() ? "" : ", ") + std::string(key);
+        fail("key '" + std::string(k.str()) + "' is unknown (known: " + list + ")");
+      }
+  }
+  [[noreturn]] void fail(const std::string& what) const { throw UsageError(where_ + ": " + what); }
+  bool has(const char* key) const { return t_.contains(key); }
+  const std::string& where() const { return where_; }
+
+  double number(const char* key, double fallback) const {
+    const toml::node* n = t_.get(key);
+    if (!n) return fallback;
+    const auto v = n->value<double>();
+    if (!v || !std::isfinite(*v)) fail(std::string(key) + " must be a number");
+    return *v;
+  }
+  double positive(const char* key, double fallback) const {
+    const double v = number(key, fallback);
+    if (!(v > 0)) fail(std::string(key) + " must be positive");
+    return v;
+  }
+  double non_negative(const char* key, double fallback) const {
+    const double v = number(key, fallback);
+    if (v < 0) fail(std::string(key) + " must not be negative");
+    return v;
+  }
+  bool flag(const char* key, bool fallback) const {
+    const toml::node* n = t_.get(key);
+    if (!n) return fallback;
+    if (!n->is_boolean()) fail(std::string(key) + " must be true or false");
+    return n->value<bool>().value();
+  }
+  std::string text(const char* key, const std::string& fallback) const {
+    const toml::node* n = t_.get(key);
+    if (!n) return fallback;
+    if (!n->is_string()) fail(std::string(key) + " must be a string");
+    return n->value<std::string>().value();
+  }
+  Eigen::Vector3d vector(const char* key, const Eigen::Vector3d& fallback) const {
+    const toml::node* n = t_.get(key);
+    if (!n) return fallback;
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != 3) fail(std::string(key) + " must be an array of 3 numbers, e.g. [0, 0, 1]");
+    Eigen::Vector3d v;
+    for (int k = 0; k < 3; ++k) {
+      const auto x = (*a)[static_cast<std::size_t>(k)].value<double>();
+      if (!x || !std::isfinite(*x)) fail(std::string(key) + " must be an array of 3 numbers, e.g. [0, 0, 1]");
+      v[k] = *x;
+    }
+    return v;
+  }
+  const toml::table& raw() const { return t_; }
+
+ private:
+  const toml::table& t_;
+  std::string where_;
+};
+
+/// The tables of an array of tables `[[name]]` (empty when absent).
+std::vector<const toml::table*> tables(const toml::table& root, const char* name, const std::string& file) {
+  std::vector<const toml::table*> out;
+  const toml::node* n = root.get(name);
+  if (!n) return out;
+  const toml::array* a = n->as_array();
+  if (!a) throw UsageError(file + ": " + name + " must be written as [[" + name + "]] tables");
+  for (const toml::node& item : *a) {
+    if (!item.is_table()) throw UsageError(file + ": " + name + " must be written as [[" + name + "]] tables");
+    out.push_back(item.as_table());
+  }
+  return out;
+}
+
+GrainKind parse_kind(const Table& t) {
+  const std::string k = t.text("kind", "tet4");
+  if (k == "rigid") return GrainKind::rigid;
+  if (k == "tet4") return GrainKind::tet4;
+  if (k == "tet10") return GrainKind::tet10;
+  t.fail("kind '" + k + "' is unknown; use rigid, tet4 or tet10");
+}
+
+}  // namespace
+
+double Scene::total_duration() const {
+  double t = 0;
+  for (const StageSpec& s : stages) t += s.duration;
+  return t;
+}
+
+Scene read_scene(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  toml::table root;
+  try {
+    root = toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
+                     "; fix the TOML syntax");
+  }
+  const Table top(root, file, {"run", "materials", "grains", "platens", "stages"});
+  Scene s;
+  double duration = 0;
+  if (const toml::table* run = root["run"].as_table()) {
+    const Table r(*run, file + ": [run]",
+                  {"duration", "time_step", "element_safety", "gravity", "damping", "contact", "frame_interval",
+                   "series_interval", "checkpoint_interval"});
+    duration = r.non_negative("duration", 0);
+    s.time_step = r.non_negative("time_step", 0);
+    s.element_safety = r.positive("element_safety", 0.8);
+    if (s.element_safety > 1) r.fail("element_safety must be at most 1 (a fraction of the critical step)");
+    s.gravity = r.vector("gravity", Eigen::Vector3d::Zero());
+    s.damping = r.non_negative("damping", 0);
+    s.contact = r.flag("contact", true);
+    s.frame_interval = r.non_negative("frame_interval", 0);
+    s.series_interval = r.non_negative("series_interval", 0);
+    s.checkpoint_interval = r.non_negative("checkpoint_interval", 0);
+  } else if (top.has("run")) {
+    top.fail("run must be a [run] table");
+  }
+
+  std::vector<std::string> material_names;
+  for (const toml::table* m : tables(root, "materials", file)) {
+    const Table t(*m, file + ": [[materials]] " + std::to_string(s.materials.size() + 1),
+                  {"name", "density", "young", "poisson", "friction", "normal_penalty", "tangential_penalty", "damping_ratio"});
+    Material mat;
+    mat.name = t.text("name", mat.name);
+    mat.density = t.positive("density", mat.density);
+    mat.young = t.positive("young", mat.young);
+    mat.poisson = t.number("poisson", mat.poisson);
+    if (!(mat.poisson > -1 && mat.poisson < 0.5)) t.fail("poisson must lie in (-1, 0.5)");
+    mat.friction = t.non_negative("friction", mat.friction);
+    mat.normal_penalty = t.positive("normal_penalty", mat.normal_penalty);
+    mat.tangential_penalty = t.positive("tangential_penalty", mat.tangential_penalty);
+    mat.damping_ratio = t.non_negative("damping_ratio", mat.damping_ratio);
+    if (mat.damping_ratio >= 1) t.fail("damping_ratio must be below 1 (a fraction of critical damping)");
+    if (std::find(material_names.begin(), material_names.end(), mat.name) != material_names.end())
+      t.fail("material name '" + mat.name + "' is used twice; give each material its own name");
+    material_names.push_back(mat.name);
+    s.materials.push_back(mat);
+  }
+  if (s.materials.empty()) s.materials.push_back(Material{}), material_names.push_back(Material{}.name);
+
+  for (const toml::table* g : tables(root, "grains", file)) {
+    const Table t(*g, file + ": [[grains]] " + std::to_string(s.grains.size() + 1),
+                  {"shape", "size", "position", "element_size", "kind", "material", "label", "velocity", "angular_velocity"});
+    GrainSpec spec;
+    spec.shape = t.text("shape", "box");
+    if (spec.shape == "sphere" || spec.shape == "ellipsoid")
+      t.fail("shape '" + spec.shape + "' is not available yet (it needs the gmsh mesh module); use box");
+    if (spec.shape != "box") t.fail("shape '" + spec.shape + "' is unknown; use box");
+    if (!t.has("size")) t.fail("size is missing: the box edges [x, y, z] in m");
+    spec.size = t.vector("size", Eigen::Vector3d::Zero());
+    if (!(spec.size.minCoeff() > 0)) t.fail("size must be positive in every direction");
+    spec.position = t.vector("position", Eigen::Vector3d::Zero());
+    spec.element_size = t.positive("element_size", spec.size.minCoeff());
+    if (spec.size.maxCoeff() / spec.element_size > 200)
+      t.fail("element_size is below 1/200 of the grain; give a larger element_size");
+    spec.kind = parse_kind(t);
+    const std::string material = t.text("material", material_names.front());
+    const auto it = std::find(material_names.begin(), material_names.end(), material);
+    if (it == material_names.end()) t.fail("material '" + material + "' is not among the [[materials]]");
+    spec.material = static_cast<std::uint32_t>(it - material_names.begin());
+    const double label = t.number("label", double(s.grains.size() + 1));
+    if (!(label >= 1 && label < 4294967296.0) || label != std::floor(label)) t.fail("label must be a positive integer");
+    spec.label = static_cast<std::uint32_t>(label);
+    spec.velocity = t.vector("velocity", Eigen::Vector3d::Zero());
+    spec.angular_velocity = t.vector("angular_velocity", Eigen::Vector3d::Zero());
+    s.grains.push_back(spec);
+  }
+  if (s.grains.empty()) throw UsageError(file + " has no [[grains]]; add at least one grain");
+  std::set<std::uint32_t> labels;
+  for (const GrainSpec& g : s.grains)
+    if (!labels.insert(g.label).second)
+      throw UsageError(file + ": grain label " + std::to_string(g.label) + " is used twice; give each grain its own label");
+
+  std::vector<std::string> platen_names;
+  for (const toml::table* p : tables(root, "platens", file)) {
+    const Table t(*p, file + ": [[platens]] " + std::to_string(s.platens.size() + 1),
+                  {"name", "point", "normal", "friction", "velocity"});
+    PlatenSpec spec;
+    spec.platen.name = t.text("name", "platen" + std::to_string(s.platens.size() + 1));
+    spec.platen.point = t.vector("point", Eigen::Vector3d::Zero());
+    const Eigen::Vector3d n = t.vector("normal", Eigen::Vector3d::UnitZ());
+    if (!(n.norm() > 0)) t.fail("normal must not be zero");
+    spec.platen.normal = n.normalized();
+    spec.platen.friction = t.non_negative("friction", 0);
+    spec.velocity = t.vector("velocity", Eigen::Vector3d::Zero());
+    if (std::find(platen_names.begin(), platen_names.end(), spec.platen.name) != platen_names.end())
+      t.fail("platen name '" + spec.platen.name + "' is used twice");
+    platen_names.push_back(spec.platen.name);
+    s.platens.push_back(spec);
+  }
+
+  for (const toml::table* st : tables(root, "stages", file)) {
+    const Table t(*st, file + ": [[stages]] " + std::to_string(s.stages.size() + 1), {"name", "duration", "damping", "platens"});
+    StageSpec spec;
+    spec.name = t.text("name", "stage" + std::to_string(s.stages.size() + 1));
+    if (!t.has("duration")) t.fail("duration is missing (s)");
+    spec.duration = t.positive("duration", 0);
+    if (t.has("damping")) spec.damping = t.non_negative("damping", 0);
+    spec.platen_velocity.resize(s.platens.size());
+    if (t.has("platens")) {
+      const toml::table* velocities = t.raw()["platens"].as_table();
+      if (!velocities) t.fail("platens must be a table of platen name = [vx, vy, vz] (m/s)");
+      for (auto&& [name, value] : *velocities) {
+        const auto it = std::find(platen_names.begin(), platen_names.end(), std::string(name.str()));
+        if (it == platen_names.end()) t.fail("platen '" + std::string(name.str()) + "' is not among the [[platens]]");
+        toml::table one;
+        one.insert("velocity", value);
+        spec.platen_velocity[static_cast<std::size_t>(it - platen_names.begin())] =
+            Table(one, t.where() + " platens", {"velocity"}).vector("velocity", Eigen::Vector3d::Zero());
+      }
+    }
+    s.stages.push_back(spec);
+  }
+  if (s.stages.empty()) {
+    if (!(duration > 0)) throw UsageError(file + ": give [run] duration (s) or at least one [[stages]] table");
+    StageSpec only;
+    only.name = "run";
+    only.duration = duration;
+    only.platen_velocity.resize(s.platens.size());
+    s.stages.push_back(only);
+  } else if (duration > 0) {
+    throw UsageError(file + ": [run] duration and [[stages]] both set the run's length; keep one");
+  }
+  return s;
+}
+
+Model build_model(const Scene& scene) {
+  Model m;
+  m.materials = scene.materials;
+  for (const GrainSpec& g : scene.grains)
+    add_grain(m, box_mesh(g.size, g.element_size), g.position, g.kind, g.material, g.label);
+  for (const PlatenSpec& p : scene.platens) m.platens.push_back(p.platen);
+  return m;
+}
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,344 @@
+#include "graintwin/fdem/solver.hpp"
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/h5file.hpp"
+
+namespace graintwin::fdem {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+/// Critical step factors k in dt = k h_min / c for a regular tetrahedron with lumped mass
+/// (element eigenvalue bound; docs/fdemrun.md): 4-node row sum and 10-node HRZ.
+constexpr double kCriticalTet4 = 0.671, kCriticalTet10 = 0.327;
+
+Eigen::Quaterniond rotation_by(const Eigen::Vector3d& theta) {
+  const double angle = theta.norm();
+  if (angle == 0) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, theta / angle));
+}
+
+bool finite(const Eigen::Vector3d& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+std::vector<double> flatten(const std::vector<Eigen::Vector3d>& v) {
+  std::vector<double> out;
+  out.reserve(3 * v.size());
+  for (const auto& p : v) out.insert(out.end(), {p[0], p[1], p[2]});
+  return out;
+}
+
+std::vector<Eigen::Vector3d> unflatten(const std::vector<double>& d) {
+  std::vector<Eigen::Vector3d> out(d.size() / 3);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Eigen::Vector3d(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+  return out;
+}
+
+}  // namespace
+
+Solver::Solver(const Model& model, const SolverOptions& options)
+    : model_(&model), options_(options), elements_(model), mass_(lumped_masses(model)) {
+  if (model.grains.empty()) throw UsageError("the FDEM model has no grain; add grains to the scene");
+  const std::size_t grains = model.grains.size();
+  bodies_.reserve(grains);
+  inverse_inertia_.resize(grains);
+  state_.bodies.resize(grains);
+  for (std::size_t g = 0; g < grains; ++g) {
+    bodies_.push_back(body_properties(model, g));
+    state_.bodies[g].position = bodies_[g].centroid;
+    if (model.grains[g].kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
+  }
+  state_.x = model.nodes;
+  state_.v.assign(model.nodes.size(), Eigen::Vector3d::Zero());
+  for (const Platen& p : model.platens) state_.platens.push_back({p.point, p.normal.normalized(), Eigen::Vector3d::Zero(), p.friction});
+  platen_force_.assign(model.platens.size(), Eigen::Vector3d::Zero());
+  force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
+  if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, mass_, options.contact);
+}
+
+Solver::~Solver() = default;
+
+void Solver::set_grain_velocity(std::size_t g, const Eigen::Vector3d& velocity, const Eigen::Vector3d& omega) {
+  if (state_.step != 0) throw UsageError("initial velocities can only be set before the first step");
+  const Grain& grain = model_->grains.at(g);
+  const Eigen::Vector3d c = grain_centroid(g);
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) state_.v[i] = velocity + omega.cross(state_.x[i] - c);
+  if (grain.kind == GrainKind::rigid) {
+    const Eigen::Matrix3d R = state_.bodies[g].orientation.toRotationMatrix();
+    state_.bodies[g].velocity = velocity;
+    state_.bodies[g].angular_momentum = R * bodies_[g].inertia * R.transpose() * omega;
+  }
+}
+
+void Solver::set_platen_velocity(std::size_t p, const Eigen::Vector3d& velocity) { state_.platens.at(p).velocity = velocity; }
+
+StepLimits Solver::time_step_limits() const {
+  StepLimits s;
+  s.element_critical = kInfinity;
+  for (std::size_t e = 0; e < model_->element_count(); ++e) {
+    if (!elements_.is_elastic(e)) continue;
+    const Material& m = model_->materials[model_->grains[model_->element_grain[e]].material];
+    const double k = model_->nodes_of(e) == 10 ? kCriticalTet10 : kCriticalTet4;
+    const double dt = k * element_min_altitude(*model_, e) / dilatational_wave_speed(m);
+    if (dt < s.element_critical) s.element_critical = dt, s.element = e;
+  }
+  s.element_stable = s.element_critical * options_.element_safety;
+  s.contact_stable = contact_ ? contact_->stable_time_step() : kInfinity;
+  return s;
+}
+
+void Solver::check_time_step(double dt) const {
+  const StepLimits s = time_step_limits();
+  if (!(dt > 0) || !std::isfinite(dt)) throw UsageError(fmt::format("the time step {:.4g} s must be positive", dt));
+  if (dt > s.stable())
+    throw UsageError(fmt::format(
+        "the time step {:.4g} s is above the stable limit {:.4g} s (elements: {:.4g} s = {} x the critical {:.4g} s of "
+        "element {}; contact: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
+        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical, s.element, s.contact_stable, s.stable()));
+}
+
+Eigen::Vector3d Solver::angular_velocity(std::size_t g, const Eigen::Quaterniond& q, const Eigen::Vector3d& L) const {
+  const Eigen::Matrix3d R = q.toRotationMatrix();
+  return R * (inverse_inertia_[g] * (R.transpose() * L));
+}
+
+void Solver::place_rigid_nodes(std::size_t g) {
+  const Grain& grain = model_->grains[g];
+  const RigidBodyState& b = state_.bodies[g];
+  const Eigen::Matrix3d R = b.orientation.toRotationMatrix();
+  const Eigen::Vector3d omega = angular_velocity(g, b.orientation, b.angular_momentum);
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+    const Eigen::Vector3d r = R * (model_->nodes[i] - bodies_[g].centroid);
+    state_.x[i] = b.position + r;
+    state_.v[i] = b.velocity + omega.cross(r);
+  }
+}
+
+StepReport Solver::step(double dt) {
+  const Model& m = *model_;
+  const std::size_t grains = m.grains.size();
+  const bool first = state_.step == 0;
+  const double a = 0.5 * options_.damping * dt;  // damping over half a step
+  const Eigen::Vector3d g_acc = options_.gravity;
+  // Per-grain sums, added in grain order afterwards so the totals do not depend on the threads.
+  std::vector<double> strain(grains, 0.0), kinetic(grains, 0.0), damped(grains, 0.0), gravity_work(grains, 0.0);
+  std::vector<char> bad(grains, 0);
+  // Threads only pay off beyond a few thousand nodes: a barrier per loop costs more on small scenes.
+  const bool parallel = m.nodes.size() > 4096;
+
+#pragma omp parallel for schedule(dynamic, 8) if (parallel)
+  for (std::size_t g = 0; g < grains; ++g) {
+    const Grain& grain = m.grains[g];
+    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) force_[i].setZero();
+    if (grain.kind != GrainKind::rigid)
+      strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
+  }
+
+  StepReport report;
+  if (contact_) report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_);
+  std::vector<ContactRecord> records;
+  if (contact_ && !state_.platens.empty()) records = contact_->contacts();
+  for (auto& f : platen_force_) f.setZero();
+  for (const ContactRecord& r : records)
+    if (r.b >= grains) platen_force_[r.b - grains] += r.force;
+
+#pragma omp parallel for schedule(dynamic, 8) if (parallel)
+  for (std::size_t g = 0; g < grains; ++g) {
+    const Grain& grain = m.grains[g];
+    if (grain.kind != GrainKind::rigid) {
+      for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+        const double mi = mass_[i];
+        const Eigen::Vector3d f = force_[i] + mi * g_acc;
+        const Eigen::Vector3d v_old = state_.v[i];
+        const Eigen::Vector3d v_new = first ? Eigen::Vector3d(v_old + 0.5 * dt * (f / mi - options_.damping * v_old))
+                                            : Eigen::Vector3d(((1 - a) * v_old + dt * f / mi) / (1 + a));
+        const Eigen::Vector3d v_mid = first ? v_old : Eigen::Vector3d(0.5 * (v_old + v_new));
+        kinetic[g] += 0.5 * mi * v_mid.squaredNorm();
+        damped[g] += dt * options_.damping * mi * v_mid.squaredNorm();
+        gravity_work[g] += dt * mi * g_acc.dot(v_mid);
+        state_.v[i] = v_new;
+        state_.x[i] += dt * v_new;
+        if (!finite(state_.x[i])) bad[g] = 1;
+      }
+      continue;
+    }
+    RigidBodyState& b = state_.bodies[g];
+    const double M = bodies_[g].mass;
+    Eigen::Vector3d F = M * g_acc, T = Eigen::Vector3d::Zero();
+    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+      F += force_[i];
+      T += (state_.x[i] - b.position).cross(force_[i]);
+    }
+    const Eigen::Vector3d V_old = b.velocity, L_old = b.angular_momentum;
+    const Eigen::Vector3d V_new = first ? Eigen::Vector3d(V_old + 0.5 * dt * (F / M - options_.damping * V_old))
+                                        : Eigen::Vector3d(((1 - a) * V_old + dt * F / M) / (1 + a));
+    const Eigen::Vector3d L_new = first ? Eigen::Vector3d(L_old + 0.5 * dt * (T - options_.damping * L_old))
+                                        : Eigen::Vector3d(((1 - a) * L_old + dt * T) / (1 + a));
+    const Eigen::Vector3d V_mid = first ? V_old : Eigen::Vector3d(0.5 * (V_old + V_new));
+    const Eigen::Vector3d L_mid = first ? L_old : Eigen::Vector3d(0.5 * (L_old + L_new));
+    const double spin = angular_velocity(g, b.orientation, L_mid).dot(L_mid);
+    kinetic[g] = 0.5 * M * V_mid.squaredNorm() + 0.5 * spin;
+    damped[g] = dt * options_.damping * (M * V_mid.squaredNorm() + spin);
+    gravity_work[g] = dt * M * g_acc.dot(V_mid);
+    // Orientation: rotate by dt times the angular velocity at the half step, found by fixed point
+    // on the midpoint orientation (second order, keeps a free body's energy).
+    Eigen::Vector3d omega = angular_velocity(g, b.orientation, L_new);
+    for (int it = 0; it < 2; ++it) omega = angular_velocity(g, rotation_by(0.5 * dt * omega) * b.orientation, L_new);
+    b.orientation = (rotation_by(dt * omega) * b.orientation).normalized();
+    b.velocity = V_new;
+    b.angular_momentum = L_new;
+    b.position += dt * V_new;
+    place_rigid_nodes(g);
+    if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
+  }
+
+  Energies& e = report.energies;
+  for (std::size_t g = 0; g < grains; ++g) {
+    e.strain += strain[g];
+    e.kinetic += kinetic[g];
+    state_.dissipated += damped[g];
+    state_.external_work += gravity_work[g];
+    state_.energy_input += std::max(gravity_work[g], 0.0);
+    if (bad[g]) e.kinetic = std::nan("");
+  }
+  e.contact_elastic = report.contact.elastic_energy;
+  state_.dissipated += report.contact.dissipated;
+  for (std::size_t p = 0; p < state_.platens.size(); ++p) {
+    const double work = -dt * platen_force_[p].dot(state_.platens[p].velocity);  // the platen pushes the grains
+    state_.external_work += work;
+    state_.energy_input += std::max(work, 0.0);
+    state_.platens[p].point += dt * state_.platens[p].velocity;
+  }
+  if (first) state_.energy_input += e.mechanical();
+  e.dissipated = state_.dissipated;
+  e.external_work = state_.external_work;
+  check_health(e);
+  state_.time += dt;
+  ++state_.step;
+  return report;
+}
+
+void Solver::check_health(const Energies& e) const {
+  const auto limits = [this] {
+    const StepLimits s = time_step_limits();
+    return fmt::format("stable limit {:.4g} s: elements {:.4g} s, contact {:.4g} s", s.stable(), s.element_stable,
+                       s.contact_stable);
+  };
+  if (!std::isfinite(e.mechanical()))
+    throw DataError(fmt::format("step {} (t = {:.6g} s): the state became NaN or infinite; likely cause: a time step above "
+                                "the stable limit ({}) or a penalty too stiff for the time step; restart from the last "
+                                "checkpoint with a smaller time step",
+                                state_.step, state_.time, limits()));
+  if (e.mechanical() > options_.runaway_factor * state_.energy_input + 1e-300)
+    throw DataError(fmt::format("step {} (t = {:.6g} s): the mechanical energy {:.4g} J ran away to more than {} x the "
+                                "energy put in ({:.4g} J); likely cause: a time step too close to the stable limit ({}) or "
+                                "a penalty too stiff; restart from the last checkpoint with a smaller time step",
+                                state_.step, state_.time, e.mechanical(), options_.runaway_factor, state_.energy_input, limits()));
+}
+
+Eigen::Vector3d Solver::mass_mean(std::size_t g, const std::vector<Eigen::Vector3d>& values) const {
+  const Grain& grain = model_->grains[g];
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double total = 0;
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) sum += mass_[i] * values[i], total += mass_[i];
+  return sum / total;
+}
+
+Eigen::Vector3d Solver::grain_centroid(std::size_t g) const {
+  return model_->grains.at(g).kind == GrainKind::rigid ? state_.bodies[g].position : mass_mean(g, state_.x);
+}
+
+Eigen::Vector3d Solver::grain_velocity(std::size_t g) const {
+  return model_->grains.at(g).kind == GrainKind::rigid ? state_.bodies[g].velocity : mass_mean(g, state_.v);
+}
+
+Eigen::Quaterniond Solver::grain_rotation(std::size_t g) const {
+  const Grain& grain = model_->grains.at(g);
+  if (grain.kind == GrainKind::rigid) return state_.bodies[g].orientation;
+  const Eigen::Vector3d c = grain_centroid(g), c0 = bodies_[g].centroid;
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i)
+    A += mass_[i] * (state_.x[i] - c) * (model_->nodes[i] - c0).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  return Eigen::Quaterniond(Eigen::Matrix3d(svd.matrixU() * D * svd.matrixV().transpose())).normalized();
+}
+
+Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
+  const Grain& grain = model_->grains.at(g);
+  if (grain.kind == GrainKind::rigid) return Eigen::Matrix3d::Zero();
+  return elements_.average_cauchy_stress(state_.x, grain.element_begin, grain.element_end);
+}
+
+std::vector<ContactRecord> Solver::contacts() const { return contact_ ? contact_->contacts() : std::vector<ContactRecord>{}; }
+
+Eigen::Vector3d Solver::platen_force(std::size_t p) const { return platen_force_.at(p); }
+
+void Solver::save(io::H5File& f, const std::string& group) const {
+  f.ensure_group(group);
+  f.set_attr(group, "step", static_cast<long long>(state_.step));
+  f.set_attr(group, "time", state_.time);
+  f.set_attr(group, "dissipated", state_.dissipated);
+  f.set_attr(group, "external_work", state_.external_work);
+  f.set_attr(group, "energy_input", state_.energy_input);
+  const hsize_t n = state_.x.size();
+  io::DatasetOptions exact;
+  exact.compress = false;
+  f.write(group + "/x", flatten(state_.x).data(), {n, 3}, exact);
+  f.write(group + "/v", flatten(state_.v).data(), {n, 3}, exact);
+  std::vector<double> bodies;
+  for (const RigidBodyState& b : state_.bodies) {
+    const auto& q = b.orientation.coeffs();  // x, y, z, w
+    bodies.insert(bodies.end(), {b.position[0], b.position[1], b.position[2], q[3], q[0], q[1], q[2], b.velocity[0],
+                                 b.velocity[1], b.velocity[2], b.angular_momentum[0], b.angular_momentum[1],
+                                 b.angular_momentum[2]});
+  }
+  f.write(group + "/bodies", bodies.data(), {state_.bodies.size(), 13}, exact);
+  std::vector<double> platens;
+  for (const PlatenState& p : state_.platens)
+    platens.insert(platens.end(), {p.point[0], p.point[1], p.point[2], p.normal[0], p.normal[1], p.normal[2], p.velocity[0],
+                                   p.velocity[1], p.velocity[2], p.friction});
+  f.write(group + "/platens", platens.data(), {state_.platens.size(), 10}, exact);
+  if (contact_) contact_->save(f, group + "/contact");
+}
+
+void Solver::load(const io::H5File& f, const std::string& group) {
+  const auto need = [&](const std::string& name, std::size_t size) {
+    auto v = f.read<double>(group + "/" + name);
+    if (v.size() != size)
+      throw DataError(f.path().string() + ": checkpoint " + group + "/" + name +
+                      " does not fit this model; restart with the scene that wrote it");
+    return v;
+  };
+  SolverState s;
+  s.step = static_cast<std::uint64_t>(f.attr_int(group, "step").value_or(0));
+  s.time = f.attr_doubles(group, "time").at(0);
+  s.dissipated = f.attr_doubles(group, "dissipated").at(0);
+  s.external_work = f.attr_doubles(group, "external_work").at(0);
+  s.energy_input = f.attr_doubles(group, "energy_input").at(0);
+  s.x = unflatten(need("x", 3 * state_.x.size()));
+  s.v = unflatten(need("v", 3 * state_.v.size()));
+  const auto bodies = need("bodies", 13 * state_.bodies.size());
+  for (std::size_t g = 0; g < state_.bodies.size(); ++g) {
+    const double* d = bodies.data() + 13 * g;
+    s.bodies.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Quaterniond(d[3], d[4], d[5], d[6]),
+                        Eigen::Vector3d(d[7], d[8], d[9]), Eigen::Vector3d(d[10], d[11], d[12])});
+  }
+  const auto platens = need("platens", 10 * state_.platens.size());
+  for (std::size_t p = 0; p < state_.platens.size(); ++p) {
+    const double* d = platens.data() + 10 * p;
+    s.platens.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Vector3d(d[3], d[4], d[5]), Eigen::Vector3d(d[6], d[7], d[8]), d[9]});
+  }
+  if (contact_) contact_->load(f, group + "/contact");
+  state_ = std::move(s);
+}
+
+}  // namespace graintwin::fdem

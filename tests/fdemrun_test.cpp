@@ -1,0 +1,168 @@
+// fdemrun: CLI contract; a scene of a spinning elastic box and a falling rigid box against their
+// exact motion; the results file (frames, series, platen schedule); a run split by --stop-step,
+// --checkpoint and --restart reproducing the uninterrupted run bit for bit; bad scenes and
+// options failing cleanly.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+
+#include "graintwin/fdem/results_file.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "support/cli_contract.hpp"
+
+using namespace graintwin;
+using test::run_tool;
+
+namespace {
+
+/// Two grains without contact: a tet10 box spinning at 2000 rad/s, a rigid box thrown upward under
+/// gravity; a platen moving down in the second stage. Two stages of 20 us each.
+const char* kScene = R"(
+[run]
+gravity = [0, 0, -9.81]
+contact = false
+frame_interval = 1e-5
+series_interval = 2e-6
+
+[[materials]]
+name = "glass"
+density = 2500
+young = 60e9
+poisson = 0.2
+
+[[grains]]
+size = [1e-3, 1e-3, 0.5e-3]
+position = [0, 0, 1e-3]
+element_size = 0.5e-3
+kind = "tet10"
+material = "glass"
+angular_velocity = [0, 0, 2000]
+
+[[grains]]
+size = [1e-3, 2e-3, 1e-3]
+position = [3e-3, 0, 0]
+element_size = 1e-3
+kind = "rigid"
+label = 42
+velocity = [0, 0, 1.5]
+
+[[platens]]
+name = "top"
+point = [0, 0, 5e-3]
+normal = [0, 0, -1]
+
+[[stages]]
+name = "still"
+duration = 2e-5
+
+[[stages]]
+name = "press"
+duration = 2e-5
+platens = { top = [0, 0, -0.5] }
+)";
+
+std::filesystem::path write_scene(const test::TempDir& dir, const std::string& name, const std::string& text) {
+  const auto p = dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+}  // namespace
+
+TEST(Fdemrun, StandardCli) { test::expect_standard_cli("fdemrun"); }
+
+TEST(Fdemrun, SceneRunsToItsExactMotion) {
+  test::TempDir dir;
+  const auto scene = write_scene(dir, "scene.toml", kScene);
+  const auto out = dir / "results.h5";
+  const auto r = run_tool("fdemrun", {scene.string(), out.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::H5File f = io::H5File::open(out);
+  EXPECT_EQ(f.attr_string("/", "kind").value_or(""), "fdem_results");
+  EXPECT_EQ(f.read<std::uint32_t>("/grains/label"), (std::vector<std::uint32_t>{1, 42}));
+  EXPECT_NE(io::read_history(f).back().find("fdemrun"), std::string::npos);
+  const auto run = nlohmann::json::parse(f.read_strings("/run/parameters").at(0));
+  const double dt = run["time_step"];
+  const std::uint64_t steps = run["steps"], every = std::uint64_t(std::llround(1e-5 / dt));
+  EXPECT_EQ(steps, 2 * std::uint64_t(std::llround(2e-5 / dt)));  // whole steps per stage
+  const std::size_t frames = fdem::results_frame_count(out);
+  EXPECT_EQ(frames, (steps - 1) / every + 2);  // every 10 us from 0, and the end
+  const fdem::ResultsFrame last = fdem::read_results_frame(out, frames - 1);
+  EXPECT_NEAR(last.time, 4e-5, dt);
+  EXPECT_EQ(last.step, steps);
+  // The rigid box flies exactly: z = v t - g t^2 / 2.
+  const double t = last.time;
+  EXPECT_NEAR(last.centroid[5], 1.5 * t - 0.5 * 9.81 * t * t, 1e-15);
+  // The spinning box turned by omega t about z, and stays unstressed within the centrifugal level.
+  const double angle = 2 * std::acos(std::min(1.0, std::abs(last.rotation[0])));
+  EXPECT_NEAR(angle, 2000 * t, 1e-3 * 2000 * t);
+  for (int k = 0; k < 9; ++k) EXPECT_LT(std::abs(last.stress[k]), 2e3);  // rho omega^2 r^2 ~ 1e3 Pa
+  EXPECT_TRUE(last.pair.empty());
+  // Series: rows every 2 us of the 40 us; the platen stood still, then moved at 0.5 m/s.
+  const fdem::ResultsSeries s = fdem::read_results_series(out);
+  ASSERT_EQ(s.time.size(), 20u);
+  EXPECT_EQ(s.platen_position.size(), 20u * 3);
+  EXPECT_NEAR(s.platen_position[3 * 5 + 2], 5e-3, 1e-15);  // row 5 (10 us), after the step of the still stage
+  // The last row's platen has moved for (t - 20 us) plus the row's own step (~1e-8 s, 5e-9 m).
+  EXPECT_NEAR(s.platen_position.back(), 5e-3 - 0.5 * (s.time.back() - 2e-5), 1e-8);
+  for (std::size_t k = 0; k < s.time.size(); ++k) EXPECT_GT(s.kinetic[k], 0);
+}
+
+TEST(Fdemrun, RestartFromCheckpointReproducesTheRunBitForBit) {
+  test::TempDir dir;
+  const auto scene = write_scene(dir, "scene.toml", kScene);
+  const auto whole = dir / "whole.h5", first = dir / "first.h5", second = dir / "second.h5", ckpt = dir / "ckpt.h5";
+  ASSERT_EQ(run_tool("fdemrun", {scene.string(), whole.string(), "-q"}).exit_code, 0);
+  const auto a = run_tool("fdemrun", {scene.string(), first.string(), "-q", "--stop-step", "37", "--checkpoint", ckpt.string()});
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const auto b = run_tool("fdemrun", {scene.string(), second.string(), "-q", "--restart", ckpt.string()});
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const auto full = fdem::read_results_frame(whole, fdem::results_frame_count(whole) - 1);
+  const auto resumed = fdem::read_results_frame(second, fdem::results_frame_count(second) - 1);
+  EXPECT_EQ(full.step, resumed.step);
+  EXPECT_EQ(full.time, resumed.time);
+  EXPECT_EQ(full.centroid, resumed.centroid);
+  EXPECT_EQ(full.rotation, resumed.rotation);
+  EXPECT_EQ(full.stress, resumed.stress);
+  EXPECT_EQ(full.velocity, resumed.velocity);
+  const auto sw = fdem::read_results_series(whole), sr = fdem::read_results_series(second);
+  ASSERT_FALSE(sr.step.empty());
+  const std::size_t offset = sw.step.size() - sr.step.size();
+  EXPECT_EQ(sw.step[offset], sr.step[0]);
+  for (std::size_t k = 0; k < sr.step.size(); ++k) EXPECT_EQ(sw.kinetic[offset + k], sr.kinetic[k]) << "row " << k;
+}
+
+TEST(Fdemrun, BadInputsFailCleanly) {
+  test::TempDir dir;
+  const auto good = write_scene(dir, "good.toml", kScene);
+  const auto out = (dir / "out.h5").string();
+  test::expect_clean_failure("fdemrun", dir, {(dir / "missing.toml").string(), out}, 2, "missing.toml");
+  const auto typo = write_scene(dir, "typo.toml", replaced(kScene, "element_size = 1e-3", "element_sise = 1e-3"));
+  test::expect_clean_failure("fdemrun", dir, {typo.string(), out}, 2, "key 'element_sise' is unknown");
+  const auto sphere = write_scene(dir, "sphere.toml", replaced(kScene, "kind = \"rigid\"", "kind = \"rigid\"\nshape = \"sphere\""));
+  test::expect_clean_failure("fdemrun", dir, {sphere.string(), out}, 2, "not available yet");
+  const auto fast = write_scene(dir, "fast.toml", replaced(kScene, "contact = false", "contact = false\ntime_step = 1e-6"));
+  test::expect_clean_failure("fdemrun", dir, {fast.string(), out}, 2, "above the stable limit");
+  const auto syntax = write_scene(dir, "syntax.toml", "[run\nduration = 1");
+  test::expect_clean_failure("fdemrun", dir, {syntax.string(), out}, 2, "syntax.toml line 1");
+  const auto material = write_scene(dir, "material.toml", replaced(kScene, "material = \"glass\"", "material = \"steel\""));
+  test::expect_clean_failure("fdemrun", dir, {material.string(), out}, 2, "material 'steel' is not among the [[materials]]");
+  test::expect_clean_failure("fdemrun", dir, {good.string(), (dir / "out.txt").string()}, 2, "must end in .h5");
+  // A checkpoint of another scene is refused before anything is written.
+  const auto ckpt = dir / "ckpt.h5";
+  ASSERT_EQ(run_tool("fdemrun", {good.string(), out, "-q", "--stop-step", "3", "--checkpoint", ckpt.string()}).exit_code, 0);
+  const auto other = write_scene(dir, "other.toml", replaced(kScene, "angular_velocity = [0, 0, 2000]", "angular_velocity = [0, 0, 1000]"));
+  test::expect_clean_failure("fdemrun", dir, {other.string(), (dir / "o.h5").string(), "--restart", ckpt.string()}, 2,
+                             "written for another scene");
+  // An existing output is refused without --force.
+  test::expect_clean_failure("fdemrun", dir, {good.string(), out}, 2, "out.h5");
+}

@@ -1,0 +1,150 @@
+// fdemrun: run an FDEM scene (SPEC.md section 7, issue 9).
+//   fdemrun scene.toml results.h5 --checkpoint run.ckpt.h5
+//   fdemrun scene.toml results.h5 --restart run.ckpt.h5 --force
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "graintwin/cli/tool.hpp"
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/results_file.hpp"
+#include "graintwin/fdem/scene.hpp"
+#include "graintwin/fdem/solver.hpp"
+#include "graintwin/io/atomic_output.hpp"
+
+namespace fs = std::filesystem;
+using namespace graintwin;
+using namespace graintwin::fdem;
+
+namespace {
+
+/// Steps of `dt` that make up `interval` seconds (at least 1); 0 when the interval is 0.
+std::uint64_t steps_of(double interval, double dt) {
+  return interval > 0 ? std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(interval / dt))) : 0;
+}
+
+std::string digest_of(const std::string& text) { return fmt::format("{:016x}", std::hash<std::string>{}(text)); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Tool tool(
+      "fdemrun",
+      "Run an FDEM scene: grains as elastic 4- or 10-node tetrahedral meshes (total-Lagrangian St Venant-Kirchhoff, "
+      "exact under large rotations) or rigid 6-DOF bodies, explicit central differences with lumped masses (HRZ for "
+      "10-node elements), mass-proportional damping, gravity, moving platens and loading stages. The time step is the "
+      "stable limit of the elements (k h_min / c x element_safety) and of the contacts unless the scene sets a smaller "
+      "one; a larger one is refused with the numbers, and a run whose state turns NaN or whose energy runs away stops "
+      "with the step and the likely cause. Writes kind=fdem_results: the energy and platen time series and frames of "
+      "grain centroids, rotations, velocities, volume-averaged stresses (compression positive) and contacts. "
+      "Checkpoints (--checkpoint) let --restart continue a run exactly. Not yet: sphere and ellipsoid grains and "
+      "grains from a kind=fdem_model file (they need the gmsh mesh module), VTK frames, the membrane; contact (penalty, "
+      "dashpot, friction, platens) comes from the fdem contact module and is switched off with [run] contact = false. "
+      "The scene format is in docs/fdemrun.md.");
+  fs::path scene_path, output, checkpoint, restart;
+  tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
+  tool.add_output("results", output, "Output kind=fdem_results .h5");
+  auto& app = tool.cli();
+  app.add_option("--checkpoint", checkpoint,
+                 "Write the solver state here (.h5) every [run] checkpoint_interval and at the end, for --restart");
+  app.add_option("--restart", restart, "Continue from a checkpoint of the same scene (the results then start there)")
+      ->check(CLI::ExistingFile);
+  std::uint64_t stop_step = 0;
+  app.add_option("--stop-step", stop_step,
+                 "Stop once the run reaches this step (0: run to the end), e.g. to split a long run into jobs with "
+                 "--checkpoint and --restart; the results hold the steps taken")
+      ->check(CLI::NonNegativeNumber);
+  tool.set_examples({"fdemrun pipelines/scenes/fdem_box_drop.toml runs/box_drop.h5",
+                     "fdemrun scene.toml results.h5 --checkpoint results.ckpt.h5",
+                     "fdemrun scene.toml results.h5 --restart results.ckpt.h5 --force"});
+
+  return tool.run(argc, argv, [&](cli::RunContext& ctx) {
+    if (output.extension() != ".h5") throw UsageError("the results file " + output.string() + " must end in .h5");
+    if (!checkpoint.empty() && checkpoint.extension() != ".h5")
+      throw UsageError("--checkpoint " + checkpoint.string() + " must end in .h5");
+    if (!checkpoint.empty() && !restart.empty() && fs::weakly_canonical(checkpoint) == fs::weakly_canonical(restart))
+      throw UsageError("--checkpoint and --restart name the same file; write the new checkpoint elsewhere");
+    const Scene scene = read_scene(scene_path);
+    std::stringstream text;
+    text << std::ifstream(scene_path).rdbuf();
+    const Model model = build_model(scene);
+    SolverOptions options;
+    options.gravity = scene.gravity;
+    options.damping = scene.damping;
+    options.element_safety = scene.element_safety;
+    options.contact.enabled = scene.contact;
+    Solver solver(model, options);
+    const StepLimits limits = solver.time_step_limits();
+    double dt = scene.time_step;
+    if (dt > 0) {
+      solver.check_time_step(dt);
+    } else {
+      dt = limits.stable();
+      if (!std::isfinite(dt))
+        throw UsageError(scene_path.string() + ": no element or contact limit bounds the time step (rigid grains without "
+                         "contact); set [run] time_step");
+    }
+    std::uint64_t total = 0;
+    std::vector<std::uint64_t> stage_end;
+    for (const StageSpec& s : scene.stages) stage_end.push_back(total += steps_of(s.duration, dt));
+    const std::uint64_t frame_every = scene.frame_interval > 0 ? steps_of(scene.frame_interval, dt) : total;
+    const std::uint64_t row_every = scene.series_interval > 0 ? steps_of(scene.series_interval, dt) : 1;
+    const std::uint64_t checkpoint_every = scene.checkpoint_interval > 0 ? steps_of(scene.checkpoint_interval, dt) : total;
+    spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s, contact {:.4g} s), "
+                 "{} steps over {} stage(s)",
+                 model.grains.size(), model.nodes.size(), model.element_count(), model.platens.size(), dt,
+                 limits.element_stable, limits.contact_stable, total, scene.stages.size());
+
+    const std::string digest = digest_of(text.str() + fmt::format("|dt={:a}", dt));
+    io::AtomicOutput out(output, ctx.force());
+    if (!restart.empty()) {
+      read_checkpoint(restart, solver, digest);
+      spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.state().step, solver.state().time);
+    } else {
+      for (std::size_t g = 0; g < scene.grains.size(); ++g)
+        solver.set_grain_velocity(g, scene.grains[g].velocity, scene.grains[g].angular_velocity);
+    }
+    nlohmann::json p = {{"scene", scene_path.string()}, {"scene_text", text.str()}, {"time_step", dt},
+                        {"steps", total},           {"threads", ctx.threads()},    {"restart", restart.string()}};
+    ResultsWriter writer(out.temp_path(), solver, scene, p.dump());
+    const auto save_checkpoint = [&] {
+      if (checkpoint.empty()) return;
+      io::AtomicOutput ckpt(checkpoint, true);
+      write_checkpoint(ckpt.temp_path(), solver, digest);
+      ckpt.commit();
+    };
+    const std::uint64_t last = stop_step > 0 ? std::min(stop_step, total) : total;
+    auto progress = ctx.progress("steps", last - std::min(last, solver.state().step));
+    std::uint32_t stage = 0;
+    while (solver.state().step < last) {
+      const std::uint64_t n = solver.state().step;
+      while (n >= stage_end[stage]) ++stage;
+      const StageSpec& s = scene.stages[stage];
+      solver.set_damping(s.damping.value_or(scene.damping));
+      for (std::size_t k = 0; k < scene.platens.size(); ++k)
+        solver.set_platen_velocity(k, s.platen_velocity[k].value_or(scene.platens[k].velocity));
+      if (n % frame_every == 0) writer.add_frame(solver);
+      StepReport report;
+      try {
+        report = solver.step(dt);
+      } catch (Error& e) {
+        e.add_context(checkpoint.empty() ? std::string("no checkpoint was written (use --checkpoint)")
+                                         : "last checkpoint: " + checkpoint.string());
+        throw;
+      }
+      if (n % row_every == 0) writer.add_row(solver, report, stage, dt);
+      if (solver.state().step % checkpoint_every == 0 || solver.state().step == last) save_checkpoint();
+      progress->advance();
+      cli::throw_if_interrupted();
+    }
+    progress->done();
+    writer.add_frame(solver);
+    writer.finish(ctx.history());
+    out.commit();
+    spdlog::info("{} frames, final time {:.6g} s", writer.frames(), solver.state().time);
+  });
+}
