@@ -29,8 +29,8 @@ using nlohmann::json;
 namespace {
 
 struct Options {
-  std::string denoise = "median";
-  double sigma_vox = 1.0;
+  std::string denoise = "gaussian";
+  double sigma_vox = 0.4;
   std::optional<double> threshold;
   bool fill_holes = true;
   double open_vox = 0.0;
@@ -105,6 +105,7 @@ json parameters_json(const SegmentOptions& s, const SegmentResult& r) {
     const HProposal& p = *r.h_proposal;
     j["h_proposal"] = {{"h_vox", p.h_vox},
                        {"markers", p.markers},
+                       {"plateau_found", p.plateau_found},
                        {"plateau_vox", {p.plateau_lo_vox, p.plateau_hi_vox}},
                        {"markers_at_plateau_ends", {p.markers_at_lo, p.markers_at_hi}},
                        {"regional_maxima", p.regional_maxima}};
@@ -152,10 +153,10 @@ void write_preview(const fs::path& path, const io::H5File& input, const Volume<s
 
 int main(int argc, char** argv) {
   cli::Tool tool("ct2labels",
-                 "Segment a CT volume (kind=volume) into labelled grains (kind=labels): denoise (3x3x3 median by "
-                 "default, or Gaussian), threshold (Otsu unless --threshold), hole filling, optional opening, exact "
-                 "Euclidean distance transform in physical units, markers from the h-maxima of the distance map "
-                 "(h chosen from the image: the middle of the widest plateau of the marker count against h, "
+                 "Segment a CT volume (kind=volume) into labelled grains (kind=labels): denoise (Gaussian of sigma "
+                 "0.4 voxel by default, or 3x3x3 median), threshold (Otsu inside the sample cylinder unless "
+                 "--threshold), hole filling, optional opening, exact Euclidean distance transform in physical "
+                 "units, markers from the h-maxima of the distance map (h chosen from the image: the middle of the widest plateau of the marker count against h, "
                  "printed) or from peaks a minimum distance apart, marker watershed of -EDT inside the solid, "
                  "fragments below a minimum volume merged into their neighbour, labels numbered in raster order. "
                  "Also finds the sample cylinder and the void ratio inside it, and writes the grain table (label, "
@@ -237,7 +238,12 @@ int main(int argc, char** argv) {
       throw;
     }
     progress->done();
-    if (r.h_proposal && r.marker_parameter_automatic && r.marker_method == MarkerMethod::h_maxima)
+    if (r.h_proposal && r.marker_parameter_automatic && r.marker_method == MarkerMethod::h_maxima &&
+        !r.h_proposal->plateau_found)
+      spdlog::warn("h = {:.3g} voxels (the floor): the marker count has no plateau against h (grains of {:.1f} voxels "
+                   "radius may be too small or too fused to separate); check the labels, or give --h or --markers peaks",
+                   r.marker_parameter_vox, r.reference_radius_m / unit);
+    else if (r.h_proposal && r.marker_parameter_automatic && r.marker_method == MarkerMethod::h_maxima)
       spdlog::info("h = {:.3g} voxels chosen from the image: marker count stable ({} to {}) for h in [{:.3g}, {:.3g}] "
                    "voxels; reference grain radius {:.1f} voxels ({})",
                    r.marker_parameter_vox, r.h_proposal->markers_at_hi, r.h_proposal->markers_at_lo,

@@ -1,11 +1,14 @@
-// 3x3x3 median filter: brute force with replicated edges, salt noise removal, NaN refusal.
+// 3x3x3 median filter: brute force with replicated edges, salt noise removal, NaN refusal; Gaussian
+// smoothing against the generic blur.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/filters.hpp"
 #include "graintwin/segment/denoise.hpp"
 
 using namespace graintwin;
@@ -77,4 +80,23 @@ TEST(Median3, RefusesNaN) {
   Volume<float> v({3, 3, 3});
   v(1, 1, 1) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(median3(v), DataError);
+}
+
+TEST(GaussianSmooth, EqualsTheGenericBlurAndRoundsIntegerScans) {
+  std::mt19937 rng(5);
+  Volume<float> f({9, 11, 13});
+  for (auto& v : f.values()) v = float(rng() % 1000);
+  Volume<std::uint16_t> u(f.shape());
+  for (std::size_t i = 0; i < f.size(); ++i) u.values()[i] = static_cast<std::uint16_t>(f.values()[i]);
+  for (double sigma : {0.4, 1.0}) {
+    Volume<float> expect = f;
+    gaussian_blur(expect, sigma);
+    const Volume<float> got = gaussian_smooth(f, sigma);
+    const Volume<std::uint16_t> got16 = gaussian_smooth(u, sigma);
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      ASSERT_NEAR(got.values()[i], expect.values()[i], 1e-3) << i;
+      ASSERT_LE(std::abs(got16.values()[i] - expect.values()[i]), 0.5 + 1e-3) << i;  // rounded to the grey step
+    }
+  }
+  EXPECT_EQ(gaussian_smooth(u, 0.0).values(), u.values());
 }

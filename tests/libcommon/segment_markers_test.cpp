@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <queue>
 #include <random>
 #include <set>
@@ -129,6 +130,44 @@ TEST(HMaxima, MatchesBruteForceReconstructionOnRandomReliefs) {
         ASSERT_EQ(got.values(), expect.values()) << "trial " << trial << " conn " << int(c) << " h " << h;
       }
   }
+}
+
+namespace {
+
+/// True if two label images mark the same voxels with the same partition (labels may differ).
+bool same_partition(const Volume<std::uint32_t>& a, const Volume<std::uint32_t>& b) {
+  std::map<std::uint32_t, std::uint32_t> ab, ba;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const std::uint32_t x = a.values()[i], y = b.values()[i];
+    if ((x == 0) != (y == 0)) return false;
+    if (x == 0) continue;
+    if (ab.emplace(x, y).first->second != y || ba.emplace(y, x).first->second != x) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST(HMaxima, FromTheDynamicsEqualsTheReconstruction) {
+  // Random reliefs with few levels (plateaus and ties everywhere) and a sphere packing's EDT.
+  std::mt19937 rng(23);
+  std::vector<Volume<float>> reliefs;
+  for (int trial = 0; trial < 6; ++trial) {
+    Volume<float> f({7, 8, 9});
+    for (auto& v : f.values()) v = rng() % 5 == 0 ? 0.0f : float(1 + rng() % 6);
+    reliefs.push_back(std::move(f));
+  }
+  reliefs.push_back(distance_transform(test::paint_balls({30, 30, 30}, test::jittered_lattice(2, 7.0, 13.0, 8.0, 0.8, 0.1, 3))));
+  for (const auto& f : reliefs)
+    for (Connectivity c : {Connectivity::faces, Connectivity::edges, Connectivity::corners}) {
+      const MaximaDynamics d = maxima_dynamics(f, c);
+      for (double h : {0.0, 0.5, 1.0, 1.7, 2.5}) {
+        const auto reconstructed = h_maxima_markers(f, h, c);
+        const auto flooded = h_maxima_markers(f, d, h, c);
+        ASSERT_TRUE(same_partition(reconstructed, flooded)) << "conn " << int(c) << " h " << h;
+        ASSERT_EQ(count_labels(flooded), count_labels(reconstructed));
+      }
+    }
 }
 
 TEST(HMaxima, MatchesBruteForceOnAnisotropicBlobEdt) {

@@ -138,4 +138,88 @@ template Volume<std::uint8_t> median3(const Volume<std::uint8_t>&);
 template Volume<std::uint16_t> median3(const Volume<std::uint16_t>&);
 template Volume<float> median3(const Volume<float>&);
 
+namespace {
+
+std::vector<float> gaussian_weights(double sigma_vox) {
+  const int radius = static_cast<int>(std::ceil(3.0 * sigma_vox));
+  std::vector<double> w(2 * static_cast<std::size_t>(radius) + 1);
+  double sum = 0.0;
+  for (int k = -radius; k <= radius; ++k) sum += w[k + radius] = std::exp(-0.5 * k * k / (sigma_vox * sigma_vox));
+  std::vector<float> out;
+  for (double x : w) out.push_back(static_cast<float>(x / sum));
+  return out;
+}
+
+/// out[x] = sum_k w[k] rows[clamp(i + k - r)][x] for the rows of one line of rows (a plane's rows
+/// along y, or a column of rows along z): every term is a whole row, so the loop vectorises.
+void blur_rows(const float* rows, std::size_t count, std::size_t width, std::size_t i, const std::vector<float>& w,
+               float* out) {
+  const long r = static_cast<long>(w.size() / 2);
+  std::fill(out, out + width, 0.0f);
+  for (long k = -r; k <= r; ++k) {
+    const auto j = static_cast<std::size_t>(std::clamp(static_cast<long>(i) + k, 0L, static_cast<long>(count) - 1));
+    const float wk = w[static_cast<std::size_t>(k + r)];
+    const float* row = rows + j * width;
+    for (std::size_t x = 0; x < width; ++x) out[x] += wk * row[x];
+  }
+}
+
+}  // namespace
+
+template <class T>
+Volume<T> gaussian_smooth(Volume<T> grey, double sigma_vox) {
+  if (!(sigma_vox > 0.0) || grey.empty()) return grey;
+  const std::vector<float> w = gaussian_weights(sigma_vox);
+  const long r = static_cast<long>(w.size() / 2);
+  const std::size_t nz = grey.nz(), ny = grey.ny(), nx = grey.nx(), plane = ny * nx;
+  // Float work volume: the scan itself when it is float, else a float copy filled by the x pass.
+  Volume<float> copy;
+  if constexpr (!std::is_same_v<T, float>) copy = Volume<float>(grey.shape(), grey.voxel_size(), grey.origin());
+  float* f = nullptr;
+  if constexpr (std::is_same_v<T, float>) f = grey.data();
+  else f = copy.data();
+  const T* g = grey.data();
+#pragma omp parallel
+  {
+    // x: each row padded by its edge values on both sides, then a dot product per voxel.
+    std::vector<float> padded(nx + 2 * static_cast<std::size_t>(r));
+#pragma omp for schedule(static)
+    for (std::size_t row = 0; row < nz * ny; ++row) {
+      const T* in = g + row * nx;
+      for (long x = -r; x < static_cast<long>(nx) + r; ++x)
+        padded[static_cast<std::size_t>(x + r)] = static_cast<float>(in[std::clamp(x, 0L, static_cast<long>(nx) - 1)]);
+      float* out = f + row * nx;
+      for (std::size_t x = 0; x < nx; ++x) {
+        float acc = 0.0f;
+        for (std::size_t k = 0; k < w.size(); ++k) acc += w[k] * padded[x + k];
+        out[x] = acc;
+      }
+    }
+    // y: a copy of each plane, its rows combined whole.
+    std::vector<float> buffer(std::max(plane, nz * nx));
+#pragma omp for schedule(static)
+    for (std::size_t z = 0; z < nz; ++z) {
+      float* p = f + z * plane;
+      std::copy(p, p + plane, buffer.begin());
+      for (std::size_t y = 0; y < ny; ++y) blur_rows(buffer.data(), ny, nx, y, w, p + y * nx);
+    }
+    // z: for each y, the rows (z, y) of all planes gathered, then combined whole.
+#pragma omp for schedule(static)
+    for (std::size_t y = 0; y < ny; ++y) {
+      for (std::size_t z = 0; z < nz; ++z) std::copy_n(f + z * plane + y * nx, nx, buffer.begin() + z * nx);
+      for (std::size_t z = 0; z < nz; ++z) blur_rows(buffer.data(), nz, nx, z, w, f + z * plane + y * nx);
+    }
+    if constexpr (!std::is_same_v<T, float>) {
+      T* o = grey.data();
+#pragma omp for schedule(static)
+      for (std::size_t i = 0; i < grey.size(); ++i) o[i] = static_cast<T>(std::lround(f[i]));  // within the input range
+    }
+  }
+  return grey;
+}
+
+template Volume<std::uint8_t> gaussian_smooth(Volume<std::uint8_t>, double);
+template Volume<std::uint16_t> gaussian_smooth(Volume<std::uint16_t>, double);
+template Volume<float> gaussian_smooth(Volume<float>, double);
+
 }  // namespace graintwin::segment

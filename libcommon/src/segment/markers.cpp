@@ -155,8 +155,9 @@ BitVolume regional_maxima(const float* relief, const Volume<float>& edt, Connect
 }
 
 /// Labels the connected components of the flagged voxels 1..K in raster order of their first
-/// voxel. Returns K.
-std::uint32_t label_flagged(const BitVolume& flag, Volume<std::uint32_t>& labels, Connectivity c) {
+/// voxel (appended to first_voxels if given). Returns K.
+std::uint32_t label_flagged(const BitVolume& flag, Volume<std::uint32_t>& labels, Connectivity c,
+                            std::vector<std::size_t>* first_voxels = nullptr) {
   const Shape3& s = labels.shape();
   const std::vector<NeighbourStep> steps = neighbour_steps(c, s);
   std::uint32_t* l = labels.data();
@@ -168,6 +169,7 @@ std::uint32_t label_flagged(const BitVolume& flag, Volume<std::uint32_t>& labels
     if (k == detail::kMaxLabel)
       throw DataError("more than 2147483647 markers; the volume is too noisy to segment, smooth it first");
     l[p] = ++k;
+    if (first_voxels) first_voxels->push_back(p);
     stack.push_back(p);
     while (!stack.empty()) {
       const std::size_t a = stack.back();
@@ -181,6 +183,26 @@ std::uint32_t label_flagged(const BitVolume& flag, Volume<std::uint32_t>& labels
     }
   }
   return k;
+}
+
+/// The median of inscribed radii weighted by r^3 (the grain volume they stand for), as d50 is a
+/// median by mass: noise specks and membrane fragments, each a deep maximum one voxel high, may
+/// outnumber the grains but hold almost none of the solid. 0 if empty.
+double volume_weighted_median(std::vector<float> radii) {
+  std::sort(radii.begin(), radii.end());
+  double total = 0.0;
+  for (float r : radii) total += std::pow(static_cast<double>(r), 3);
+  double below = 0.0;
+  for (float r : radii) {
+    below += std::pow(static_cast<double>(r), 3);
+    if (below >= 0.5 * total) return r;
+  }
+  return 0.0;
+}
+
+void check_radius(double expected_radius_m) {
+  if (!(expected_radius_m >= 0.0) || !std::isfinite(expected_radius_m))
+    throw UsageError("the expected grain radius must be a finite length >= 0 (0 = estimate it)");
 }
 
 void check_h(double h_vox, const char* what) {
@@ -275,19 +297,17 @@ Volume<std::uint32_t> peak_markers(const Volume<float>& edt, double min_distance
   return labels;
 }
 
-HProposal propose_h(const Volume<float>& edt, double expected_radius_m, Connectivity c) {
-  if (!(expected_radius_m >= 0.0) || !std::isfinite(expected_radius_m))
-    throw UsageError("the expected grain radius must be a finite length >= 0 (0 = estimate it)");
-  const double unit = smallest_voxel(edt);
-  HProposal out;
+MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c) {
+  MaximaDynamics out;
+  out.unit = smallest_voxel(edt);
   Volume<std::uint32_t> labels(edt.shape(), edt.voxel_size(), edt.origin());
-  const std::uint32_t k = label_flagged(regional_maxima(edt.data(), edt, c), labels, c);
-  out.regional_maxima = k;
-  std::vector<float> peak(k + 1, 0.0f);
-  for (std::size_t p = 0; p < labels.size(); ++p)
-    if (labels.values()[p] != 0) peak[labels.values()[p]] = edt.values()[p];
+  const std::uint32_t k = label_flagged(regional_maxima(edt.data(), edt, c), labels, c, &out.first_voxel);
+  const float* f = edt.data();
+  out.peak.resize(k);
+  for (std::uint32_t i = 0; i < k; ++i) out.peak[i] = f[out.first_voxel[i]];
+  out.saddle.assign(k, kMinusInf);
 
-  // Dynamics by union-find over the maxima while flooding down from all of them: when two basins
+  // Saddles by union-find over the maxima while flooding down from all of them: when two basins
   // first touch, the one with the lower peak dies there (ties: the larger label dies). A contact
   // counts only once both voxels are at or above the flood level: labels are handed out when a
   // voxel enters the queue, so a labelled neighbour may still lie far below the flood, and its
@@ -295,50 +315,92 @@ HProposal propose_h(const Volume<float>& edt, double expected_radius_m, Connecti
   // the lower voxel leaves the queue.
   std::vector<std::uint32_t> parent(k + 1);
   std::iota(parent.begin(), parent.end(), 0u);
-  std::vector<double> dynamic(k + 1, std::numeric_limits<double>::infinity());
   const auto find = [&](std::uint32_t a) {
     while (parent[a] != a) a = parent[a] = parent[parent[a]];
     return a;
   };
-  const float* f = edt.data();
   const detail::LevelMap levels = detail::make_level_map(edt);
   const auto meet = [&](std::size_t p, std::size_t q, std::uint32_t lp, std::uint32_t lq, std::uint32_t level) {
     std::uint32_t a = find(lp), b = find(lq);  // the small union-find tables first: mostly a == b
     if (a == b || levels(f[q]) < level) return;
-    if (peak[a] > peak[b] || (peak[a] == peak[b] && a < b)) std::swap(a, b);  // a is the loser
-    dynamic[a] = static_cast<double>(peak[a]) - static_cast<double>(std::min(f[p], f[q]));
+    const auto peak_of = [&](std::uint32_t l) { return out.peak[l - 1]; };
+    if (peak_of(a) > peak_of(b) || (peak_of(a) == peak_of(b) && a < b)) std::swap(a, b);  // a is the loser
+    out.saddle[a - 1] = std::min(f[p], f[q]);
     parent[a] = b;
   };
   if (edt.size() < (std::size_t{1} << 32))
     detail::priority_flood<std::uint32_t>(edt, labels.data(), c, levels, meet);
   else
     detail::priority_flood<std::uint64_t>(edt, labels.data(), c, levels, meet);
-  labels = Volume<std::uint32_t>();
+  return out;
+}
 
-  std::vector<double> dyn_vox(dynamic.begin() + 1, dynamic.end());
-  for (double& d : dyn_vox) d /= unit;
-  std::sort(dyn_vox.begin(), dyn_vox.end());
-  const auto count_above = [&](double h) {
-    return static_cast<std::size_t>(dyn_vox.end() - std::upper_bound(dyn_vox.begin(), dyn_vox.end(), h));
-  };
+Volume<std::uint32_t> h_maxima_markers(const Volume<float>& edt, const MaximaDynamics& d, double h_vox,
+                                       Connectivity c) {
+  check_h(h_vox, "h");
+  const auto h = static_cast<float>(h_vox * d.unit);
+  const Shape3& s = edt.shape();
+  const float* f = edt.data();
+  Volume<std::uint32_t> labels(s, edt.voxel_size(), edt.origin());
+  std::uint32_t* l = labels.data();
+  const std::vector<NeighbourStep> steps = neighbour_steps(c, s);
+  const IndexSplitter split(s);
+  std::vector<std::size_t> stack;
+  std::uint32_t k = 0;
+  for (std::size_t i = 0; i < d.peak.size(); ++i) {
+    // The same float arithmetic as the reconstruction (edt - h), so both give the same plateaus.
+    const float top = d.peak[i] - h;
+    if (!(d.saddle[i] < top)) continue;  // a higher peak is reachable without descending below top
+    l[d.first_voxel[i]] = ++k;
+    stack.push_back(d.first_voxel[i]);
+    while (!stack.empty()) {
+      const std::size_t a = stack.back();
+      stack.pop_back();
+      for_each_neighbour(steps, s, split, a, [&](std::size_t q) {
+        if (l[q] == 0 && f[q] >= top && f[q] > 0.0f) {
+          l[q] = k;
+          stack.push_back(q);
+        }
+      });
+    }
+  }
+  return labels;
+}
 
+HProposal propose_h(const MaximaDynamics& d, double expected_radius_m) {
+  check_radius(expected_radius_m);
+  const double unit = d.unit;
+  const std::size_t k = d.peak.size();
+  HProposal out;
+  out.regional_maxima = k;
   if (expected_radius_m > 0.0) {
     out.reference_radius_m = expected_radius_m;
   } else {
     out.radius_estimated = true;
     // Finite peaks only: a solid region without any background has an infinite distance.
     std::vector<float> deep, finite;
-    for (std::uint32_t i = 1; i <= k; ++i)
-      if (std::isfinite(peak[i])) {
-        finite.push_back(peak[i]);
-        if (dynamic[i] > unit) deep.push_back(peak[i]);
+    for (std::size_t i = 0; i < k; ++i)
+      if (std::isfinite(d.peak[i])) {
+        finite.push_back(d.peak[i]);
+        if (d.dynamic(i) > unit) deep.push_back(d.peak[i]);
       }
     if (deep.empty()) deep = std::move(finite);
-    if (!deep.empty()) {
-      std::nth_element(deep.begin(), deep.begin() + static_cast<std::ptrdiff_t>(deep.size() / 2), deep.end());
-      out.reference_radius_m = deep[deep.size() / 2];
-    }
+    out.reference_radius_m = volume_weighted_median(std::move(deep));
   }
+
+  // A maximum whose inscribed ball is smaller than a fragment cannot stand for a grain (its basin
+  // is merged or removed with the fragments), so it does not count: noise specks and membrane
+  // pieces, isolated and hence of infinite dynamic, would otherwise inflate N(h) at every h and
+  // with it the 1 % tolerance of the plateau.
+  const double smallest_peak = std::cbrt(kFragmentVolumeShare) * out.reference_radius_m;
+  std::vector<double> dyn_vox;
+  dyn_vox.reserve(k);
+  for (std::size_t i = 0; i < k; ++i)
+    if (d.peak[i] >= smallest_peak) dyn_vox.push_back(d.dynamic(i) / unit);
+  std::sort(dyn_vox.begin(), dyn_vox.end());
+  const auto count_above = [&](double h) {
+    return static_cast<std::size_t>(dyn_vox.end() - std::upper_bound(dyn_vox.begin(), dyn_vox.end(), h));
+  };
   constexpr double kLowest = 0.5, kStep = 1.0905077326652577;  // 2^(1/8)
   const double hi = std::max(kLowest, 0.5 * out.reference_radius_m / unit);
   std::vector<double> grid{kLowest};
@@ -356,6 +418,11 @@ HProposal propose_h(const Volume<float>& edt, double expected_radius_m, Connecti
       best_b = b;
     }
   }
+  // A window narrower than a quarter octave is no plateau (a count that keeps falling still has
+  // steps where it pauses, most often where few markers are left): h stays at the floor, where the
+  // fragment merge can still join what is split, while nothing joins what is merged.
+  out.plateau_found = best_b - best_a >= 2;
+  if (!out.plateau_found) best_b = best_a = 0;
   out.plateau_lo_vox = grid[best_a];
   out.plateau_hi_vox = grid[best_b];
   out.markers_at_lo = count[best_a];
@@ -363,6 +430,11 @@ HProposal propose_h(const Volume<float>& edt, double expected_radius_m, Connecti
   out.h_vox = std::sqrt(grid[best_a] * grid[best_b]);
   out.markers = count_above(out.h_vox);
   return out;
+}
+
+HProposal propose_h(const Volume<float>& edt, double expected_radius_m, Connectivity c) {
+  check_radius(expected_radius_m);
+  return propose_h(maxima_dynamics(edt, c), expected_radius_m);
 }
 
 }  // namespace graintwin::segment

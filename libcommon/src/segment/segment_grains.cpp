@@ -5,7 +5,6 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/core/filters.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/segment/denoise.hpp"
 #include "graintwin/segment/edt.hpp"
@@ -31,22 +30,24 @@ Volume<T> denoised(Volume<T> grey, const SegmentOptions& o) {
   switch (o.denoise) {
     case Denoise::none: return grey;
     case Denoise::median: return median3(grey);
-    case Denoise::gaussian: {
-      // Blurred in float and stored back in T: rounding to the grey step is far below the noise.
-      Volume<float> f(grey.shape(), grey.voxel_size(), grey.origin());
-      const std::size_t n = grey.size();
-      T* g = grey.data();
-      float* fd = f.data();
-#pragma omp parallel for schedule(static)
-      for (std::size_t i = 0; i < n; ++i) fd[i] = static_cast<float>(g[i]);
-      gaussian_blur(f, o.gaussian_sigma_vox);
-      if constexpr (std::is_same_v<T, float>) return f;
-#pragma omp parallel for schedule(static)
-      for (std::size_t i = 0; i < n; ++i) g[i] = static_cast<T>(std::lround(fd[i]));  // blur stays within the input range
-      return grey;
-    }
+    case Denoise::gaussian: return gaussian_smooth(std::move(grey), o.gaussian_sigma_vox);
   }
   return grey;
+}
+
+/// Otsu's threshold of the sample: over the whole volume for a crop from inside a sample; else
+/// inside the sample cylinder (given, or fitted to the mask of a first whole-volume Otsu), where
+/// the histogram holds only grains and pores. Over the whole volume the air around the sample and
+/// the membrane's intermediate grey pull the threshold down, at 8 voxels per d50 below the
+/// membrane's grey (a solid membrane welds the sample into one grain). The fit stops at a solid
+/// membrane (its columns are solid in every slice), so the first threshold may be that low.
+template <class T>
+double sample_otsu_threshold(const Volume<T>& grey, const SegmentOptions& o) {
+  if (o.region_mode == RegionMode::whole_volume) return otsu_threshold(grey);
+  const Cylinder region = o.region_mode == RegionMode::given_cylinder
+                              ? o.region
+                              : fit_sample_cylinder(binarise(grey, otsu_threshold(grey)));
+  return otsu_threshold(grey, region);
 }
 
 std::size_t count_nonzero(const Volume<std::uint8_t>& m) {
@@ -117,7 +118,7 @@ SegmentResult segment_grains(Volume<T> grey, const SegmentOptions& o) {
 
   step("threshold");
   out.threshold_from_otsu = !o.threshold;
-  out.threshold = o.threshold ? *o.threshold : otsu_threshold(grey);
+  out.threshold = o.threshold ? *o.threshold : sample_otsu_threshold(grey, o);
   Volume<std::uint8_t> mask = binarise(grey, out.threshold);
   grey = Volume<T>();
   if (o.fill_holes) {
@@ -154,13 +155,20 @@ SegmentResult segment_grains(Volume<T> grey, const SegmentOptions& o) {
   const bool need_proposal = (o.markers == MarkerMethod::h_maxima && !o.h_vox) ||
                              (o.markers == MarkerMethod::peaks && !o.min_distance_vox && o.expected_d50_m <= 0.0) ||
                              (!o.min_volume_vox && o.expected_d50_m <= 0.0);
-  if (need_proposal) out.h_proposal = propose_h(edt, o.expected_d50_m / 2.0, o.connectivity);
+  std::optional<MaximaDynamics> dynamics;
+  if (need_proposal) {
+    dynamics = maxima_dynamics(edt, o.connectivity);
+    out.h_proposal = propose_h(*dynamics, o.expected_d50_m / 2.0);
+  }
   out.reference_radius_m = o.expected_d50_m > 0.0 ? o.expected_d50_m / 2.0 : out.h_proposal->reference_radius_m;
   Volume<std::uint32_t> markers;
   if (o.markers == MarkerMethod::h_maxima) {
     out.marker_parameter_automatic = !o.h_vox;
     out.marker_parameter_vox = o.h_vox ? *o.h_vox : out.h_proposal->h_vox;
-    markers = h_maxima_markers(edt, out.marker_parameter_vox, o.connectivity);
+    // With the dynamics at hand the markers cost only their own size; a given h alone is cheaper
+    // by reconstruction than by a flood.
+    markers = dynamics ? h_maxima_markers(edt, *dynamics, out.marker_parameter_vox, o.connectivity)
+                       : h_maxima_markers(edt, out.marker_parameter_vox, o.connectivity);
   } else {
     out.marker_parameter_automatic = !o.min_distance_vox;
     out.marker_parameter_vox = o.min_distance_vox ? *o.min_distance_vox : std::max(1.0, out.reference_radius_m / unit);
@@ -172,12 +180,12 @@ SegmentResult segment_grains(Volume<T> grey, const SegmentOptions& o) {
   out.markers = relabel_sequential(out.labels);
 
   step("fragments");
-  // A fragment is a piece far smaller than any real grain: 5 % of the volume of a sphere of the
-  // reference radius (the smallest Ottawa grain, 0.30 mm against d50 0.551 mm, has 16 %), and never
-  // below 2 voxels (one voxel is noise at any resolution). Necks between grains give pieces of 2-4 %.
+  // A fragment is a piece far smaller than any real grain (kFragmentVolumeShare of a reference
+  // grain), and never below 2 voxels (one voxel is noise at any resolution).
   const double r_vox = out.reference_radius_m / unit;
   out.min_volume_vox = o.min_volume_vox ? *o.min_volume_vox
-                                        : std::max(2.0, std::round(0.05 * 4.0 / 3.0 * std::numbers::pi * r_vox * r_vox * r_vox));
+                                        : std::max(2.0, std::round(kFragmentVolumeShare * 4.0 / 3.0 * std::numbers::pi *
+                                                                   r_vox * r_vox * r_vox));
   out.fragments = remove_small_fragments(out.labels, static_cast<std::size_t>(std::ceil(out.min_volume_vox)),
                                          o.fragments, o.connectivity);
   if (o.remove_edge_grains) {

@@ -18,19 +18,40 @@ constexpr std::size_t kFloatBins = 4096;
   throw DataError("Otsu is undefined for a constant image; give --threshold");
 }
 
-/// Histogram of integer values, one bin per value, summed over per-thread histograms (integer
-/// sums, so the result is independent of the thread count).
+/// Calls f(i) for the index i of every voxel whose centre lies inside `region`, from one OpenMP
+/// thread per range of rows (call inside a parallel region: the rows are shared out with omp for).
+template <class T, class F>
+void for_each_inside(const Volume<T>& v, const Cylinder& region, F&& f) {
+  const std::size_t rows = v.nz() * v.ny();
+#pragma omp for schedule(static) nowait
+  for (std::size_t row = 0; row < rows; ++row) {
+    const std::size_t z = row / v.ny(), y = row % v.ny();
+    const auto [first, last] = region.row_span(v, z, y);
+    const std::size_t base = v.index(z, y, 0);
+    for (std::size_t x = first; x < last; ++x) f(base + x);
+  }
+}
+
+/// Histogram of the values inside `region`, summed over per-thread histograms (integer sums, so the
+/// result is independent of the thread count). Integers: one bin per value. Floats: kFloatBins bins
+/// between lo and lo + bins * width.
 template <class T>
-std::vector<std::uint64_t> integer_histogram(const Volume<T>& v) {
-  constexpr std::size_t bins = std::size_t{std::numeric_limits<T>::max()} + 1;
+std::vector<std::uint64_t> region_histogram(const Volume<T>& v, const Cylinder& region, double lo = 0.0,
+                                            double width = 1.0) {
+  std::size_t bins = kFloatBins;
+  if constexpr (std::is_integral_v<T>) bins = std::size_t{std::numeric_limits<T>::max()} + 1;
   std::vector<std::uint64_t> total(bins, 0);
   const T* d = v.data();
-  const std::size_t n = v.size();
 #pragma omp parallel
   {
     std::vector<std::uint64_t> h(bins, 0);
-#pragma omp for schedule(static) nowait
-    for (std::size_t i = 0; i < n; ++i) ++h[d[i]];
+    if constexpr (std::is_integral_v<T>) {
+      for_each_inside(v, region, [&](std::size_t i) { ++h[d[i]]; });
+    } else {
+      for_each_inside(v, region, [&](std::size_t i) {
+        ++h[std::min(static_cast<std::size_t>((static_cast<double>(d[i]) - lo) / width), bins - 1)];
+      });
+    }
 #pragma omp critical
     for (std::size_t b = 0; b < bins; ++b) total[b] += h[b];
   }
@@ -80,17 +101,21 @@ double otsu_bin_edge(const std::vector<std::uint64_t>& histogram) {
 
 template <class T>
 double otsu_threshold(const Volume<T>& grey) {
+  return otsu_threshold(grey, Cylinder{0.0, 0.0, std::numeric_limits<double>::infinity()});
+}
+
+template <class T>
+double otsu_threshold(const Volume<T>& grey, const Cylinder& region) {
   if (grey.empty()) throw DataError("cannot threshold an empty volume; check the input file");
   if constexpr (std::is_integral_v<T>) {
     // Bin i holds value i, i.e. the interval [i - 0.5, i + 0.5).
-    return otsu_bin_edge(integer_histogram(grey)) - 0.5;
+    return otsu_bin_edge(region_histogram(grey, region)) - 0.5;
   } else {
     const T* d = grey.data();
-    const std::size_t n = grey.size();
     std::size_t nan = 0, inf = 0;
     float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
-#pragma omp parallel for schedule(static) reduction(+ : nan, inf) reduction(min : lo) reduction(max : hi)
-    for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel reduction(+ : nan, inf) reduction(min : lo) reduction(max : hi)
+    for_each_inside(grey, region, [&](std::size_t i) {
       const float x = d[i];
       if (std::isnan(x)) {
         ++nan;
@@ -100,7 +125,7 @@ double otsu_threshold(const Volume<T>& grey) {
         lo = std::min(lo, x);
         hi = std::max(hi, x);
       }
-    }
+    });
     if (nan > 0)
       throw DataError("the volume holds " + std::to_string(nan) +
                       " NaN values; replace them (e.g. crop them away or cast with volconvert) before thresholding");
@@ -109,19 +134,7 @@ double otsu_threshold(const Volume<T>& grey) {
                       " infinite values; replace them (e.g. crop them away or cast with volconvert) before thresholding");
     if (!(hi > lo)) throw_constant();
     const double width = (static_cast<double>(hi) - static_cast<double>(lo)) / kFloatBins;
-    std::vector<std::uint64_t> total(kFloatBins, 0);
-#pragma omp parallel
-    {
-      std::vector<std::uint64_t> h(kFloatBins, 0);
-#pragma omp for schedule(static) nowait
-      for (std::size_t i = 0; i < n; ++i) {
-        const auto b = static_cast<std::size_t>((static_cast<double>(d[i]) - lo) / width);
-        ++h[std::min(b, kFloatBins - 1)];
-      }
-#pragma omp critical
-      for (std::size_t b = 0; b < kFloatBins; ++b) total[b] += h[b];
-    }
-    return static_cast<double>(lo) + width * otsu_bin_edge(total);
+    return static_cast<double>(lo) + width * otsu_bin_edge(region_histogram(grey, region, lo, width));
   }
 }
 
@@ -208,6 +221,9 @@ void binary_open(Volume<std::uint8_t>& mask, double radius_vox) {
 template double otsu_threshold(const Volume<std::uint8_t>&);
 template double otsu_threshold(const Volume<std::uint16_t>&);
 template double otsu_threshold(const Volume<float>&);
+template double otsu_threshold(const Volume<std::uint8_t>&, const Cylinder&);
+template double otsu_threshold(const Volume<std::uint16_t>&, const Cylinder&);
+template double otsu_threshold(const Volume<float>&, const Cylinder&);
 template Volume<std::uint8_t> binarise(const Volume<std::uint8_t>&, double);
 template Volume<std::uint8_t> binarise(const Volume<std::uint16_t>&, double);
 template Volume<std::uint8_t> binarise(const Volume<float>&, double);

@@ -1,8 +1,11 @@
 #pragma once
 // The sample region of a triaxial scan: the cylinder (axis along z) that holds the grains, found
 // from the solid mask or given, and the void ratio e = V_void / V_solid inside it.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 
 #include "graintwin/core/volume.hpp"
 
@@ -20,6 +23,20 @@ struct Cylinder {
     const Vec3 p = v.position_xyz(static_cast<double>(z), static_cast<double>(y), static_cast<double>(x));
     const double dx = p[0] - centre_x, dy = p[1] - centre_y;
     return p[2] >= z_min && p[2] <= z_max && dx * dx + dy * dy <= radius * radius;
+  }
+  /// The x index range [first, last) of row (z, y) of `v` whose voxel centres lie inside (the same
+  /// voxels as `contains`, up to rounding exactly on the surface); first == last if none.
+  template <class T>
+  std::pair<std::size_t, std::size_t> row_span(const Volume<T>& v, std::size_t z, std::size_t y) const {
+    const Vec3 p = v.position_xyz(static_cast<double>(z), static_cast<double>(y), 0.0);
+    const double dy = p[1] - centre_y, half2 = radius * radius - dy * dy;
+    if (!(p[2] >= z_min && p[2] <= z_max && half2 >= 0.0)) return {0, 0};
+    if (std::isinf(half2)) return {0, v.nx()};
+    const double half = std::sqrt(half2), dx = v.voxel_size()[2];
+    const double lo = std::ceil((centre_x - half - p[0]) / dx), hi = std::floor((centre_x + half - p[0]) / dx) + 1.0;
+    const double nx = static_cast<double>(v.nx());
+    const auto first = static_cast<std::size_t>(std::clamp(lo, 0.0, nx));
+    return {first, std::max(first, static_cast<std::size_t>(std::clamp(hi, 0.0, nx)))};
   }
 };
 

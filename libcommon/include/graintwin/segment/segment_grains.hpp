@@ -24,8 +24,10 @@ enum class MarkerMethod { h_maxima, peaks };
 enum class RegionMode { auto_cylinder, given_cylinder, whole_volume };
 
 struct SegmentOptions {
-  Denoise denoise = Denoise::median;
-  double gaussian_sigma_vox = 1.0;
+  /// Measured (ct2labels_accuracy_bench, sigma 0.3-0.7 over 8-24 voxels per d50 and 2-10 % noise):
+  /// 0.4 voxel keeps the narrow gaps between grains that the 3x3x3 median fills.
+  Denoise denoise = Denoise::gaussian;
+  double gaussian_sigma_vox = 0.4;
   std::optional<double> threshold;       ///< grey level; solid is strictly above. Empty: Otsu.
   bool fill_holes = true;
   double open_radius_vox = 0.0;          ///< morphological opening of the mask; 0 = none

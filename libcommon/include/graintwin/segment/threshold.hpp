@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "graintwin/core/volume.hpp"
+#include "graintwin/segment/sample_region.hpp"
 
 namespace graintwin::segment {
 
@@ -22,6 +23,14 @@ double otsu_bin_edge(const std::vector<std::uint64_t>& histogram);
 /// on the thread count.
 template <class T>
 double otsu_threshold(const Volume<T>& grey);
+
+/// The same over the voxels whose centres lie inside `region` only (float: 4096 bins between the
+/// minimum and the maximum inside). In a triaxial scan the region is the sample cylinder: inside it
+/// the histogram holds only pores and grains, while over the whole volume the air around the sample
+/// and a membrane of intermediate grey pull the threshold down (below the membrane's grey when the
+/// grains take few voxels). Throws DataError if fewer than two grey levels lie inside.
+template <class T>
+double otsu_threshold(const Volume<T>& grey, const Cylinder& region);
 
 /// Solid mask: 1 where value > threshold, else 0 (NaN gives 0); same geometry as `grey`.
 template <class T>
