@@ -2,7 +2,8 @@
 // (Debian libinsighttoolkit5-dev) as an ITK user would write it, one filter per step, each updated
 // and timed on its own, intermediates released as soon as the next step has its input (ITK's best
 // memory, not a pipeline that keeps every output alive):
-//   MedianImageFilter (radius 1) -> OtsuThresholdImageFilter (one bin per grey value) ->
+//   DiscreteGaussianImageFilter (sigma SIGMA_VOX voxels, GrainTwin's default denoising) ->
+//   OtsuThresholdImageFilter (one bin per grey value, whole volume) ->
 //   BinaryFillholeImageFilter -> SignedMaurerDistanceMapImageFilter -> HMaximaImageFilter ->
 //   RegionalMaximaImageFilter -> ConnectedComponentImageFilter (markers) ->
 //   MorphologicalWatershedFromMarkersImageFilter on -EDT -> MaskImageFilter (the solid).
@@ -10,14 +11,16 @@
 // have it); without that ITK's flood sorts every distinct void distance and takes 2-3x longer.
 // Input is a MetaImage copy of the scan (ITK's HDF5 reader expects ITK's own layout, not GrainTwin's);
 // reading and writing are timed separately from the segmentation.
-//   itk_segment SCAN.mhd LABELS.mhd TIMES.json H_VOX THREADS
+//   itk_segment SCAN.mhd LABELS.mhd TIMES.json H_VOX THREADS SIGMA_VOX
+#include <cmath>
+
 #include <itkBinaryFillholeImageFilter.h>
 #include <itkConnectedComponentImageFilter.h>
 #include <itkHMaximaImageFilter.h>
 #include <itkImageFileReader.h>
 #include <itkImageFileWriter.h>
 #include <itkMaskImageFilter.h>
-#include <itkMedianImageFilter.h>
+#include <itkDiscreteGaussianImageFilter.h>
 #include <itkMinimumMaximumImageCalculator.h>
 #include <itkMorphologicalWatershedFromMarkersImageFilter.h>
 #include <itkMultiThreaderBase.h>
@@ -83,13 +86,14 @@ typename Filter::OutputImageType::Pointer run(typename Filter::Pointer f) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 6) {
-    std::cerr << "usage: itk_segment SCAN.mhd LABELS.mhd TIMES.json H_VOX THREADS\n";
+  if (argc != 7) {
+    std::cerr << "usage: itk_segment SCAN.mhd LABELS.mhd TIMES.json H_VOX THREADS SIGMA_VOX\n";
     return 2;
   }
   const std::string in_path = argv[1], out_path = argv[2], times_path = argv[3];
   const double h_vox = std::stod(argv[4]);
   const int threads = std::stoi(argv[5]);
+  const double sigma_vox = std::stod(argv[6]);
   itk::MultiThreaderBase::SetGlobalMaximumNumberOfThreads(threads);
   itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(threads);
   Steps steps;
@@ -105,10 +109,14 @@ int main(int argc, char** argv) {
     const double unit = std::min({spacing[0], spacing[1], spacing[2]});
 
     steps.time("denoise", [&] {
-      auto m = itk::MedianImageFilter<Grey, Grey>::New();
-      m->SetInput(grey);
-      m->SetRadius(1);  // 3x3x3; ITK replicates edges (zero-flux Neumann) as GrainTwin does
-      grey = run<itk::MedianImageFilter<Grey, Grey>>(m);
+      using Gauss = itk::DiscreteGaussianImageFilter<Grey, Grey>;
+      auto g = Gauss::New();
+      g->SetInput(grey);
+      g->SetUseImageSpacing(false);  // sigma in voxel steps, as GrainTwin's --sigma-vox
+      g->SetVariance(sigma_vox * sigma_vox);
+      g->SetMaximumKernelWidth(2 * static_cast<unsigned>(std::ceil(3.0 * sigma_vox)) + 1);
+      g->SetMaximumError(0.001);
+      grey = run<Gauss>(g);  // edges replicated (zero-flux Neumann) as GrainTwin does
     });
 
     Mask::Pointer solid;
