@@ -1,35 +1,514 @@
 #include "graintwin/fdem/contact.hpp"
 
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/contact_broadphase.hpp"
+#include "graintwin/fdem/contact_bvh.hpp"
+#include "graintwin/fdem/contact_law.hpp"
 #include "graintwin/io/h5file.hpp"
 
 namespace graintwin::fdem {
 
-// First commit of the contact API so the solver can code against it; the implementation follows.
-struct ContactModel::State {};
-
 namespace {
-[[noreturn]] void not_implemented() { throw DataError("fdem contact is not implemented yet."); }
+
+constexpr std::uint32_t kNoTriangle = UINT32_MAX;
+/// Fraction of the contact limit 2 sqrt(m / k) (damped) that stable_time_step() returns: a node
+/// can meet two contacts at once (a grain and a platen, or both directions), which halves m / k.
+constexpr double kTimeStepSafety = 0.5;
+/// Automatic skin, as a fraction of the smallest grain's box diagonal.
+constexpr double kSkinFraction = 0.05;
+/// Deepest detectable penetration, as a fraction of the smallest grain's smallest box side: the
+/// closest-triangle search looks no farther (penalty overlaps are a few per mille of a grain).
+constexpr double kMaxPenetrationFraction = 0.1;
+
+// Below these sizes a parallel region costs more than the loop (and much more on a loaded machine).
+constexpr std::size_t kParallelGrains = 64, kParallelNodes = 16384, kParallelCandidates = 4;
+
+/// One node in contact this step.
+struct NodeHit {
+  std::uint32_t node = 0;
+  std::uint32_t triangle = kNoTriangle;  ///< other grain's triangle; kNoTriangle against a platen
+  Eigen::Vector3d weights = Eigen::Vector3d::Zero();
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< midpoint of node and surface point
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, the direction the node is pushed
+  double overlap = 0;
+  NodeContactForce law;
+};
+
+/// One candidate interaction of a step: grains a < b, or grain a and platen b - grains.
+struct Candidate {
+  std::uint32_t a = 0, b = 0;
+};
+/// Work done on one candidate (for the benchmark's throughput figures).
+struct Checks {
+  std::size_t nodes = 0, triangles = 0;
+};
+
+struct HistoryEntry {
+  std::uint32_t a = 0, b = 0, node = 0;
+  Eigen::Vector3d spring = Eigen::Vector3d::Zero();
+};
+bool key_less(const HistoryEntry& h, std::uint32_t a, std::uint32_t b, std::uint32_t node) {
+  return std::tie(h.a, h.b, h.node) < std::tie(a, b, node);
+}
+
+Eigen::Vector3d triangle_normal(const std::array<std::uint32_t, 3>& t, std::span<const Eigen::Vector3d> x) {
+  return (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);  // length = twice the area
+}
+
 }  // namespace
 
-ContactModel::ContactModel(const Model&, std::span<const double>, const ContactOptions&) {
-  not_implemented();
+struct ContactModel::State {
+  std::vector<Grain> grains;
+  std::vector<Material> materials;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<double> node_mass;
+  std::size_t node_count = 0;
+  ContactOptions options;
+  double skin = 0, max_penetration = 0;
+
+  std::vector<std::uint32_t> surface_offset, surface_nodes;  ///< per grain, sorted node indices
+  std::vector<std::uint32_t> node_triangle_offset, node_triangles;  ///< CSR: triangles around a node
+  std::vector<std::array<std::uint32_t, 3>> neighbour;  ///< triangle across edge 01, 12, 20
+  std::vector<double> triangle_area;                    ///< reference, m^2
+  SurfaceTrees trees;
+
+  std::vector<BoxPair> grain_pairs;          ///< broad phase result
+  std::vector<Eigen::Vector3d> built_at;     ///< surface node positions at the last build
+  bool need_rebuild = true;
+  std::size_t rebuilds = 0;
+
+  std::vector<HistoryEntry> history;  ///< sorted by (a, b, node)
+  std::vector<ContactRecord> records;
+
+  std::vector<Candidate> candidates;
+  std::vector<std::vector<NodeHit>> hits;
+  std::vector<Checks> checks;
+
+  const Material& material_of(std::uint32_t grain) const { return materials[grains[grain].material]; }
+  std::span<const std::uint32_t> surface(std::uint32_t grain) const {
+    return {surface_nodes.data() + surface_offset[grain], surface_offset[grain + 1] - surface_offset[grain]};
+  }
+
+  /// Reference area of `node` facing `normal` in the current configuration: one third of each
+  /// surrounding triangle's reference area times the cosine between the triangle's outward normal
+  /// and -normal (0 when it faces away). Equals A_node on a flat patch pressed head-on, and makes a
+  /// face's nodes carry exactly the face's area even when its rim nodes also border side faces.
+  double facing_area(std::uint32_t node, const Eigen::Vector3d& normal, std::span<const Eigen::Vector3d> x) const {
+    double area = 0;
+    for (std::uint32_t k = node_triangle_offset[node]; k < node_triangle_offset[node + 1]; ++k) {
+      const std::uint32_t t = node_triangles[k];
+      const Eigen::Vector3d n = triangle_normal(triangles[t], x);
+      const double len = n.norm();
+      if (len > 0) area += triangle_area[t] / 3.0 * std::max(0.0, -n.dot(normal) / len);
+    }
+    return area;
+  }
+
+  /// A normal at the closest feature whose sign tells inside from outside for a closed surface
+  /// (angle-weighted pseudonormals at corners, the two faces' sum at edges).
+  Eigen::Vector3d pseudonormal(std::uint32_t t, TriangleFeature feature, std::span<const Eigen::Vector3d> x) const {
+    const Eigen::Vector3d n = triangle_normal(triangles[t], x).normalized();
+    auto across = [&](int edge) -> Eigen::Vector3d {
+      const std::uint32_t o = neighbour[t][edge];
+      return o == kNoTriangle ? n : Eigen::Vector3d(n + triangle_normal(triangles[o], x).normalized());
+    };
+    switch (feature) {
+      case TriangleFeature::face: return n;
+      case TriangleFeature::edge_ab: return across(0);
+      case TriangleFeature::edge_bc: return across(1);
+      case TriangleFeature::edge_ca: return across(2);
+      default: break;
+    }
+    const std::uint32_t v = triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)];
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (std::uint32_t k = node_triangle_offset[v]; k < node_triangle_offset[v + 1]; ++k) {
+      const auto& tri = triangles[node_triangles[k]];
+      const int i = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+      const Eigen::Vector3d e1 = (x[tri[(i + 1) % 3]] - x[v]).normalized(), e2 = (x[tri[(i + 2) % 3]] - x[v]).normalized();
+      sum += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * triangle_normal(tri, x).normalized();
+    }
+    return sum;
+  }
+
+  const Eigen::Vector3d* previous_spring(std::uint32_t a, std::uint32_t b, std::uint32_t node) const {
+    auto it = std::lower_bound(history.begin(), history.end(), 0,
+                               [&](const HistoryEntry& h, int) { return key_less(h, a, b, node); });
+    return it != history.end() && it->a == a && it->b == b && it->node == node ? &it->spring : nullptr;
+  }
+
+  /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces.
+  void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<const Eigen::Vector3d> x,
+                  std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
+    const Aabb& box = trees.bounds(to);
+    const Material& mf = material_of(from);
+    const Material& mt = material_of(to);
+    const double p_n = std::min(mf.normal_penalty, mt.normal_penalty);
+    const double p_t = std::min(mf.tangential_penalty, mt.tangential_penalty);
+    const double mu = std::min(mf.friction, mt.friction);
+    const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
+    SurfaceTrees::Nearest near;
+    checks.nodes += surface(from).size();
+    for (std::uint32_t node : surface(from)) {
+      const Eigen::Vector3d& p = x[node];
+      if (!box.contains(p)) continue;
+      const bool close = trees.nearest(to, p, max_penetration, x, near);
+      checks.triangles += near.tested;
+      if (!close) continue;
+      const Eigen::Vector3d d = near.closest.point - p;  // from the node out to the surface
+      if (!(d.dot(pseudonormal(near.triangle, near.closest.feature, x)) > 0)) continue;  // outside
+      NodeHit hit;
+      hit.overlap = std::sqrt(near.distance2);
+      hit.normal = near.closest.feature == TriangleFeature::face
+                       ? Eigen::Vector3d(triangle_normal(triangles[near.triangle], x).normalized())
+                       : Eigen::Vector3d(d / hit.overlap);
+      // Both directions are evaluated, each with half the penalty (docs/fdem_contact.md).
+      const double area = 0.5 * facing_area(node, hit.normal, x);
+      if (!(area > 0)) continue;
+      const auto& tri = triangles[near.triangle];
+      const Eigen::Vector3d w = near.closest.weights;
+      const Eigen::Vector3d relative = v[node] - (w[0] * v[tri[0]] + w[1] * v[tri[1]] + w[2] * v[tri[2]]);
+      const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
+      hit.law = node_contact_force(contact_law(p_n, p_t, area, node_mass[node], beta, mu), hit.normal, hit.overlap,
+                                   relative, spring ? *spring : Eigen::Vector3d::Zero(), dt);
+      hit.node = node;
+      hit.triangle = near.triangle;
+      hit.weights = w;
+      hit.point = 0.5 * (p + near.closest.point);
+      out.push_back(hit);
+    }
+  }
+
+  void platen_hits(const Candidate& key, const PlatenState& platen, std::span<const Eigen::Vector3d> x,
+                   std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
+    const Material& m = material_of(key.a);
+    checks.nodes += surface(key.a).size();
+    for (std::uint32_t node : surface(key.a)) {
+      const double height = (x[node] - platen.point).dot(platen.normal);
+      if (!(height < 0)) continue;
+      NodeHit hit;
+      hit.overlap = -height;
+      hit.normal = platen.normal;
+      const double area = facing_area(node, hit.normal, x);
+      if (!(area > 0)) continue;
+      const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
+      hit.law = node_contact_force(
+          contact_law(m.normal_penalty, m.tangential_penalty, area, node_mass[node], m.damping_ratio, platen.friction),
+          hit.normal, hit.overlap, v[node] - platen.velocity, spring ? *spring : Eigen::Vector3d::Zero(), dt);
+      hit.node = node;
+      hit.point = x[node] + 0.5 * hit.overlap * platen.normal;
+      out.push_back(hit);
+    }
+  }
+};
+
+ContactModel::ContactModel(const Model& model, std::span<const double> node_mass, const ContactOptions& options)
+    : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  if (node_mass.size() != model.nodes.size())
+    throw DataError(fmt::format("fdem contact: {} node masses for {} model nodes; pass one lumped mass per node.",
+                                node_mass.size(), model.nodes.size()));
+  if (model.triangle_grain.size() != model.triangles.size())
+    throw DataError("fdem contact: the model's triangle_grain does not match its triangles; rebuild the model.");
+  s.grains = model.grains;
+  s.materials = model.materials;
+  s.triangles = model.triangles;
+  s.node_mass.assign(node_mass.begin(), node_mass.end());
+  s.node_count = model.nodes.size();
+  s.options = options;
+  for (const Grain& g : model.grains)
+    if (g.material >= model.materials.size())
+      throw DataError(fmt::format("fdem contact: grain {} uses material {} of {}; fix the model's materials.",
+                                  g.label, g.material, model.materials.size()));
+
+  // Surface nodes per grain and the triangles around every node.
+  s.node_triangle_offset.assign(s.node_count + 1, 0);
+  for (const auto& t : s.triangles)
+    for (std::uint32_t v : t) {
+      if (v >= s.node_count)
+        throw DataError(fmt::format("fdem contact: a surface triangle uses node {} of {}; rebuild the model.", v,
+                                    s.node_count));
+      ++s.node_triangle_offset[v + 1];
+    }
+  for (std::size_t n = 0; n < s.node_count; ++n) s.node_triangle_offset[n + 1] += s.node_triangle_offset[n];
+  s.node_triangles.resize(s.node_triangle_offset.back());
+  {
+    std::vector<std::uint32_t> fill(s.node_triangle_offset.begin(), s.node_triangle_offset.end() - 1);
+    for (std::uint32_t t = 0; t < s.triangles.size(); ++t)
+      for (std::uint32_t v : s.triangles[t]) s.node_triangles[fill[v]++] = t;
+  }
+  s.surface_offset.push_back(0);
+  double smallest_diagonal = std::numeric_limits<double>::infinity();
+  double smallest_side = std::numeric_limits<double>::infinity();
+  for (const Grain& g : model.grains) {
+    const std::size_t first = s.surface_nodes.size();
+    for (std::uint32_t t = g.triangle_begin; t < g.triangle_end; ++t)
+      for (std::uint32_t v : s.triangles[t]) s.surface_nodes.push_back(v);
+    std::sort(s.surface_nodes.begin() + first, s.surface_nodes.end());
+    s.surface_nodes.erase(std::unique(s.surface_nodes.begin() + first, s.surface_nodes.end()), s.surface_nodes.end());
+    Aabb box;
+    for (std::size_t k = first; k < s.surface_nodes.size(); ++k) {
+      const std::uint32_t v = s.surface_nodes[k];
+      if (v < g.node_begin || v >= g.node_end)
+        throw DataError(fmt::format("fdem contact: grain {}'s surface uses node {} outside its nodes; rebuild the model.",
+                                    g.label, v));
+      if (!(s.node_mass[v] > 0))
+        throw DataError(fmt::format("fdem contact: surface node {} of grain {} has mass {}; node masses must be positive.",
+                                    v, g.label, s.node_mass[v]));
+      box.grow(model.nodes[v]);
+    }
+    s.surface_offset.push_back(static_cast<std::uint32_t>(s.surface_nodes.size()));
+    if (s.surface_nodes.size() > first) {
+      smallest_diagonal = std::min(smallest_diagonal, (box.hi - box.lo).norm());
+      smallest_side = std::min(smallest_side, (box.hi - box.lo).minCoeff());
+    }
+  }
+  if (!std::isfinite(smallest_diagonal) || !(smallest_side > 0))
+    throw DataError("fdem contact: no grain has a closed surface of positive size; mesh the grains first.");
+  s.skin = options.skin > 0 ? options.skin : kSkinFraction * smallest_diagonal;
+  s.max_penetration = kMaxPenetrationFraction * smallest_side;
+
+  // Reference triangle areas and edge neighbours (for edge pseudonormals): each grain's edges
+  // sorted by their end nodes, so the two uses of an edge are adjacent.
+  s.triangle_area.resize(s.triangles.size());
+  s.neighbour.assign(s.triangles.size(), {kNoTriangle, kNoTriangle, kNoTriangle});
+  struct EdgeUse {
+    std::uint32_t low, high, triangle;
+    int edge;
+  };
+  std::vector<EdgeUse> edges;
+  for (const Grain& g : model.grains) {
+    edges.clear();
+    for (std::uint32_t t = g.triangle_begin; t < g.triangle_end; ++t) {
+      s.triangle_area[t] = 0.5 * triangle_normal(s.triangles[t], model.nodes).norm();
+      for (int e = 0; e < 3; ++e) {
+        const auto [low, high] = std::minmax(s.triangles[t][e], s.triangles[t][(e + 1) % 3]);
+        edges.push_back({low, high, t, e});
+      }
+    }
+    std::sort(edges.begin(), edges.end(), [](const EdgeUse& p, const EdgeUse& q) {
+      return std::tie(p.low, p.high, p.triangle) < std::tie(q.low, q.high, q.triangle);
+    });
+    for (std::size_t k = 0; k + 1 < edges.size(); ++k)
+      if (edges[k].low == edges[k + 1].low && edges[k].high == edges[k + 1].high) {
+        s.neighbour[edges[k].triangle][edges[k].edge] = edges[k + 1].triangle;
+        s.neighbour[edges[k + 1].triangle][edges[k + 1].edge] = edges[k].triangle;
+        ++k;
+      }
+  }
+  s.trees = SurfaceTrees(model);
 }
+
 ContactModel::~ContactModel() = default;
 ContactModel::ContactModel(ContactModel&&) noexcept = default;
 ContactModel& ContactModel::operator=(ContactModel&&) noexcept = default;
 
-ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d>,
-                                          std::span<const Eigen::Vector3d>,
-                                          std::span<const PlatenState>, double,
-                                          std::span<Eigen::Vector3d>) {
-  not_implemented();
+ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                          std::span<const PlatenState> platens, double dt,
+                                          std::span<Eigen::Vector3d> f) {
+  State& s = *state_;
+  if (x.size() != s.node_count || v.size() != s.node_count || f.size() != s.node_count)
+    throw DataError(fmt::format("fdem contact: positions, velocities and forces have {}, {} and {} entries for {} "
+                                "nodes; pass one per model node.",
+                                x.size(), v.size(), f.size(), s.node_count));
+  ContactStepStats stats;
+  s.records.clear();
+  if (!s.options.enabled) {
+    s.history.clear();
+    return stats;
+  }
+  const auto grain_count = static_cast<std::uint32_t>(s.grains.size());
+
+#pragma omp parallel for schedule(dynamic, 16) if (grain_count >= kParallelGrains)
+  for (std::int64_t g = 0; g < grain_count; ++g) s.trees.refit(static_cast<std::size_t>(g), x);
+
+  // Verlet criterion: the pairs stay complete until a node has moved skin / 2 since the build.
+  if (!s.need_rebuild) {
+    const double limit2 = 0.25 * s.skin * s.skin;
+    bool moved = false;
+#pragma omp parallel for reduction(|| : moved) if (s.surface_nodes.size() >= kParallelNodes)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(s.surface_nodes.size()); ++k)
+      moved = moved || (x[s.surface_nodes[k]] - s.built_at[k]).squaredNorm() > limit2;
+    s.need_rebuild = moved;
+  }
+  if (s.need_rebuild) {
+    std::vector<Aabb> boxes(grain_count);
+    for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
+    s.grain_pairs = overlapping_box_pairs(boxes);
+    s.built_at.resize(s.surface_nodes.size());
+    for (std::size_t k = 0; k < s.surface_nodes.size(); ++k) s.built_at[k] = x[s.surface_nodes[k]];
+    s.need_rebuild = false;
+    ++s.rebuilds;
+    stats.rebuilt = true;
+  }
+  stats.pairs = s.grain_pairs.size();
+
+  // This step's candidates in (a, b) order: grain pairs whose current boxes overlap, then each
+  // grain's platens whose plane cuts its box.
+  s.candidates.clear();
+  for (std::size_t k = 0, a = 0; a < grain_count; ++a) {
+    for (; k < s.grain_pairs.size() && s.grain_pairs[k].first == a; ++k)
+      if (s.trees.bounds(a).overlaps(s.trees.bounds(s.grain_pairs[k].second)))
+        s.candidates.push_back({s.grain_pairs[k].first, s.grain_pairs[k].second});
+    const Aabb& box = s.trees.bounds(a);
+    if (!(box.lo.array() <= box.hi.array()).all()) continue;
+    for (std::uint32_t p = 0; p < platens.size(); ++p) {
+      // The box corner deepest along -normal decides whether the plane can touch the grain.
+      const Eigen::Vector3d& n = platens[p].normal;
+      const Eigen::Vector3d deepest{n.x() > 0 ? box.lo.x() : box.hi.x(), n.y() > 0 ? box.lo.y() : box.hi.y(),
+                                    n.z() > 0 ? box.lo.z() : box.hi.z()};
+      if ((deepest - platens[p].point).dot(n) < 0) s.candidates.push_back({static_cast<std::uint32_t>(a), grain_count + p});
+    }
+  }
+
+  // Narrow phase: each candidate's hits depend only on the state, not on the thread that found
+  // them, and are applied below in candidate order: results are the same for any thread count.
+  if (s.hits.size() < s.candidates.size()) s.hits.resize(s.candidates.size());
+  s.checks.assign(s.candidates.size(), {});
+#pragma omp parallel for schedule(dynamic, 4) if (s.candidates.size() >= kParallelCandidates)
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(s.candidates.size()); ++i) {
+    const Candidate& c = s.candidates[i];
+    std::vector<NodeHit>& out = s.hits[i];
+    out.clear();
+    if (c.b >= grain_count) {
+      s.platen_hits(c, platens[c.b - grain_count], x, v, dt, out, s.checks[i]);
+      continue;
+    }
+    s.grain_hits(c.a, c.b, c, x, v, dt, out, s.checks[i]);
+    s.grain_hits(c.b, c.a, c, x, v, dt, out, s.checks[i]);
+    // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
+    if (!std::is_sorted(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; }))
+      std::sort(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; });
+  }
+
+  s.history.clear();
+  for (std::size_t i = 0; i < s.candidates.size(); ++i) {
+    const Candidate& c = s.candidates[i];
+    stats.node_checks += s.checks[i].nodes;
+    stats.triangle_checks += s.checks[i].triangles;
+    if (s.hits[i].empty()) continue;
+    const bool platen = c.b >= grain_count;
+    const Grain& b_grain = s.grains[platen ? c.a : c.b];
+    ContactRecord record;
+    record.a = c.a;
+    record.b = c.b;
+    Eigen::Vector3d normal_force_on_b = Eigen::Vector3d::Zero();
+    double weight = 0;
+    Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
+    for (const NodeHit& h : s.hits[i]) {
+      const Eigen::Vector3d& force = h.law.force;
+      f[h.node] += force;
+      if (!platen) {
+        const auto& tri = s.triangles[h.triangle];
+        for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
+      }
+      // The node belongs to b (pushed along +normal by a) or to a (its reaction acts on b).
+      const double sign = !platen && h.node >= b_grain.node_begin && h.node < b_grain.node_end ? 1.0 : -1.0;
+      record.force += sign * force;
+      normal_force_on_b += sign * h.law.normal_force * h.normal;
+      record.point += h.law.normal_force * h.point;
+      weight += h.law.normal_force;
+      point_sum += h.point;
+      record.overlap = std::max(record.overlap, h.overlap);
+      stats.elastic_energy += h.law.elastic_energy;
+      stats.dissipated += h.law.dissipated;
+      s.history.push_back({c.a, c.b, h.node, h.law.spring});
+    }
+    // Normal-force-weighted; a plain mean when every node force is clamped to zero.
+    record.point = weight > 0 ? Eigen::Vector3d(record.point / weight)
+                              : Eigen::Vector3d(point_sum / static_cast<double>(s.hits[i].size()));
+    const double nf = normal_force_on_b.norm();
+    record.normal = nf > 0 ? Eigen::Vector3d(normal_force_on_b / nf) : Eigen::Vector3d::Zero();
+    stats.node_contacts += s.hits[i].size();
+    stats.max_overlap = std::max(stats.max_overlap, record.overlap);
+    s.records.push_back(record);
+  }
+  return stats;
 }
-std::vector<ContactRecord> ContactModel::contacts() const { not_implemented(); }
-double ContactModel::stable_time_step() const { not_implemented(); }
-std::size_t ContactModel::rebuild_count() const { not_implemented(); }
-double ContactModel::skin() const { not_implemented(); }
-void ContactModel::save(io::H5File&, const std::string&) const { not_implemented(); }
-void ContactModel::load(const io::H5File&, const std::string&) { not_implemented(); }
+
+std::vector<ContactRecord> ContactModel::contacts() const { return state_->records; }
+
+double ContactModel::stable_time_step() const {
+  const State& s = *state_;
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::uint32_t g = 0; g < s.grains.size(); ++g) {
+    const Material& m = s.material_of(g);
+    const double beta = m.damping_ratio;
+    for (std::uint32_t node : s.surface(g)) {
+      double area = 0;
+      for (std::uint32_t k = s.node_triangle_offset[node]; k < s.node_triangle_offset[node + 1]; ++k)
+        area += s.triangle_area[s.node_triangles[k]] / 3.0;
+      const double k_n = m.normal_penalty * area;
+      if (!(k_n > 0)) continue;
+      // Critical step of a damped oscillator: (2 / omega) (sqrt(1 + beta^2) - beta).
+      const double omega = std::sqrt(k_n / s.node_mass[node]);
+      dt = std::min(dt, kTimeStepSafety * 2.0 / omega * (std::sqrt(1 + beta * beta) - beta));
+    }
+  }
+  return dt;
+}
+
+std::size_t ContactModel::rebuild_count() const { return state_->rebuilds; }
+double ContactModel::skin() const { return state_->skin; }
+
+void ContactModel::save(io::H5File& file, const std::string& group) const {
+  const State& s = *state_;
+  file.ensure_group(group);
+  file.set_attr(group, "entries", static_cast<long long>(s.history.size()));
+  if (s.history.empty()) return;
+  std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
+  std::vector<double> spring(3 * s.history.size());
+  for (std::size_t i = 0; i < s.history.size(); ++i) {
+    const HistoryEntry& h = s.history[i];
+    pair[2 * i] = h.a;
+    pair[2 * i + 1] = h.b;
+    node[i] = h.node;
+    for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+  }
+  const hsize_t n = s.history.size();
+  file.write(group + "/pair", pair.data(), {n, 2});
+  file.write(group + "/node", node.data(), {n});
+  file.write(group + "/spring", spring.data(), {n, 3}, io::units("N"));
+}
+
+void ContactModel::load(const io::H5File& file, const std::string& group) {
+  State& s = *state_;
+  auto bad = [&](const std::string& why) {
+    return DataError(fmt::format("{}: the contact history in {} {}; write the checkpoint with this model.",
+                                 file.path().string(), group, why));
+  };
+  const auto entries = file.attr_int(group, "entries");
+  if (!entries || *entries < 0) throw bad("has no 'entries' count");
+  std::vector<HistoryEntry> history(static_cast<std::size_t>(*entries));
+  if (!history.empty()) {
+    std::vector<hsize_t> pair_dims, node_dims, spring_dims;
+    const auto pair = file.read<std::uint32_t>(group + "/pair", &pair_dims);
+    const auto node = file.read<std::uint32_t>(group + "/node", &node_dims);
+    const auto spring = file.read<double>(group + "/spring", &spring_dims);
+    const hsize_t n = history.size();
+    if (pair_dims != std::vector<hsize_t>{n, 2} || node_dims != std::vector<hsize_t>{n} ||
+        spring_dims != std::vector<hsize_t>{n, 3})
+      throw bad(fmt::format("does not hold {} entries in pair (n x 2), node (n) and spring (n x 3)", n));
+    for (std::size_t i = 0; i < history.size(); ++i)
+      history[i] = {pair[2 * i], pair[2 * i + 1], node[i], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
+  }
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    const HistoryEntry& h = history[i];
+    if (h.a >= s.grains.size() || h.b <= h.a || h.node >= s.node_count)
+      throw bad(fmt::format("names grain pair ({}, {}) and node {} outside a model of {} grains and {} nodes", h.a,
+                            h.b, h.node, s.grains.size(), s.node_count));
+    if (i > 0 && !key_less(history[i - 1], h.a, h.b, h.node)) throw bad("is not sorted by pair and node");
+  }
+  s.history = std::move(history);
+  s.records.clear();
+  s.need_rebuild = true;
+}
 
 }  // namespace graintwin::fdem

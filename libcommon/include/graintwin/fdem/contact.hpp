@@ -51,6 +51,8 @@ struct ContactStepStats {
   double elastic_energy = 0;      ///< J, stored in the normal and tangential penalty springs now
   double dissipated = 0;          ///< J, by dashpots and friction slip during this step
   double max_overlap = 0;         ///< m
+  std::size_t node_checks = 0;      ///< surface nodes tested against another grain's box or a platen
+  std::size_t triangle_checks = 0;  ///< closest-point evaluations in the trees
 };
 
 class ContactModel {

@@ -1,0 +1,111 @@
+#include "graintwin/fdem/contact_bvh.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+
+namespace graintwin::fdem {
+
+namespace {
+constexpr std::uint32_t kLeafSize = 4;
+constexpr int kStackSize = 64;  // median splits: depth <= log2(triangles), far below this
+}  // namespace
+
+SurfaceTrees::SurfaceTrees(const Model& model) : triangles_(model.triangles) {
+  std::vector<Eigen::Vector3d> centroid(model.triangles.size());
+  for (std::size_t t = 0; t < centroid.size(); ++t) {
+    const auto& tri = model.triangles[t];
+    centroid[t] = (model.nodes[tri[0]] + model.nodes[tri[1]] + model.nodes[tri[2]]) / 3.0;
+  }
+  order_.resize(model.triangles.size());
+  // Depth-first layout, left child right after its parent: children always follow their parent,
+  // so a reverse sweep refits bottom-up.
+  auto build = [&](auto&& self, std::uint32_t first, std::uint32_t count) -> void {
+    const auto index = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.push_back({});
+    if (count <= kLeafSize) {
+      nodes_[index].first = first;
+      nodes_[index].count = count;
+      return;
+    }
+    Aabb box;
+    for (std::uint32_t i = first; i < first + count; ++i) box.grow(centroid[order_[i]]);
+    int axis = 0;
+    (box.hi - box.lo).maxCoeff(&axis);
+    const std::uint32_t half = count / 2;
+    std::nth_element(order_.begin() + first, order_.begin() + first + half, order_.begin() + first + count,
+                     [&](std::uint32_t a, std::uint32_t b) {
+                       return centroid[a][axis] < centroid[b][axis] ||
+                              (centroid[a][axis] == centroid[b][axis] && a < b);
+                     });
+    self(self, first, half);
+    nodes_[index].first = static_cast<std::uint32_t>(nodes_.size());
+    self(self, first + half, count - half);
+  };
+  tree_begin_.reserve(model.grains.size() + 1);
+  for (const Grain& grain : model.grains) {
+    tree_begin_.push_back(static_cast<std::uint32_t>(nodes_.size()));
+    for (std::uint32_t t = grain.triangle_begin; t < grain.triangle_end; ++t) order_[t] = t;
+    if (grain.triangle_end > grain.triangle_begin)
+      build(build, grain.triangle_begin, grain.triangle_end - grain.triangle_begin);
+  }
+  tree_begin_.push_back(static_cast<std::uint32_t>(nodes_.size()));
+  for (std::size_t g = 0; g < model.grains.size(); ++g) refit(g, model.nodes);
+}
+
+void SurfaceTrees::refit(std::size_t grain, std::span<const Eigen::Vector3d> x) {
+  for (std::uint32_t i = tree_begin_[grain + 1]; i-- > tree_begin_[grain];) {
+    Node& node = nodes_[i];
+    node.box = Aabb{};
+    if (node.count > 0) {
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
+        for (std::uint32_t v : triangles_[order_[k]]) node.box.grow(x[v]);
+    } else {
+      node.box.grow(nodes_[i + 1].box);
+      node.box.grow(nodes_[node.first].box);
+    }
+  }
+}
+
+const Aabb& SurfaceTrees::bounds(std::size_t grain) const {
+  static const Aabb empty;
+  return tree_begin_[grain] < tree_begin_[grain + 1] ? nodes_[tree_begin_[grain]].box : empty;
+}
+
+bool SurfaceTrees::nearest(std::size_t grain, const Eigen::Vector3d& p, double radius,
+                           std::span<const Eigen::Vector3d> x, Nearest& out) const {
+  if (tree_begin_[grain] == tree_begin_[grain + 1]) return false;
+  double best2 = radius * radius;
+  bool found = false;
+  std::uint32_t tested = 0;
+  std::uint32_t stack[kStackSize];
+  int top = 0;
+  stack[top++] = tree_begin_[grain];
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (node.box.squared_distance(p) >= best2) continue;
+    if (node.count > 0) {
+      tested += node.count;
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
+        const auto& tri = triangles_[order_[k]];
+        TrianglePoint c = closest_point_on_triangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
+        const double d2 = (c.point - p).squaredNorm();
+        if (d2 < best2) {
+          best2 = d2;
+          out = {order_[k], c, d2, 0};
+          found = true;
+        }
+      }
+      continue;
+    }
+    // Visit the nearer child first so the radius shrinks early.
+    const std::uint32_t left = static_cast<std::uint32_t>(&node - nodes_.data()) + 1, right = node.first;
+    const bool left_first = nodes_[left].box.squared_distance(p) <= nodes_[right].box.squared_distance(p);
+    stack[top++] = left_first ? right : left;
+    stack[top++] = left_first ? left : right;
+  }
+  out.tested = tested;
+  return found;
+}
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,404 @@
+// fdem/ contact: closest points, the node law (penalty, clamped dashpot, tangential spring and
+// slip), the broad phase against an all-pairs check, and ContactModel on tet-meshed boxes: exact
+// normal force of a pressed face, equal and opposite forces, friction against a platen, restart
+// from a saved history bit for bit, same forces for any thread count.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <Eigen/Geometry>
+
+#include <filesystem>
+#include <random>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/contact.hpp"
+#include "graintwin/fdem/contact_broadphase.hpp"
+#include "graintwin/fdem/contact_bvh.hpp"
+#include "graintwin/fdem/contact_geometry.hpp"
+#include "graintwin/fdem/contact_law.hpp"
+#include "graintwin/fdem/primitives.hpp"
+#include "graintwin/io/h5file.hpp"
+
+using namespace graintwin;
+using namespace graintwin::fdem;
+
+namespace {
+
+constexpr double kMm = 1e-3;
+
+std::vector<Eigen::Vector3d> zeros(std::size_t n) { return std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()); }
+
+/// A 2 x 2 x 1 mm slab (0.25 mm cells, top face at z = 0.5 mm) and, on it, a 1 mm cube pressed in
+/// by `overlap`. The cube's footprint [-0.625, 0.375]^2 mm holds exactly 4 x 4 of the slab's top
+/// nodes, each 0.125 mm from the cube's sides, so both directions see exactly the footprint area.
+Model pressed_cubes(double overlap, double damping_ratio = 0.0) {
+  Model m;
+  m.materials[0].damping_ratio = damping_ratio;
+  add_grain(m, box_mesh({2 * kMm, 2 * kMm, 1 * kMm}, 0.25 * kMm), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
+  add_grain(m, box_mesh({1 * kMm, 1 * kMm, 1 * kMm}, 0.25 * kMm),
+            Eigen::Vector3d(-0.125 * kMm, -0.125 * kMm, 1 * kMm - overlap), GrainKind::tet4, 0, 2);
+  return m;
+}
+
+std::vector<double> unit_masses(const Model& m) { return std::vector<double>(m.nodes.size(), 1e-6); }
+
+TEST(ClosestPoint, FaceEdgeAndCornerRegions) {
+  const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  TrianglePoint r = closest_point_on_triangle({0.25, 0.25, -2}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::face);
+  EXPECT_NEAR((r.point - Eigen::Vector3d(0.25, 0.25, 0)).norm(), 0, 1e-15);
+  EXPECT_NEAR((r.weights - Eigen::Vector3d(0.5, 0.25, 0.25)).norm(), 0, 1e-15);
+  r = closest_point_on_triangle({0.5, -1, 1}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::edge_ab);
+  EXPECT_NEAR((r.point - Eigen::Vector3d(0.5, 0, 0)).norm(), 0, 1e-15);
+  r = closest_point_on_triangle({1, 1, 0}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::edge_bc);
+  EXPECT_NEAR((r.point - Eigen::Vector3d(0.5, 0.5, 0)).norm(), 0, 1e-15);
+  r = closest_point_on_triangle({-1, 0.5, 0}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::edge_ca);
+  r = closest_point_on_triangle({-1, -1, 3}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::vertex_a);
+  r = closest_point_on_triangle({3, -1, 0}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::vertex_b);
+  EXPECT_NEAR((r.weights - Eigen::Vector3d(0, 1, 0)).norm(), 0, 0);
+  r = closest_point_on_triangle({-0.5, 3, 0}, a, b, c);
+  EXPECT_EQ(r.feature, TriangleFeature::vertex_c);
+}
+
+TEST(ContactLaw, PenaltyForceIsStiffnessTimesOverlap) {
+  const ContactLaw law = contact_law(1e12, 1e12, 2e-8, 1e-6, 0.0, 0.5);
+  EXPECT_EQ(law.normal_stiffness, 2e4);
+  const Eigen::Vector3d n = Eigen::Vector3d(1, 2, 2) / 3.0;
+  const NodeContactForce r = node_contact_force(law, n, 3e-6, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 1e-8);
+  EXPECT_DOUBLE_EQ(r.normal_force, 2e4 * 3e-6);
+  EXPECT_NEAR((r.force - 2e4 * 3e-6 * n).norm(), 0, 1e-15);
+  EXPECT_DOUBLE_EQ(r.elastic_energy, 0.5 * 2e4 * 3e-6 * 3e-6);
+  EXPECT_EQ(r.dissipated, 0);
+}
+
+TEST(ContactLaw, DashpotNeverPulls) {
+  const ContactLaw law = contact_law(1e12, 1e12, 1e-8, 1e-6, 0.5, 0.5);
+  const Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  // Closing: the dashpot adds to the spring.
+  NodeContactForce r = node_contact_force(law, n, 1e-6, -1.0 * n, Eigen::Vector3d::Zero(), 1e-8);
+  EXPECT_GT(r.normal_force, law.normal_stiffness * 1e-6);
+  // Opening fast: spring minus dashpot would be negative; the force is clamped at zero.
+  const double fast = 10 * law.normal_stiffness * 1e-6 / law.normal_damping;
+  r = node_contact_force(law, n, 1e-6, fast * n, Eigen::Vector3d::Zero(), 1e-8);
+  EXPECT_EQ(r.normal_force, 0);
+  EXPECT_EQ(r.force.norm(), 0);
+  EXPECT_GT(r.dissipated, 0);
+  // Opening slowly: less than the spring, still pushing.
+  r = node_contact_force(law, n, 1e-6, 0.05 * fast * n, Eigen::Vector3d::Zero(), 1e-8);
+  EXPECT_GT(r.normal_force, 0);
+  EXPECT_LT(r.normal_force, law.normal_stiffness * 1e-6);
+}
+
+TEST(ContactLaw, TangentialSpringGrowsThenSlipsAtCoulombLimit) {
+  const ContactLaw law = contact_law(1e12, 0.5e12, 1e-8, 1e-6, 0.0, 0.3);
+  const Eigen::Vector3d n = Eigen::Vector3d::UnitZ(), slide(2.0, 0, 0);
+  const double overlap = 1e-6, dt = 1e-8;
+  const double cap = 0.3 * law.normal_stiffness * overlap;
+  Eigen::Vector3d spring = Eigen::Vector3d::Zero();
+  int slipped_at = -1;
+  for (int step = 1; step <= 40; ++step) {
+    const NodeContactForce r = node_contact_force(law, n, overlap, slide, spring, dt);
+    const double elastic = law.tangential_stiffness * slide.x() * dt * step;
+    if (elastic <= cap) {
+      EXPECT_FALSE(r.slipping) << step;
+      EXPECT_NEAR(r.force.x(), -elastic, 1e-12 * cap) << step;
+      EXPECT_EQ(r.dissipated, 0);
+    } else {
+      if (slipped_at < 0) slipped_at = step;
+      EXPECT_TRUE(r.slipping) << step;
+      EXPECT_NEAR(r.force.x(), -cap, 1e-12 * cap) << step;
+      EXPECT_GT(r.dissipated, 0);
+    }
+    EXPECT_NEAR(r.force.z(), law.normal_stiffness * overlap, 1e-12 * cap);
+    spring = r.spring;
+  }
+  EXPECT_GT(slipped_at, 1);
+  EXPECT_LT(slipped_at, 40);
+}
+
+TEST(ContactLaw, SpringIsRotatedIntoTheNewTangentPlane) {
+  const ContactLaw law = contact_law(1e12, 1e12, 1e-8, 1e-6, 0.0, 1.0);
+  const Eigen::Vector3d tilted = Eigen::Vector3d(0.6, 0, 0.8);
+  const NodeContactForce r =
+      node_contact_force(law, tilted, 1e-6, Eigen::Vector3d::Zero(), Eigen::Vector3d(1e-3, 0, 0), 1e-8);
+  EXPECT_NEAR(r.spring.dot(tilted), 0, 1e-18);
+  EXPECT_NEAR(r.spring.norm(), 1e-3, 1e-18);
+}
+
+TEST(BroadPhase, FindsExactlyTheOverlappingPairs) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(0, 10), size(0.1, 1.5);
+  std::vector<Aabb> boxes;
+  for (int i = 0; i < 300; ++i) {
+    Aabb b;
+    const Eigen::Vector3d lo(pos(rng), pos(rng), pos(rng));
+    b.grow(lo);
+    b.grow(lo + Eigen::Vector3d(size(rng), size(rng), size(rng)));
+    boxes.push_back(b);
+  }
+  boxes.push_back({});  // empty: in no pair
+  Aabb far;             // far away and large: coarsens nothing it should not
+  far.grow(Eigen::Vector3d(1e4, 1e4, 1e4));
+  far.grow(Eigen::Vector3d(1e4 + 3, 1e4 + 3, 1e4 + 3));
+  boxes.push_back(far);
+  Aabb touching = boxes[0];  // touching along a face counts
+  touching.lo.x() = boxes[0].hi.x();
+  touching.hi.x() = boxes[0].hi.x() + 0.5;
+  boxes.push_back(touching);
+  std::vector<BoxPair> expected;
+  for (std::uint32_t i = 0; i < boxes.size(); ++i)
+    for (std::uint32_t j = i + 1; j < boxes.size(); ++j)
+      if ((boxes[i].lo.array() <= boxes[i].hi.array()).all() && (boxes[j].lo.array() <= boxes[j].hi.array()).all() &&
+          boxes[i].overlaps(boxes[j]))
+        expected.emplace_back(i, j);
+  const std::vector<BoxPair> found = overlapping_box_pairs(boxes);
+  EXPECT_GT(expected.size(), 100u);
+  EXPECT_EQ(found, expected);
+}
+
+TEST(SurfaceTrees, NearestTriangleMatchesBruteForceAfterRefit) {
+  Model m;
+  add_grain(m, box_mesh({1 * kMm, 0.7 * kMm, 0.5 * kMm}, 0.1 * kMm), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
+  SurfaceTrees trees(m);
+  // Refit to a rotated and sheared configuration: the tree must follow without a rebuild.
+  Eigen::Matrix3d A = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  A(0, 1) += 0.2;
+  std::vector<Eigen::Vector3d> x;
+  for (const auto& p : m.nodes) x.push_back(A * p + Eigen::Vector3d(1e-3, 0, 0));
+  trees.refit(0, x);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.8 * kMm, 0.8 * kMm);
+  int found = 0;
+  for (int i = 0; i < 500; ++i) {
+    const Eigen::Vector3d p = Eigen::Vector3d(1e-3 + u(rng), u(rng), u(rng));
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& t : m.triangles)
+      best = std::min(best, (closest_point_on_triangle(p, x[t[0]], x[t[1]], x[t[2]]).point - p).squaredNorm());
+    SurfaceTrees::Nearest near;
+    const double radius = 0.2 * kMm;
+    const bool hit = trees.nearest(0, p, radius, x, near);
+    EXPECT_EQ(hit, best < radius * radius) << i;
+    if (hit) {
+      ++found;
+      EXPECT_EQ(near.distance2, best) << i;
+      EXPECT_LT(near.tested, m.triangles.size() / 4) << i;
+    }
+  }
+  EXPECT_GT(found, 100);
+}
+
+TEST(ContactModel, PressedFaceCarriesPenaltyTimesAreaTimesOverlap) {
+  const double overlap = 1e-6;
+  const Model m = pressed_cubes(overlap);
+  ContactModel contact(m, unit_masses(m), {});
+  auto f = zeros(m.nodes.size());
+  const ContactStepStats stats = contact.add_forces(m.nodes, zeros(m.nodes.size()), {}, 1e-9, f);
+  const double expected = m.materials[0].normal_penalty * (1 * kMm * 1 * kMm) * overlap;
+
+  Eigen::Vector3d on_cube = Eigen::Vector3d::Zero(), total = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+  for (std::uint32_t n = 0; n < m.nodes.size(); ++n) {
+    total += f[n];
+    torque += m.nodes[n].cross(f[n]);
+    if (n >= m.grains[1].node_begin) on_cube += f[n];
+  }
+  EXPECT_NEAR(on_cube.z(), expected, 1e-12 * expected);
+  EXPECT_NEAR(on_cube.head<2>().norm(), 0, 1e-12 * expected);
+  EXPECT_NEAR(total.norm(), 0, 1e-12 * expected);
+  EXPECT_NEAR(torque.norm(), 0, 1e-12 * expected * kMm);
+  // 5 x 5 cube bottom nodes and 4 x 4 slab top nodes.
+  EXPECT_EQ(stats.node_contacts, 25u + 16u);
+  EXPECT_NEAR(stats.max_overlap, overlap, 1e-15);
+  EXPECT_NEAR(stats.elastic_energy, 0.5 * expected * overlap, 1e-12 * expected * overlap);
+
+  const std::vector<ContactRecord> records = contact.contacts();
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].a, 0u);
+  EXPECT_EQ(records[0].b, 1u);
+  EXPECT_NEAR((records[0].normal - Eigen::Vector3d::UnitZ()).norm(), 0, 1e-12);
+  EXPECT_NEAR((records[0].force - on_cube).norm(), 0, 1e-12 * expected);
+  EXPECT_NEAR(records[0].point.z(), 0.5 * kMm - 0.5 * overlap, 1e-12);
+}
+
+TEST(ContactModel, NoForceAcrossAGap) {
+  const Model m = pressed_cubes(-1e-7);
+  ContactModel contact(m, unit_masses(m), {});
+  auto f = zeros(m.nodes.size());
+  const ContactStepStats stats = contact.add_forces(m.nodes, zeros(m.nodes.size()), {}, 1e-9, f);
+  EXPECT_EQ(stats.pairs, 1u);  // the skin keeps the pair a candidate
+  EXPECT_EQ(stats.node_contacts, 0u);
+  EXPECT_TRUE(contact.contacts().empty());
+  for (const auto& v : f) EXPECT_EQ(v.norm(), 0);
+}
+
+TEST(ContactModel, BroadPhaseRebuildsOnlyAfterHalfTheSkin) {
+  const Model m = pressed_cubes(1e-6);
+  ContactModel contact(m, unit_masses(m), {});
+  auto x = m.nodes;
+  auto f = zeros(m.nodes.size());
+  EXPECT_TRUE(contact.add_forces(x, zeros(x.size()), {}, 1e-9, f).rebuilt);
+  for (std::uint32_t n = m.grains[1].node_begin; n < m.grains[1].node_end; ++n) x[n].x() += 0.4 * contact.skin();
+  EXPECT_FALSE(contact.add_forces(x, zeros(x.size()), {}, 1e-9, f).rebuilt);
+  for (std::uint32_t n = m.grains[1].node_begin; n < m.grains[1].node_end; ++n) x[n].x() += 0.2 * contact.skin();
+  EXPECT_TRUE(contact.add_forces(x, zeros(x.size()), {}, 1e-9, f).rebuilt);
+  EXPECT_EQ(contact.rebuild_count(), 2u);
+}
+
+/// The 1 mm cube alone, resting on a platen `overlap` deep and sliding along x.
+struct SlidingCube {
+  Model model;
+  PlatenState platen;
+  std::vector<Eigen::Vector3d> x, v;
+  double dt = 1e-9, overlap = 1e-6;
+  SlidingCube() {
+    model.materials[0].damping_ratio = 0;
+    add_grain(model, box_mesh({1 * kMm, 1 * kMm, 1 * kMm}, 0.25 * kMm), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
+    platen.point = Eigen::Vector3d(0, 0, -0.5 * kMm + overlap);
+    platen.friction = 0.4;
+    x = model.nodes;
+    v.assign(x.size(), Eigen::Vector3d(100.0, 0, 0));  // 0.1 um per step
+  }
+  Eigen::Vector3d step(ContactModel& contact) {
+    auto f = zeros(x.size());
+    contact.add_forces(x, v, {&platen, 1}, dt, f);
+    for (std::size_t n = 0; n < x.size(); ++n) x[n] += v[n] * dt;
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    for (const auto& fn : f) total += fn;
+    return total;
+  }
+};
+
+TEST(ContactModel, PlatenFrictionGrowsWithSlipThenHoldsMuTimesNormalForce) {
+  SlidingCube s;
+  ContactModel contact(s.model, unit_masses(s.model), {});
+  const Material& mat = s.model.materials[0];
+  const double area = 1 * kMm * 1 * kMm;
+  const double normal = mat.normal_penalty * area * s.overlap;
+  const double cap = s.platen.friction * normal;
+  for (int step = 1; step <= 12; ++step) {
+    const Eigen::Vector3d total = s.step(contact);
+    EXPECT_NEAR(total.z(), normal, 1e-12 * normal);
+    const double elastic = mat.tangential_penalty * area * 100.0 * s.dt * step;
+    EXPECT_NEAR(total.x(), -std::min(elastic, cap), 1e-9 * cap) << step;
+  }
+  const std::vector<ContactRecord> records = contact.contacts();
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].b, 1u);  // grains.size() + platen 0
+  EXPECT_NEAR((records[0].normal + Eigen::Vector3d::UnitZ()).norm(), 0, 1e-12);
+}
+
+TEST(ContactModel, RestartFromSavedHistoryIsExact) {
+  const auto path = std::filesystem::temp_directory_path() / "fdem_contact_history_test.h5";
+  SlidingCube run, restarted;
+  ContactModel contact(run.model, unit_masses(run.model), {});
+  for (int step = 0; step < 3; ++step) run.step(contact);
+  {
+    io::H5File file = io::H5File::create(path);
+    contact.save(file, "/contact");
+  }
+  ContactModel fresh(restarted.model, unit_masses(restarted.model), {});
+  fresh.load(io::H5File::open(path), "/contact");
+  restarted.x = run.x;
+  for (int step = 0; step < 5; ++step) {
+    auto fa = zeros(run.x.size()), fb = zeros(run.x.size());
+    contact.add_forces(run.x, run.v, {&run.platen, 1}, run.dt, fa);
+    fresh.add_forces(restarted.x, restarted.v, {&restarted.platen, 1}, restarted.dt, fb);
+    for (std::size_t n = 0; n < fa.size(); ++n) ASSERT_EQ(fa[n], fb[n]) << "step " << step << " node " << n;
+    for (std::size_t n = 0; n < run.x.size(); ++n) run.x[n] = restarted.x[n] = run.x[n] + run.v[n] * run.dt;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(ContactModel, LoadRefusesAHistoryOfAnotherModel) {
+  const auto path = std::filesystem::temp_directory_path() / "fdem_contact_bad_history_test.h5";
+  {
+    io::H5File file = io::H5File::create(path);
+    file.set_attr("/", "entries", 1LL);
+    file.write<std::uint32_t>("/pair", std::vector<std::uint32_t>{0, 7}.data(), {1, 2});
+    file.write<std::uint32_t>("/node", std::vector<std::uint32_t>{99999});
+    file.write<double>("/spring", std::vector<double>{0, 0, 0}.data(), {1, 3});
+  }
+  SlidingCube s;
+  ContactModel contact(s.model, unit_masses(s.model), {});
+  try {
+    contact.load(io::H5File::open(path), "/");
+    FAIL() << "a foreign history was accepted";
+  } catch (const DataError& e) {
+    EXPECT_NE(e.message().find(path.filename().string()), std::string::npos) << e.message();
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(ContactModel, SameForcesForAnyThreadCount) {
+  // 2 x 2 x 2 jittered, overlapping 0.5 mm cubes on a platen, spinning and sinking: many
+  // candidate pairs, every kind of closest feature and the friction history.
+  Model m;
+  m.materials[0].damping_ratio = 0.05;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.01 * kMm, 0.01 * kMm);
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d at(0.49 * kMm * (i & 1) + jitter(rng), 0.49 * kMm * ((i >> 1) & 1) + jitter(rng),
+                             0.49 * kMm * (i >> 2) + jitter(rng));
+    add_grain(m, box_mesh({0.5 * kMm, 0.5 * kMm, 0.5 * kMm}, 0.25 * kMm), at, GrainKind::tet4, 0, i + 1);
+  }
+  PlatenState floor;
+  floor.point = Eigen::Vector3d(0, 0, -0.24 * kMm);
+  floor.friction = 0.3;
+  std::vector<Eigen::Vector3d> v = zeros(m.nodes.size());
+  for (std::uint32_t g = 0; g < m.grains.size(); ++g)
+    for (std::uint32_t n = m.grains[g].node_begin; n < m.grains[g].node_end; ++n)
+      v[n] = Eigen::Vector3d(0, 0, 30.0 * (g % 3)).cross(m.nodes[n]) + Eigen::Vector3d(0.1 * g, 0, -0.2);
+  std::vector<std::vector<Eigen::Vector3d>> forces;
+  for (int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    ContactModel contact(m, unit_masses(m), {});
+    auto y = m.nodes;
+    std::vector<Eigen::Vector3d> f;
+    for (int step = 0; step < 4; ++step) {
+      f = zeros(m.nodes.size());
+      const ContactStepStats stats = contact.add_forces(y, v, {&floor, 1}, 1e-8, f);
+      EXPECT_GE(stats.pairs, 12u);
+      for (std::size_t n = 0; n < y.size(); ++n) y[n] += v[n] * 1e-8;
+    }
+    forces.push_back(f);
+  }
+  omp_set_num_threads(omp_get_num_procs());
+  EXPECT_EQ(forces[0], forces[1]);
+  EXPECT_EQ(forces[0], forces[2]);
+  double sum = 0;
+  for (const auto& fn : forces[0]) sum += fn.norm();
+  EXPECT_GT(sum, 0);
+}
+
+TEST(ContactModel, StableTimeStepIsHalfTheNodeOscillatorLimit) {
+  SlidingCube s;
+  s.model.materials[0].damping_ratio = 0;
+  std::vector<double> mass = unit_masses(s.model);
+  ContactModel contact(s.model, mass, {});
+  // The largest surface node area on a Kuhn-split 0.25 mm face is a cube corner: 1/3 of its
+  // triangles' areas on three faces. Compare with the smallest limit over all nodes brute force.
+  double largest = 0;
+  for (std::uint32_t n = 0; n < s.model.nodes.size(); ++n) {
+    double area = 0;
+    for (const auto& t : s.model.triangles)
+      if (t[0] == n || t[1] == n || t[2] == n)
+        area += 0.5 * (s.model.nodes[t[1]] - s.model.nodes[t[0]]).cross(s.model.nodes[t[2]] - s.model.nodes[t[0]]).norm() / 3;
+    largest = std::max(largest, area);
+  }
+  const double expected = 0.5 * 2 * std::sqrt(1e-6 / (s.model.materials[0].normal_penalty * largest));
+  EXPECT_NEAR(contact.stable_time_step(), expected, 1e-12 * expected);
+}
+
+TEST(ContactModel, RefusesMassesThatDoNotMatchTheNodes) {
+  SlidingCube s;
+  EXPECT_THROW(ContactModel(s.model, std::vector<double>(3, 1.0), {}), DataError);
+  std::vector<double> mass = unit_masses(s.model);
+  mass[s.model.triangles[0][0]] = 0;
+  EXPECT_THROW(ContactModel(s.model, mass, {}), DataError);
+}
+
+}  // namespace
