@@ -291,6 +291,21 @@ TEST(ContactModel, PlatenFrictionGrowsWithSlipThenHoldsMuTimesNormalForce) {
   EXPECT_NEAR((records[0].normal + Eigen::Vector3d::UnitZ()).norm(), 0, 1e-12);
 }
 
+TEST(ContactModel, HistoryIsDroppedWhenTheContactOpens) {
+  SlidingCube s;
+  ContactModel contact(s.model, unit_masses(s.model), {});
+  const double area = 1 * kMm * 1 * kMm;
+  const double one_step = s.model.materials[0].tangential_penalty * area * 100.0 * s.dt;
+  for (int step = 0; step < 3; ++step) s.step(contact);
+  EXPECT_NEAR(s.step(contact).x(), -4 * one_step, 1e-9 * one_step);
+  // Lift the cube clear for one step: no contact, so no spring survives.
+  for (auto& p : s.x) p.z() += 2 * s.overlap;
+  EXPECT_EQ(s.step(contact).norm(), 0);
+  EXPECT_TRUE(contact.contacts().empty());
+  for (auto& p : s.x) p.z() -= 2 * s.overlap;
+  EXPECT_NEAR(s.step(contact).x(), -one_step, 1e-9 * one_step);
+}
+
 TEST(ContactModel, RestartFromSavedHistoryIsExact) {
   const auto path = std::filesystem::temp_directory_path() / "fdem_contact_history_test.h5";
   SlidingCube run, restarted;
