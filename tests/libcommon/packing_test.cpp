@@ -7,12 +7,15 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/shape/radial_table.hpp"
+#include "graintwin/shape/sand_shape.hpp"
+#include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/synth/packing.hpp"
 
 using namespace graintwin;
@@ -149,6 +152,39 @@ TEST(PairContact, TwoSpheresGiveTheExactOverlapNormalAndPoint) {
     ASSERT_TRUE(back.has_value());
     EXPECT_NEAR(back->overlap, overlap, 1e-9);
     EXPECT_LT(angle_between(back->normal, -n), 0.01 * kDeg);
+  }
+}
+
+// The ground-truth contacts of rough sand grains are symmetric: seen from either grain, the same
+// depth and point and opposite unit normals, for pairs overlapping or a few um apart.
+TEST(PairContact, SandGrainContactsAreSymmetricWithUnitNormals) {
+  std::mt19937_64 rng(8);
+  const int degree = 15;
+  const RadialTable a = graintwin::shape::radial_table_from_sh(
+      0.25e-3 * graintwin::shape::random_sand_coeffs({}, rng), degree, 96);
+  const RadialTable b = graintwin::shape::radial_table_from_sh(
+      0.2e-3 * graintwin::shape::random_sand_coeffs({}, rng), degree, 96);
+  for (int trial = 0; trial < 12; ++trial) {
+    PackedGrain ga, gb;
+    ga.orientation = random_quaternion(rng);
+    gb.orientation = random_quaternion(rng);
+    const Eigen::Vector3d dir = random_quaternion(rng) * Eigen::Vector3d::UnitX();
+    // Bring b in along dir until the pair is within 2 um, then on to an overlap on odd trials.
+    const double wanted = trial % 2 ? 2e-6 : -2e-6;
+    std::optional<synth::PairContact> ab;
+    for (double dist = a.max_radius() + b.max_radius(); dist > 0.0; dist -= 0.5e-6) {
+      gb.position = ga.position + dist * dir;
+      ab = synth::pair_contact(a, ga, b, gb, 3e-6);
+      if (ab && ab->overlap >= wanted) break;
+    }
+    ASSERT_TRUE(ab.has_value());
+    const auto ba = synth::pair_contact(b, gb, a, ga, 3e-6);
+    ASSERT_TRUE(ba.has_value());
+    EXPECT_NEAR(ab->normal.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(ba->normal.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(ab->overlap, ba->overlap, 0.02e-6) << "trial " << trial;
+    EXPECT_LT(angle_between(ab->normal, -ba->normal), 0.5 * kDeg) << "trial " << trial;
+    EXPECT_LT((ab->point - ba->point).norm(), 0.2e-6) << "trial " << trial;
   }
 }
 

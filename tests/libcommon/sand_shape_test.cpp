@@ -81,6 +81,8 @@ TEST(SandShape, Degree20) {
 TEST(SandShape, InvariantsFollowTheSpectrum) {
   gs::SandShapeParams params;
   params.d2_spread = 0.0;
+  params.exponent_spread = 0.0;
+  params.degree_jitter = 0.0;
   std::mt19937_64 rng(3);
   const Eigen::VectorXd c = gs::random_sand_coeffs(params, rng);
   const Eigen::VectorXd inv = gs::sh_invariants(c, params.degree);
@@ -95,6 +97,31 @@ TEST(SandShape, InvariantsFollowTheSpectrum) {
   EXPECT_NEAR(d12, expected12, 0.1 * expected12);
 }
 
+// Grains drawn from one parameter set differ in the shape of their spectrum, not only in Dhat_2:
+// the spread over 40 grains of log(Dhat_n / Dhat_2) is near 0 without the per-grain exponents and
+// jitter (one drawn value sets every degree) and clearly positive with the defaults.
+TEST(SandShape, SpectraVaryFromGrainToGrain) {
+  const auto spread_of_spectrum_shape = [](const gs::SandShapeParams& params) {
+    std::mt19937_64 rng(99);
+    const int count = 40;
+    Eigen::MatrixXd shape(count, params.degree - 2);  // log(Dhat_n / Dhat_2), n = 3..degree
+    for (int i = 0; i < count; ++i) {
+      const Eigen::VectorXd inv = gs::sh_invariants(gs::random_sand_coeffs(params, rng), params.degree);
+      for (int n = 3; n <= params.degree; ++n) shape(i, n - 3) = std::log(inv[n] / inv[2]);
+    }
+    const Eigen::RowVectorXd mean = shape.colwise().mean();
+    return std::sqrt((shape.rowwise() - mean).squaredNorm() / (count * shape.cols()));
+  };
+  gs::SandShapeParams fixed;
+  fixed.exponent_spread = 0.0;
+  fixed.degree_jitter = 0.0;
+  const double without = spread_of_spectrum_shape(fixed);
+  const double with = spread_of_spectrum_shape(gs::SandShapeParams{});
+  std::printf("spread of log(Dhat_n / Dhat_2) over 40 grains: %.3f fixed law, %.3f default\n", without, with);
+  EXPECT_LT(without, 0.06);
+  EXPECT_GT(with, 0.15);
+}
+
 TEST(SandShape, RejectsBadParameters) {
   std::mt19937_64 rng(1);
   gs::SandShapeParams p;
@@ -105,6 +132,12 @@ TEST(SandShape, RejectsBadParameters) {
   EXPECT_THROW(gs::random_sand_coeffs(p, rng), graintwin::UsageError);
   p = {};
   p.roughness_from_degree = 17;
+  EXPECT_THROW(gs::random_sand_coeffs(p, rng), graintwin::UsageError);
+  p = {};
+  p.exponent_spread = 1.0;
+  EXPECT_THROW(gs::random_sand_coeffs(p, rng), graintwin::UsageError);
+  p = {};
+  p.degree_jitter = -0.1;
   EXPECT_THROW(gs::random_sand_coeffs(p, rng), graintwin::UsageError);
   EXPECT_THROW(gs::sphere_coeffs(-1.0), graintwin::UsageError);
   EXPECT_THROW(gs::ellipsoid_table(1.0, 0.0, 1.0), graintwin::UsageError);

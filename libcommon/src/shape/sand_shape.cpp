@@ -62,6 +62,12 @@ void validate(const SandShapeParams& p) {
     throw UsageError("SandShapeParams.d2_spread must be in [0, 1) (got " +
                      std::to_string(p.d2_spread) + ")");
   }
+  if (!(p.exponent_spread >= 0.0 && p.exponent_spread < 1.0) ||
+      !(p.degree_jitter >= 0.0 && std::isfinite(p.degree_jitter))) {
+    throw UsageError("SandShapeParams.exponent_spread must be in [0, 1) and degree_jitter finite "
+                     "and >= 0 (got " + std::to_string(p.exponent_spread) + ", " +
+                     std::to_string(p.degree_jitter) + ")");
+  }
   if (!std::isfinite(p.roundness_exponent) || !std::isfinite(p.roughness_exponent)) {
     throw UsageError("SandShapeParams exponents must be finite numbers");
   }
@@ -72,16 +78,21 @@ void validate(const SandShapeParams& p) {
   }
 }
 
-// Dhat_n = D_n / D_0 for n = 0..degree (SandShapeParams doc). The power laws are anchored at the
-// drawn Dhat_2 (as in Wei et al.), so a grain's irregularity at all scales varies together.
-Eigen::VectorXd invariant_ratios(const SandShapeParams& p, double dhat2) {
+// One grain's spectrum Dhat_n = D_n / D_0, n = 0..degree (SandShapeParams doc): the drawn Dhat_2,
+// the grain's own exponents, and a per-degree factor (1 for n <= 2) of each Dhat_n.
+struct GrainSpectrum {
+  double dhat2 = 0.0, roundness_exponent = 0.0, roughness_exponent = 0.0;
+  Eigen::VectorXd jitter;
+};
+
+Eigen::VectorXd invariant_ratios(const SandShapeParams& p, const GrainSpectrum& g) {
   Eigen::VectorXd d = Eigen::VectorXd::Zero(p.degree + 1);
   d[0] = 1.0;
   const int nr = p.roughness_from_degree;
-  const double at_nr = dhat2 * std::pow(nr / 2.0, -p.roundness_exponent);
+  const double at_nr = g.dhat2 * std::pow(nr / 2.0, -g.roundness_exponent);
   for (int n = 2; n <= p.degree; ++n) {
-    d[n] = n < nr ? dhat2 * std::pow(n / 2.0, -p.roundness_exponent)
-                  : at_nr * std::pow(static_cast<double>(n) / nr, -p.roughness_exponent);
+    d[n] = g.jitter[n] * (n < nr ? g.dhat2 * std::pow(n / 2.0, -g.roundness_exponent)
+                                 : at_nr * std::pow(static_cast<double>(n) / nr, -g.roughness_exponent));
   }
   return d;
 }
@@ -147,8 +158,15 @@ Eigen::VectorXd random_sand_coeffs(const SandShapeParams& params, std::mt19937_6
   std::normal_distribution<double> normal(0.0, 1.0);
   const double d0 = std::sqrt(4.0 * std::numbers::pi);  // c_00 of the unit sphere
   for (int draw = 0; draw < kMaxDraws; ++draw) {
-    const double dhat2 = params.d2 * (1.0 + params.d2_spread * uniform(rng));
-    const Eigen::VectorXd dhat = invariant_ratios(params, dhat2);
+    GrainSpectrum spectrum;
+    spectrum.dhat2 = params.d2 * (1.0 + params.d2_spread * uniform(rng));
+    spectrum.roundness_exponent =
+        params.roundness_exponent * (1.0 + params.exponent_spread * uniform(rng));
+    spectrum.roughness_exponent =
+        params.roughness_exponent * (1.0 + params.exponent_spread * uniform(rng));
+    spectrum.jitter = Eigen::VectorXd::Ones(degree + 1);
+    for (int n = 3; n <= degree; ++n) spectrum.jitter[n] = std::exp(params.degree_jitter * normal(rng));
+    const Eigen::VectorXd dhat = invariant_ratios(params, spectrum);
     Eigen::VectorXd coeffs = Eigen::VectorXd::Zero(sh_count(degree));
     coeffs[0] = d0;
     for (int n = 2; n <= degree; ++n) {

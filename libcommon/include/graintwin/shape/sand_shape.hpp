@@ -17,10 +17,14 @@ namespace graintwin::shape {
 ///   Dhat_n = Dhat_2 (n / 2)^-roundness_exponent                for 3 <= n < roughness_from_degree,
 ///   Dhat_n = Dhat_{n_r} (n / n_r)^-roughness_exponent, n_r = roughness_from_degree, for n >= n_r
 ///   (continuous at n_r; Dhat_{n_r} from the roundness law). Both laws are anchored at the drawn
-///   Dhat_2, as in Wei et al., so a grain's irregularity varies together at all scales; larger
-///   exponents give rounder, smoother grains. The defaults are calibrated to Ottawa sand at degree
-///   15 (see random_sand_coeffs); a higher degree with the same parameters adds roughness, so it
-///   lowers sphericity (degree 20: about 0.87).
+///   Dhat_2, as in Wei et al.; larger exponents give rounder, smoother grains.
+/// Real sand varies from grain to grain at every scale, not only in form, so each grain also draws
+/// its own exponents (uniform in exponent * [1 - exponent_spread, 1 + exponent_spread], the two
+/// independently) and a log-normal factor exp(degree_jitter N(0, 1)) on every Dhat_n, n >= 3.
+/// Without them (both 0) every grain's spectrum is Dhat_2 times one fixed curve, and grains are
+/// told apart by their invariants only through Dhat_2. The defaults are calibrated to Ottawa sand
+/// at degree 15 (see random_sand_coeffs); a higher degree with the same parameters adds roughness,
+/// so it lowers sphericity.
 struct SandShapeParams {
   int degree = 15;                   ///< max SH degree, >= 2 (tested up to 20)
   double d2 = 0.085;                 ///< mean Dhat_2, >= 0
@@ -28,6 +32,8 @@ struct SandShapeParams {
   double roundness_exponent = 1.0;   ///< power-law exponent for degrees 3 .. n_r - 1
   double roughness_exponent = 2.0;   ///< power-law exponent for degrees n_r .. degree
   int roughness_from_degree = 8;     ///< n_r, in [3, degree + 1] (degree + 1: no roughness band)
+  double exponent_spread = 0.2;      ///< per-grain relative half-width of both exponents, [0, 1)
+  double degree_jitter = 0.15;       ///< per-grain, per-degree log-normal sigma of Dhat_n, >= 0
 };
 
 /// A random grain: SH coefficients (sh_count(degree) entries) of a surface whose
@@ -43,7 +49,7 @@ struct SandShapeParams {
 /// r(theta, phi)).
 ///
 /// With the default parameters and degree 15, 200 grains measured (RadialTable n = 64) aspect ratio
-/// 1.34 +- 0.09 and sphericity 0.886 +- 0.037 (mean +- standard deviation; Ottawa sand: about
+/// 1.35 +- 0.08 and sphericity 0.877 +- 0.043 (mean +- standard deviation; Ottawa sand: about
 /// 1.2-1.5 and 0.85-0.92 on average). A grain takes 1-2 ms (one core).
 Eigen::VectorXd random_sand_coeffs(const SandShapeParams& params, std::mt19937_64& rng);
 
