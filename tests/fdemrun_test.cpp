@@ -1,5 +1,6 @@
 // fdemrun: CLI contract; a scene of a spinning elastic box and a falling rigid box against their
-// exact motion; the results file (frames, series, platen schedule); a run split by --stop-step,
+// exact motion; the results file (frames, series, platen schedule); grains from a kind=fdem_model
+// file with a gmsh sphere beside them and VTK frames read back by VTK; a run split by --stop-step,
 // --checkpoint and --restart reproducing the uninterrupted run bit for bit; bad scenes and
 // options failing cleanly.
 #include <gtest/gtest.h>
@@ -7,11 +8,16 @@
 
 #include <cmath>
 #include <fstream>
+#include <numbers>
+#include <regex>
 
+#include "graintwin/fdem/model_file.hpp"
+#include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "support/cli_contract.hpp"
+#include "support/vtk_summary.hpp"
 
 using namespace graintwin;
 using test::run_tool;
@@ -117,6 +123,66 @@ TEST(Fdemrun, SceneRunsToItsExactMotion) {
   for (std::size_t k = 0; k < s.time.size(); ++k) EXPECT_GT(s.kinetic[k], 0);
 }
 
+TEST(Fdemrun, ModelFileAndSphereFallWithVtkFrames) {
+  test::TempDir dir;
+  fdem::Model grains;
+  fdem::add_grain(grains, fdem::box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d::Zero(), fdem::GrainKind::tet4, 0, 5);
+  grains.platens = {fdem::Platen{"bottom", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitZ(), 0}};
+  fdem::write_model_file(dir / "grains.h5", grains, {"test"});
+  const auto scene = write_scene(dir, "scene.toml", R"(
+[run]
+duration = 2e-5
+gravity = [0, 0, -9.81]
+contact = false
+frame_interval = 1e-5
+[model]
+file = "grains.h5"
+[[grains]]
+shape = "sphere"
+radius = 0.5e-3
+position = [3e-3, 0, 0]
+element_size = 0.25e-3
+kind = "tet10"
+velocity = [0, 0, -2]
+)");
+  const auto out = dir / "results.h5", frames = dir / "frames";
+  const auto r = run_tool("fdemrun", {scene.string(), out.string(), "-q", "--vtk", frames.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::H5File f = io::H5File::open(out);
+  EXPECT_EQ(f.read<std::uint32_t>("/grains/label"), (std::vector<std::uint32_t>{5, 6}));  // file first, then primitives
+  const std::size_t count = fdem::results_frame_count(out);
+  ASSERT_GE(count, 3u);
+  // The .pvd lists every frame with the results' times.
+  std::stringstream pvd;
+  pvd << std::ifstream(frames / "frames.pvd").rdbuf();
+  const std::string text = pvd.str();
+  const std::regex entry(R"re(timestep="([^"]+)"[^>]*file="(frame_\d{6}\.vtu)")re");
+  std::vector<std::pair<double, std::string>> listed;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it)
+    listed.emplace_back(std::stod((*it)[1]), (*it)[2]);
+  ASSERT_EQ(listed.size(), count);
+  const fdem::ResultsFrame last = fdem::read_results_frame(out, count - 1);
+  EXPECT_EQ(listed.back().first, last.time);
+  // VTK reads the last frame: every node and element, displacements of free fall, no stress.
+  const auto vtu = test::vtk_summary(frames / listed.back().second);
+  EXPECT_EQ(vtu["point_data"]["displacement"]["tuples"].get<std::uint64_t>(), vtu["points"].get<std::uint64_t>());
+  ASSERT_TRUE(vtu["point_data"].contains("displacement"));
+  ASSERT_TRUE(vtu["point_data"].contains("velocity"));
+  ASSERT_TRUE(vtu["cell_data"].contains("stress"));
+  ASSERT_TRUE(vtu["cell_data"].contains("label"));
+  EXPECT_EQ(vtu["cell_data"]["stress"]["components"].get<int>(), 9);
+  const double t = last.time, fall = 0.5 * 9.81 * t * t;
+  const auto range = vtu["point_data"]["displacement"]["range"];
+  EXPECT_NEAR(range[0].get<double>(), fall, 1e-12);              // the box, dropped from rest
+  EXPECT_NEAR(range[1].get<double>(), 2 * t + fall, 1e-12);      // the sphere, thrown down at 2 m/s
+  EXPECT_LT(vtu["cell_data"]["stress"]["range"][1].get<double>(), 1.0);  // Pa: free fall strains nothing
+  // VTK's cell volumes (quadratic cells split at their mid-edge nodes) add up to the grains' exact
+  // ones: its node order agrees with ours; and the curved sphere is a sphere.
+  const auto volumes = f.read<double>("/grains/volume");
+  EXPECT_NEAR(vtu["volume"].get<double>() / (volumes[0] + volumes[1]), 1.0, 0.01);
+  EXPECT_NEAR(volumes[1] / (4.0 / 3.0 * std::numbers::pi * 0.125e-9), 1.0, 0.01);
+}
+
 TEST(Fdemrun, RestartFromCheckpointReproducesTheRunBitForBit) {
   test::TempDir dir;
   const auto scene = write_scene(dir, "scene.toml", kScene);
@@ -149,7 +215,9 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   const auto typo = write_scene(dir, "typo.toml", replaced(kScene, "element_size = 1e-3", "element_sise = 1e-3"));
   test::expect_clean_failure("fdemrun", dir, {typo.string(), out}, 2, "key 'element_sise' is unknown");
   const auto sphere = write_scene(dir, "sphere.toml", replaced(kScene, "kind = \"rigid\"", "kind = \"rigid\"\nshape = \"sphere\""));
-  test::expect_clean_failure("fdemrun", dir, {sphere.string(), out}, 2, "not available yet");
+  test::expect_clean_failure("fdemrun", dir, {sphere.string(), out}, 2, "size does not apply to a sphere");
+  const auto no_model = write_scene(dir, "no_model.toml", replaced(kScene, "[run]", "[model]\nfile = \"gone.h5\"\n[run]"));
+  test::expect_clean_failure("fdemrun", dir, {no_model.string(), out}, 2, "gone.h5 does not exist");
   const auto fast = write_scene(dir, "fast.toml", replaced(kScene, "contact = false", "contact = false\ntime_step = 1e-6"));
   test::expect_clean_failure("fdemrun", dir, {fast.string(), out}, 2, "above the stable limit");
   const auto syntax = write_scene(dir, "syntax.toml", "[run\nduration = 1");
@@ -163,6 +231,9 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   const auto other = write_scene(dir, "other.toml", replaced(kScene, "angular_velocity = [0, 0, 2000]", "angular_velocity = [0, 0, 1000]"));
   test::expect_clean_failure("fdemrun", dir, {other.string(), (dir / "o.h5").string(), "--restart", ckpt.string()}, 2,
                              "written for another scene");
-  // An existing output is refused without --force.
+  // An existing output (results or VTK folder) is refused without --force.
   test::expect_clean_failure("fdemrun", dir, {good.string(), out}, 2, "out.h5");
+  std::filesystem::create_directory(dir / "old_frames");
+  test::expect_clean_failure("fdemrun", dir, {good.string(), (dir / "new.h5").string(), "--vtk", (dir / "old_frames").string()},
+                             2, "old_frames");
 }

@@ -11,6 +11,8 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/fdem/frames_vtk.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
@@ -41,9 +43,11 @@ int main(int argc, char** argv) {
       "one; a larger one is refused with the numbers, and a run whose state turns NaN or whose energy runs away stops "
       "with the step and the likely cause. Writes kind=fdem_results: the energy and platen time series and frames of "
       "grain centroids, rotations, velocities, volume-averaged stresses (compression positive) and contacts. "
-      "Checkpoints (--checkpoint) let --restart continue a run exactly. Not yet: sphere and ellipsoid grains and "
-      "grains from a kind=fdem_model file (they need the gmsh mesh module), VTK frames, the membrane; contact (penalty, "
-      "dashpot, friction, platens) comes from the fdem contact module and is switched off with [run] contact = false. "
+      "Checkpoints (--checkpoint) let --restart continue a run exactly; --vtk writes every frame as a .vtu of the "
+      "deformed meshes with a .pvd index for ParaView. Grains come from a kind=fdem_model file (shapes2mesh) and/or "
+      "primitives: boxes (structured mesh), spheres and ellipsoids (gmsh). Contact (penalty, dashpot, friction, "
+      "platens) comes from the fdem contact module and is switched off with [run] contact = false; its verification "
+      "against impact solutions is not finished (docs/fdemrun.md). Not yet: the membrane, servo control. "
       "The scene format is in docs/fdemrun.md.");
   fs::path scene_path, output, checkpoint, restart;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
@@ -53,13 +57,17 @@ int main(int argc, char** argv) {
                  "Write the solver state here (.h5) every [run] checkpoint_interval and at the end, for --restart");
   app.add_option("--restart", restart, "Continue from a checkpoint of the same scene (the results then start there)")
       ->check(CLI::ExistingFile);
+  fs::path vtk_folder;
+  app.add_option("--vtk", vtk_folder,
+                 "Also write every frame as FOLDER/frame_<k>.vtu (deformed meshes: displacement, velocity; grain label, "
+                 "element stress) with FOLDER/frames.pvd for ParaView");
   std::uint64_t stop_step = 0;
   app.add_option("--stop-step", stop_step,
                  "Stop once the run reaches this step (0: run to the end), e.g. to split a long run into jobs with "
                  "--checkpoint and --restart; the results hold the steps taken")
       ->check(CLI::NonNegativeNumber);
   tool.set_examples({"fdemrun pipelines/scenes/fdem_box_drop.toml runs/box_drop.h5",
-                     "fdemrun scene.toml results.h5 --checkpoint results.ckpt.h5",
+                     "fdemrun scene.toml results.h5 --checkpoint results.ckpt.h5 --vtk results_frames",
                      "fdemrun scene.toml results.h5 --restart results.ckpt.h5 --force"});
 
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
@@ -68,10 +76,14 @@ int main(int argc, char** argv) {
       throw UsageError("--checkpoint " + checkpoint.string() + " must end in .h5");
     if (!checkpoint.empty() && !restart.empty() && fs::weakly_canonical(checkpoint) == fs::weakly_canonical(restart))
       throw UsageError("--checkpoint and --restart name the same file; write the new checkpoint elsewhere");
+    std::optional<io::AtomicOutput> vtk_out;
+    if (!vtk_folder.empty()) vtk_out.emplace(vtk_folder, ctx.force());
     const Scene scene = read_scene(scene_path);
     std::stringstream text;
     text << std::ifstream(scene_path).rdbuf();
-    const Model model = build_model(scene);
+    std::stringstream model_bytes;  // a restart needs the same model file too
+    if (scene.model) model_bytes << std::ifstream(scene.model->path, std::ios::binary).rdbuf();
+    const Model model = build_model(scene, append_ellipsoid_grain);
     SolverOptions options;
     options.gravity = scene.gravity;
     options.damping = scene.damping;
@@ -99,18 +111,25 @@ int main(int argc, char** argv) {
                  model.grains.size(), model.nodes.size(), model.element_count(), model.platens.size(), dt,
                  limits.element_stable, limits.contact_stable, total, scene.stages.size());
 
-    const std::string digest = digest_of(text.str() + fmt::format("|dt={:a}", dt));
+    const std::string digest = digest_of(text.str() + model_bytes.str() + fmt::format("|dt={:a}", dt));
     io::AtomicOutput out(output, ctx.force());
     if (!restart.empty()) {
       read_checkpoint(restart, solver, digest);
       spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.state().step, solver.state().time);
     } else {
       for (std::size_t g = 0; g < scene.grains.size(); ++g)
-        solver.set_grain_velocity(g, scene.grains[g].velocity, scene.grains[g].angular_velocity);
+        solver.set_grain_velocity(scene.primitive_grain(g), scene.grains[g].velocity, scene.grains[g].angular_velocity);
     }
     nlohmann::json p = {{"scene", scene_path.string()}, {"scene_text", text.str()}, {"time_step", dt},
-                        {"steps", total},           {"threads", ctx.threads()},    {"restart", restart.string()}};
+                        {"steps", total},           {"threads", ctx.threads()},    {"restart", restart.string()},
+                        {"model_file", scene.model ? scene.model->path.string() : ""}};
     ResultsWriter writer(out.temp_path(), solver, scene, p.dump());
+    std::optional<VtkFrameWriter> frames;
+    if (vtk_out) frames.emplace(vtk_out->temp_path());
+    const auto add_frame = [&] {
+      writer.add_frame(solver);
+      if (frames) frames->add(solver);
+    };
     const auto save_checkpoint = [&] {
       if (checkpoint.empty()) return;
       io::AtomicOutput ckpt(checkpoint, true);
@@ -127,7 +146,7 @@ int main(int argc, char** argv) {
       solver.set_damping(s.damping.value_or(scene.damping));
       for (std::size_t k = 0; k < scene.platens.size(); ++k)
         solver.set_platen_velocity(k, s.platen_velocity[k].value_or(scene.platens[k].velocity));
-      if (n % frame_every == 0) writer.add_frame(solver);
+      if (n % frame_every == 0) add_frame();
       StepReport report;
       try {
         report = solver.step(dt);
@@ -142,8 +161,9 @@ int main(int argc, char** argv) {
       cli::throw_if_interrupted();
     }
     progress->done();
-    writer.add_frame(solver);
+    add_frame();
     writer.finish(ctx.history());
+    if (frames) frames->finish(), vtk_out->commit();
     out.commit();
     spdlog::info("{} frames, final time {:.6g} s", writer.frames(), solver.state().time);
   });

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/primitives.hpp"
 
 namespace graintwin::fdem {
@@ -118,8 +119,40 @@ Scene read_scene(const std::filesystem::path& path) {
     throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
                      "; fix the TOML syntax");
   }
-  const Table top(root, file, {"run", "materials", "grains", "platens", "stages"});
+  const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages"});
   Scene s;
+  if (const toml::table* model = root["model"].as_table()) {
+    const Table t(*model, file + ": [model]", {"file", "kind"});
+    if (!t.has("file")) t.fail("file is missing: the kind=fdem_model .h5 of shapes2mesh");
+    ModelSource source;
+    source.path = path.parent_path() / t.text("file", "");
+    if (!std::filesystem::exists(source.path))
+      t.fail("model file " + source.path.string() + " does not exist (paths are relative to the scene's folder)");
+    source.model = std::make_shared<const Model>(read_model_file(source.path));
+    if (t.has("kind")) {
+      if (parse_kind(t) != GrainKind::rigid)
+        t.fail("kind may only be \"rigid\" (a mesh keeps its own element order); leave it out to keep the file's kinds");
+      source.kind = GrainKind::rigid;
+    }
+    s.sample = source.model->sample;
+    s.model = std::move(source);
+  } else if (top.has("model")) {
+    top.fail("model must be a [model] table");
+  }
+  if (const toml::table* sample = root["sample"].as_table()) {
+    const Table t(*sample, file + ": [sample]", {"axis_xy", "radius", "z_min", "z_max", "membrane_thickness"});
+    SampleCylinder c = s.sample.value_or(SampleCylinder{});
+    const Eigen::Vector3d axis = t.vector("axis_xy", Eigen::Vector3d(c.axis_xy.x(), c.axis_xy.y(), 0));
+    c.axis_xy = axis.head<2>();
+    c.radius = t.positive("radius", c.radius > 0 ? c.radius : -1);
+    c.z_min = t.number("z_min", c.z_min);
+    c.z_max = t.number("z_max", c.z_max);
+    if (!(c.z_max > c.z_min)) t.fail("z_max must lie above z_min");
+    c.membrane_thickness = t.non_negative("membrane_thickness", c.membrane_thickness);
+    s.sample = c;
+  } else if (top.has("sample")) {
+    top.fail("sample must be a [sample] table");
+  }
   double duration = 0;
   if (const toml::table* run = root["run"].as_table()) {
     const Table r(*run, file + ": [run]",
@@ -140,6 +173,9 @@ Scene read_scene(const std::filesystem::path& path) {
   }
 
   std::vector<std::string> material_names;
+  if (s.model)
+    for (const Material& mat : s.model->model->materials) s.materials.push_back(mat), material_names.push_back(mat.name);
+  const std::size_t model_materials = s.materials.size();
   for (const toml::table* m : tables(root, "materials", file)) {
     const Table t(*m, file + ": [[materials]] " + std::to_string(s.materials.size() + 1),
                   {"name", "density", "young", "poisson", "friction", "normal_penalty", "tangential_penalty", "damping_ratio"});
@@ -154,26 +190,52 @@ Scene read_scene(const std::filesystem::path& path) {
     mat.tangential_penalty = t.positive("tangential_penalty", mat.tangential_penalty);
     mat.damping_ratio = t.non_negative("damping_ratio", mat.damping_ratio);
     if (mat.damping_ratio >= 1) t.fail("damping_ratio must be below 1 (a fraction of critical damping)");
-    if (std::find(material_names.begin(), material_names.end(), mat.name) != material_names.end())
+    const auto same = std::find(material_names.begin(), material_names.end(), mat.name);
+    const auto index = static_cast<std::size_t>(same - material_names.begin());
+    if (same != material_names.end() && index >= model_materials)
       t.fail("material name '" + mat.name + "' is used twice; give each material its own name");
-    material_names.push_back(mat.name);
-    s.materials.push_back(mat);
+    if (same != material_names.end()) {
+      s.materials[index] = mat;  // the scene's values replace the model file's material of that name
+    } else {
+      material_names.push_back(mat.name);
+      s.materials.push_back(mat);
+    }
   }
   if (s.materials.empty()) s.materials.push_back(Material{}), material_names.push_back(Material{}.name);
 
+  std::uint32_t first_label = 1;  // primitives are numbered after the model file's labels
+  if (s.model)
+    for (const Grain& g : s.model->model->grains) first_label = std::max(first_label, g.label + 1);
   for (const toml::table* g : tables(root, "grains", file)) {
     const Table t(*g, file + ": [[grains]] " + std::to_string(s.grains.size() + 1),
-                  {"shape", "size", "position", "element_size", "kind", "material", "label", "velocity", "angular_velocity"});
+                  {"shape", "size", "radius", "semi_axes", "rotation", "position", "element_size", "kind", "material",
+                   "label", "velocity", "angular_velocity"});
     GrainSpec spec;
     spec.shape = t.text("shape", "box");
-    if (spec.shape == "sphere" || spec.shape == "ellipsoid")
-      t.fail("shape '" + spec.shape + "' is not available yet (it needs the gmsh mesh module); use box");
-    if (spec.shape != "box") t.fail("shape '" + spec.shape + "' is unknown; use box");
-    if (!t.has("size")) t.fail("size is missing: the box edges [x, y, z] in m");
-    spec.size = t.vector("size", Eigen::Vector3d::Zero());
-    if (!(spec.size.minCoeff() > 0)) t.fail("size must be positive in every direction");
+    // Each shape takes exactly its own size keys, so a box given a radius is an error, not ignored.
+    const auto only = [&](const char* key, std::initializer_list<const char*> others) {
+      for (const char* other : others)
+        if (t.has(other)) t.fail(std::string(other) + " does not apply to a " + spec.shape + "; give " + key);
+      if (!t.has(key)) t.fail(std::string(key) + " is missing for the " + spec.shape);
+    };
+    if (spec.shape == "box") {
+      only("size", {"radius", "semi_axes", "rotation"});
+      spec.size = t.vector("size", Eigen::Vector3d::Zero());
+    } else if (spec.shape == "sphere") {
+      only("radius", {"size", "semi_axes", "rotation"});
+      spec.size = Eigen::Vector3d::Constant(t.positive("radius", 0));
+    } else if (spec.shape == "ellipsoid") {
+      only("semi_axes", {"size", "radius"});
+      spec.size = t.vector("semi_axes", Eigen::Vector3d::Zero());
+      const Eigen::Vector3d r = t.vector("rotation", Eigen::Vector3d::Zero());
+      if (r.norm() > 0) spec.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()));
+    } else {
+      t.fail("shape '" + spec.shape + "' is unknown; use box, sphere or ellipsoid");
+    }
+    if (!(spec.size.minCoeff() > 0)) t.fail("the " + spec.shape + "'s size must be positive in every direction");
     spec.position = t.vector("position", Eigen::Vector3d::Zero());
-    spec.element_size = t.positive("element_size", spec.size.minCoeff());
+    // Boxes mesh exactly with one cell across; a curved surface needs a few elements per radius.
+    spec.element_size = t.positive("element_size", spec.shape == "box" ? spec.size.minCoeff() : spec.size.minCoeff() / 2);
     if (spec.size.maxCoeff() / spec.element_size > 200)
       t.fail("element_size is below 1/200 of the grain; give a larger element_size");
     spec.kind = parse_kind(t);
@@ -181,18 +243,22 @@ Scene read_scene(const std::filesystem::path& path) {
     const auto it = std::find(material_names.begin(), material_names.end(), material);
     if (it == material_names.end()) t.fail("material '" + material + "' is not among the [[materials]]");
     spec.material = static_cast<std::uint32_t>(it - material_names.begin());
-    const double label = t.number("label", double(s.grains.size() + 1));
+    const double label = t.number("label", double(first_label + s.grains.size()));
     if (!(label >= 1 && label < 4294967296.0) || label != std::floor(label)) t.fail("label must be a positive integer");
     spec.label = static_cast<std::uint32_t>(label);
     spec.velocity = t.vector("velocity", Eigen::Vector3d::Zero());
     spec.angular_velocity = t.vector("angular_velocity", Eigen::Vector3d::Zero());
     s.grains.push_back(spec);
   }
-  if (s.grains.empty()) throw UsageError(file + " has no [[grains]]; add at least one grain");
+  if (s.grains.empty() && !s.model)
+    throw UsageError(file + " has no [[grains]] and no [model]; add at least one grain");
   std::set<std::uint32_t> labels;
+  if (s.model)
+    for (const Grain& g : s.model->model->grains) labels.insert(g.label);
   for (const GrainSpec& g : s.grains)
     if (!labels.insert(g.label).second)
-      throw UsageError(file + ": grain label " + std::to_string(g.label) + " is used twice; give each grain its own label");
+      throw UsageError(file + ": grain label " + std::to_string(g.label) + " is used twice (the model file's labels " +
+                       "count too); give each grain its own label");
 
   std::vector<std::string> platen_names;
   for (const toml::table* p : tables(root, "platens", file)) {
@@ -211,6 +277,11 @@ Scene read_scene(const std::filesystem::path& path) {
     platen_names.push_back(spec.platen.name);
     s.platens.push_back(spec);
   }
+  if (s.platens.empty() && s.model)
+    for (const Platen& p : s.model->model->platens) {
+      s.platens.push_back(PlatenSpec{p, Eigen::Vector3d::Zero()});
+      platen_names.push_back(p.name);
+    }
 
   for (const toml::table* st : tables(root, "stages", file)) {
     const Table t(*st, file + ": [[stages]] " + std::to_string(s.stages.size() + 1), {"name", "duration", "damping", "platens"});
@@ -247,12 +318,27 @@ Scene read_scene(const std::filesystem::path& path) {
   return s;
 }
 
-Model build_model(const Scene& scene) {
+Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
   Model m;
+  if (scene.model) {
+    m = *scene.model->model;
+    if (scene.model->kind)
+      for (Grain& g : m.grains) g.kind = *scene.model->kind;
+  }
   m.materials = scene.materials;
-  for (const GrainSpec& g : scene.grains)
-    add_grain(m, box_mesh(g.size, g.element_size), g.position, g.kind, g.material, g.label);
+  m.platens.clear();
+  for (const GrainSpec& g : scene.grains) {
+    if (g.shape == "box") {
+      add_grain(m, box_mesh(g.size, g.element_size), g.position, g.kind, g.material, g.label);
+    } else {
+      if (!mesh_curved)
+        throw UsageError("grain label " + std::to_string(g.label) + " is a " + g.shape +
+                         ", which this program cannot mesh (gmsh is in graintwin_mesh); use fdemrun");
+      mesh_curved(m, g);
+    }
+  }
   for (const PlatenSpec& p : scene.platens) m.platens.push_back(p.platen);
+  m.sample = scene.sample;
   return m;
 }
 

@@ -278,6 +278,11 @@ Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
   return elements_.average_cauchy_stress(state_.x, grain.element_begin, grain.element_end);
 }
 
+Eigen::Matrix3d Solver::element_stress(std::size_t e) const {
+  if (!elements_.is_elastic(e)) return Eigen::Matrix3d::Zero();
+  return elements_.average_cauchy_stress(state_.x, e, e + 1);
+}
+
 std::vector<ContactRecord> Solver::contacts() const { return contact_ ? contact_->contacts() : std::vector<ContactRecord>{}; }
 
 Eigen::Vector3d Solver::platen_force(std::size_t p) const { return platen_force_.at(p); }

@@ -1,10 +1,14 @@
 #pragma once
-// fdemrun scene files (TOML, docs/fdemrun.md): materials, grains from primitives (box now; sphere
-// and ellipsoid through gmsh once the mesh module lands), platens, initial velocities, gravity,
-// damping, loading stages and the output schedule. Every table refuses unknown keys, so a typo is
-// an error naming the file, the table and the key, not a silently ignored setting.
+// fdemrun scene files (TOML, docs/fdemrun.md): grains from a kind=fdem_model file and/or from
+// primitives (box meshed here; sphere and ellipsoid through gmsh, graintwin_mesh), materials,
+// platens, initial velocities, gravity, damping, loading stages and the output schedule. Every
+// table refuses unknown keys, so a typo is an error naming the file, the table and the key, not a
+// silently ignored setting.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,10 +17,13 @@
 
 namespace graintwin::fdem {
 
+/// A primitive grain of the scene.
 struct GrainSpec {
-  std::string shape = "box";                                 ///< box (sphere, ellipsoid: not yet)
-  Eigen::Vector3d size = Eigen::Vector3d::Zero();            ///< m: box edges (x, y, z)
+  std::string shape = "box";                                 ///< box | sphere | ellipsoid
+  /// m: box edges (x, y, z); sphere and ellipsoid: the semi-axes (a sphere's are its radius).
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
   Eigen::Vector3d position = Eigen::Vector3d::Zero();        ///< m, centre
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< ellipsoid axes -> world
   double element_size = 0;                                   ///< m
   GrainKind kind = GrainKind::tet4;
   std::uint32_t material = 0;                                ///< index into Scene::materials
@@ -38,10 +45,22 @@ struct StageSpec {
   std::vector<std::optional<Eigen::Vector3d>> platen_velocity;  ///< per platen; unset: the platen's own
 };
 
+/// Grains of a kind=fdem_model file (shapes2mesh) taken into the scene.
+struct ModelSource {
+  std::filesystem::path path;
+  std::shared_ptr<const Model> model;   ///< as read; build_model copies it
+  std::optional<GrainKind> kind;        ///< every grain of the file modelled as this (only rigid: a mesh keeps its order)
+};
+
 struct Scene {
+  /// The model file's materials first (a [[materials]] table of the same name replaces one), then
+  /// the scene's other materials.
   std::vector<Material> materials;
-  std::vector<GrainSpec> grains;
+  std::optional<ModelSource> model;       ///< grains 0 .. model grains - 1 of the built model
+  std::vector<GrainSpec> grains;          ///< primitives, after the model's grains
+  /// The scene's [[platens]], or the model file's (at rest) when the scene has none.
   std::vector<PlatenSpec> platens;
+  std::optional<SampleCylinder> sample;   ///< [sample], else the model file's
   std::vector<StageSpec> stages;          ///< at least one (a run without [[stages]] is one stage of run.duration)
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
   double damping = 0;                     ///< mass-proportional alpha, 1/s
@@ -52,11 +71,21 @@ struct Scene {
   double series_interval = 0;             ///< s between time-series rows; 0 = every step
   double checkpoint_interval = 0;         ///< s between checkpoints; 0 = at the end only
   double total_duration() const;
+  /// Index in the built model of primitive grain k (the model file's grains come first).
+  std::size_t primitive_grain(std::size_t k) const { return (model ? model->model->grains.size() : 0) + k; }
 };
 
-/// Parses and checks a scene; UsageError naming the file, the table and the fix on any problem.
+/// Parses and checks a scene (and reads its model file, a path relative to the scene's folder);
+/// UsageError naming the file, the table and the fix on any problem.
 Scene read_scene(const std::filesystem::path& path);
-/// The model of the scene's grains and platens (grains meshed here, in scene order).
-Model build_model(const Scene& scene);
+
+/// Appends a sphere or ellipsoid grain to a model. gmsh is linked only into graintwin_mesh, so
+/// programs that mesh pass fdem::append_ellipsoid_grain (fdem/ellipsoid_grain.hpp).
+using CurvedGrainMesher = std::function<void(Model&, const GrainSpec&)>;
+
+/// The model of the scene: the model file's grains, then the primitives in scene order (boxes
+/// meshed here, spheres and ellipsoids by `mesh_curved`), the platens and the sample cylinder.
+/// UsageError when the scene has curved grains and no mesher is given.
+Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved = {});
 
 }  // namespace graintwin::fdem

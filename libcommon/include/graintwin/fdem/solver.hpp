@@ -112,6 +112,8 @@ class Solver {
   Eigen::Quaterniond grain_rotation(std::size_t grain) const;
   /// Volume-averaged Cauchy stress of grain g, tension positive, Pa (zero for rigid grains).
   Eigen::Matrix3d grain_stress(std::size_t grain) const;
+  /// Volume-averaged Cauchy stress of element e, tension positive, Pa (zero in rigid grains).
+  Eigen::Matrix3d element_stress(std::size_t element) const;
   /// Grain-pair and grain-platen resultants of the last step (empty without contact).
   std::vector<ContactRecord> contacts() const;
   /// Force the grains exert on platen p in the last step, N.

@@ -1,0 +1,185 @@
+// fdem/ scenes: sphere and ellipsoid primitives meshed by gmsh (volume, mass and principal axes
+// against the exact solid, kinds), grains from a kind=fdem_model file merged with primitives
+// (materials by name, labels, platens and sample cylinder from the file unless the scene sets
+// them), and the errors of bad [model] and shape tables.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/element.hpp"
+#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/fdem/model_file.hpp"
+#include "graintwin/fdem/primitives.hpp"
+#include "graintwin/fdem/scene.hpp"
+#include "support/run_tool.hpp"
+
+using namespace graintwin;
+using namespace graintwin::fdem;
+
+namespace {
+
+std::filesystem::path write_text(const test::TempDir& dir, const std::string& name, const std::string& text) {
+  const auto p = dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+std::string error_of(const std::filesystem::path& scene) {
+  try {
+    read_scene(scene);
+  } catch (const Error& e) {
+    return e.message();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(FdemScene, SpheresAndEllipsoidsHaveTheExactSolidsMassAndAxes) {
+  test::TempDir dir;
+  const auto path = write_text(dir, "s.toml", R"(
+[run]
+duration = 1e-6
+[[grains]]
+shape = "sphere"
+radius = 1e-3
+element_size = 0.4e-3
+kind = "tet10"
+position = [0, 0, 1e-3]
+[[grains]]
+shape = "sphere"
+radius = 1e-3
+element_size = 0.4e-3
+kind = "tet4"
+position = [5e-3, 0, 0]
+[[grains]]
+shape = "ellipsoid"
+semi_axes = [2e-3, 1e-3, 0.5e-3]
+rotation = [0, 0, 0.5235987755982988]
+element_size = 0.3e-3
+kind = "rigid"
+position = [0, 5e-3, 0]
+)");
+  const Scene scene = read_scene(path);
+  EXPECT_THROW(build_model(scene), UsageError);  // no mesher: refused, not skipped
+  const Model m = build_model(scene, append_ellipsoid_grain);
+  ASSERT_EQ(m.grains.size(), 3u);
+  EXPECT_EQ(m.grains[0].kind, GrainKind::tet10);
+  EXPECT_EQ(m.nodes_of(m.grains[0].element_begin), 10u);
+  EXPECT_EQ(m.nodes_of(m.grains[1].element_begin), 4u);
+  EXPECT_EQ(m.grains[2].kind, GrainKind::rigid);
+  const double sphere = 4.0 / 3.0 * std::numbers::pi * 1e-9;
+  const BodyProperties curved = body_properties(m, 0), flat = body_properties(m, 1), ellipsoid = body_properties(m, 2);
+  // Curved 10-node elements follow the sphere; flat facets (h = 0.4 R) cut a cap off each, 6 % here.
+  EXPECT_NEAR(curved.volume / sphere, 1.0, 2e-3);
+  EXPECT_NEAR(flat.volume / sphere, 1.0, 0.08);
+  EXPECT_LT(flat.volume, sphere);
+  EXPECT_NEAR((curved.centroid - Eigen::Vector3d(0, 0, 1e-3)).norm(), 0, 1e-3 * 1e-3);  // an unstructured mesh: 1e-4 R
+  EXPECT_NEAR(curved.mass, 2650 * curved.volume, 1e-12);
+  // Principal axes of the rotated ellipsoid: the longest (smallest moment) turned 30 deg about z.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(ellipsoid.inertia);
+  const Eigen::Vector3d long_axis = eig.eigenvectors().col(0);
+  EXPECT_NEAR(std::abs(long_axis.dot(Eigen::Vector3d(std::cos(std::numbers::pi / 6), std::sin(std::numbers::pi / 6), 0))), 1.0,
+              1e-3);
+  const double exact_volume = 4.0 / 3.0 * std::numbers::pi * 2e-3 * 1e-3 * 0.5e-3;
+  EXPECT_NEAR(ellipsoid.volume / exact_volume, 1.0, 0.08);
+}
+
+TEST(FdemScene, ModelFileGrainsMergeWithPrimitives) {
+  test::TempDir dir;
+  Model file_model;
+  file_model.materials = {Material{}, Material{}};
+  file_model.materials[1].name = "glass";
+  file_model.materials[1].density = 2500;
+  add_grain(file_model, box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d::Zero(), GrainKind::tet4, 1, 7);
+  add_grain(file_model, box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d(2e-3, 0, 0), GrainKind::tet10, 0, 8);
+  file_model.platens = {Platen{"bottom", Eigen::Vector3d(0, 0, -1e-3), Eigen::Vector3d::UnitZ(), 0.1},
+                        Platen{"top", Eigen::Vector3d(0, 0, 2e-3), -Eigen::Vector3d::UnitZ(), 0.0}};
+  file_model.sample = SampleCylinder{Eigen::Vector2d(1e-3, 0), 3e-3, -1e-3, 2e-3, 0.3e-3};
+  write_model_file(dir / "grains.h5", file_model, {"test"});
+
+  const auto merged = write_text(dir, "merged.toml", R"(
+[model]
+file = "grains.h5"
+[[materials]]
+name = "glass"
+density = 2400
+[[materials]]
+name = "steel"
+density = 7800
+[[grains]]
+size = [1e-3, 1e-3, 1e-3]
+position = [0, 0, 5e-3]
+material = "steel"
+label = 9
+velocity = [0, 0, -1]
+[[stages]]
+duration = 1e-6
+platens = { top = [0, 0, -0.1] }
+)");
+  const Scene scene = read_scene(merged);
+  ASSERT_EQ(scene.materials.size(), 3u);
+  EXPECT_EQ(scene.materials[1].density, 2400);  // the scene's glass replaces the file's
+  EXPECT_EQ(scene.materials[2].name, "steel");
+  ASSERT_EQ(scene.platens.size(), 2u);  // from the file, and a stage can move them by name
+  EXPECT_EQ(scene.stages[0].platen_velocity[1].value(), Eigen::Vector3d(0, 0, -0.1));
+  EXPECT_EQ(scene.primitive_grain(0), 2u);
+  const Model m = build_model(scene);
+  ASSERT_EQ(m.grains.size(), 3u);
+  EXPECT_EQ(m.grains[0].label, 7u);
+  EXPECT_EQ(m.grains[1].kind, GrainKind::tet10);
+  EXPECT_EQ(m.grains[2].label, 9u);
+  EXPECT_EQ(m.materials[m.grains[0].material].name, "glass");
+  EXPECT_EQ(m.materials[m.grains[2].material].name, "steel");
+  EXPECT_NEAR(body_properties(m, 0).mass, 2400 * 1e-9, 1e-18);
+  ASSERT_EQ(m.platens.size(), 2u);
+  EXPECT_EQ(m.platens[0].friction, 0.1);
+  ASSERT_TRUE(m.sample.has_value());
+  EXPECT_EQ(m.sample->radius, 3e-3);
+  EXPECT_NO_THROW(validate_model(m, "merged"));
+
+  // The scene's own platens, sample and kind override the file's.
+  const auto own = write_text(dir, "own.toml", R"(
+[run]
+duration = 1e-6
+[model]
+file = "grains.h5"
+kind = "rigid"
+[sample]
+radius = 4e-3
+[[platens]]
+name = "floor"
+point = [0, 0, -2e-3]
+)");
+  const Model o = build_model(read_scene(own));
+  ASSERT_EQ(o.platens.size(), 1u);
+  EXPECT_EQ(o.platens[0].name, "floor");
+  EXPECT_EQ(o.sample->radius, 4e-3);
+  EXPECT_EQ(o.sample->z_max, 2e-3);  // the other keys stay the file's
+  for (const Grain& g : o.grains) EXPECT_EQ(g.kind, GrainKind::rigid);
+}
+
+TEST(FdemScene, BadModelAndShapeTablesFailWithTheFix) {
+  test::TempDir dir;
+  Model file_model;
+  add_grain(file_model, box_mesh({1e-3, 1e-3, 1e-3}, 1e-3), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 3);
+  write_model_file(dir / "grains.h5", file_model, {"test"});
+  const auto scene = [&](const std::string& body) { return write_text(dir, "bad.toml", "[run]\nduration = 1e-6\n" + body); };
+  EXPECT_NE(error_of(scene("[model]\nfile = \"nope.h5\"\n")).find("does not exist"), std::string::npos);
+  EXPECT_NE(error_of(scene("[model]\nfile = \"grains.h5\"\nkind = \"tet10\"\n")).find("kind may only be"), std::string::npos);
+  EXPECT_NE(error_of(scene("[model]\nfile = \"grains.h5\"\n[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\nlabel = 3\n"))
+                .find("label 3 is used twice"),
+            std::string::npos);
+  write_text(dir, "not_a_model.h5", "plain text");
+  EXPECT_NE(error_of(scene("[model]\nfile = \"not_a_model.h5\"\n")).find("not_a_model.h5"), std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nsize = [1e-3, 1e-3, 1e-3]\n")).find("size does not apply to a sphere"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"ellipsoid\"\nradius = 1e-3\n")).find("radius does not apply"), std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"ellipsoid\"\n")).find("semi_axes is missing"), std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"cone\"\n")).find("use box, sphere or ellipsoid"), std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nradius = -1\n")).find("radius must be positive"), std::string::npos);
+}
