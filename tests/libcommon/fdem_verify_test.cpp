@@ -1,11 +1,15 @@
 // FDEM verification against exact answers (ctest label fdem-verify; the long ones are benchmarks):
-// the longitudinal wave speed of a free bar, energy conservation over 10^4 undamped steps, and a
-// free rigid body's spin (angular momentum, energy, precession cone).
+// the longitudinal wave speed of a free bar, energy conservation over 10^4 undamped steps, a free
+// rigid body's spin (angular momentum, energy, precession cone); with contact: a box bouncing off a
+// platen against the spring-dashpot solution (restitution, contact time), a block on an incline
+// (sticks below tan(phi) = mu, slides above at g (sin - mu cos)), an elastic sphere's rebound.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
+#include "graintwin/fdem/ellipsoid_grain.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/solver.hpp"
 
@@ -97,4 +101,168 @@ TEST(FdemVerify, RigidSpinConservesAngularMomentum) {
   const Grain& g = m.grains[0];
   for (std::uint32_t i = g.node_begin; i < g.node_end; ++i)
     EXPECT_LT((s.state().x[i] - (s.grain_centroid(0) + R * (m.nodes[i] - s.body(0).centroid))).norm(), 1e-15);
+}
+
+namespace {
+
+/// A rigid or elastic 1 mm wide box of `height` resting on (or falling onto) a floor platen of friction mu.
+Model box_on_floor(GrainKind kind, double height, double gap, double mu) {
+  Model m;
+  add_grain(m, box_mesh({1e-3, 1e-3, height}, 0.25e-3), Eigen::Vector3d(0, 0, height / 2 + gap), kind, 0, 1);
+  m.platens = {Platen{"floor", Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), mu}};
+  return m;
+}
+
+/// A_node against a contact pushing along `n`: a third of the reference areas of the node's
+/// surface triangles, each weighted by max(0, -n_t . n) (docs/fdem_contact.md: a face's nodes
+/// carry exactly the face's area).
+std::vector<double> node_areas(const Model& m, const Eigen::Vector3d& n) {
+  std::vector<double> area(m.nodes.size(), 0.0);
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d c = (m.nodes[t[1]] - m.nodes[t[0]]).cross(m.nodes[t[2]] - m.nodes[t[0]]);
+    const double facing = std::max(0.0, -c.normalized().dot(n));
+    for (std::uint32_t v : t) area[v] += 0.5 * c.norm() / 3 * facing;
+  }
+  return area;
+}
+
+}  // namespace
+
+// A rigid box falls flat onto a platen without gravity: its bottom nodes penetrate alike, so the
+// contact is one spring-dashpot K = sum k_i, C = sum 2 beta sqrt(m_i k_i) on the body mass M
+// (k_i = p_n A_i with the facing node areas, m_i the lumped node masses). Contact time is the
+// time the platen force is not zero (after it, the nodes still overlap a little, force-free). With zeta = C / (2 sqrt(K M)), omega_d =
+// omega sqrt(1 - zeta^2) and the force clamped at zero (it never pulls), contact ends when
+// k delta + c delta' = 0: omega_d t_c = pi - atan(2 zeta sqrt(1 - zeta^2) / (1 - 2 zeta^2)), and
+// e = exp(-zeta omega t_c) |cos(omega_d t_c) - zeta omega / omega_d sin(omega_d t_c)|.
+// Tolerances: 1 % on e and on t_c (plus one step), for dt = a quarter of the stable step.
+TEST(FdemVerify, BoxBouncesOffAPlatenLikeTheSpringDashpot) {
+  for (double beta : {0.03, 0.3}) {
+    Model m = box_on_floor(GrainKind::rigid, 1e-3, 0, 0);
+    m.materials[0].damping_ratio = beta;
+    const double v0 = 0.1;
+    Solver s(m, SolverOptions{});
+    s.set_grain_velocity(0, {0, 0, -v0}, Eigen::Vector3d::Zero());
+    const std::vector<double> area = node_areas(m, Eigen::Vector3d::UnitZ());
+    double K = 0, C = 0;
+    for (std::size_t i = 0; i < m.nodes.size(); ++i)
+      if (std::abs(m.nodes[i].z()) < 1e-12) {
+        const double k = m.materials[0].normal_penalty * area[i];
+        K += k, C += 2 * beta * std::sqrt(s.node_mass()[i] * k);
+      }
+    const double M = s.body(0).mass, omega = std::sqrt(K / M), zeta = C / (2 * std::sqrt(K * M));
+    const double wd = omega * std::sqrt(1 - zeta * zeta);
+    const double t_c = (std::numbers::pi - std::atan(2 * zeta * std::sqrt(1 - zeta * zeta) / (1 - 2 * zeta * zeta))) / wd;
+    const double e = std::exp(-zeta * omega * t_c) * std::abs(std::cos(wd * t_c) - zeta * omega / wd * std::sin(wd * t_c));
+    const double dt = s.time_step_limits().stable() / 4;
+    std::int64_t first = -1, last = -1;
+    for (std::int64_t n = 0; n < 100000 && (last < 0 || n < last + 10); ++n) {
+      s.step(dt);
+      if (s.platen_force(0).norm() > 0) {
+        if (first < 0) first = n;
+      } else if (first >= 0 && last < 0) {
+        last = n;
+      }
+    }
+    ASSERT_GT(last, first + 50) << "too few steps in contact to resolve it";
+    EXPECT_NEAR((last - first) * dt, t_c, 0.01 * t_c + dt) << "beta " << beta;
+    EXPECT_NEAR(s.grain_velocity(0).z() / v0, e, 0.01 * e) << "beta " << beta;
+    RecordProperty(fmt::format("beta_{}_restitution_over_exact", beta), std::to_string(s.grain_velocity(0).z() / v0 / e));
+    RecordProperty(fmt::format("beta_{}_contact_time_over_exact", beta), std::to_string((last - first) * dt / t_c));
+    EXPECT_LT(s.grain_velocity(0).head<2>().norm(), 1e-6 * v0);  // no spurious sideways kick
+  }
+}
+
+// A block on a plane tilted by phi (gravity tilted instead): the Coulomb limit holds it when
+// tan(phi) < mu; above, it slides at a = g (sin phi - mu cos phi). The block is flat (1 x 1 x
+// 0.25 mm), so the tipping moment leaves every bottom node pressed: a cube at tan(phi) = 0.8 mu
+// rocks, its uphill nodes open and lose their spring history, and it creeps (measured 3.5e-9 m in
+// 0.4 ms, 0.6 % of a frictionless slide; docs/fdemrun.md). The block first settles on its
+// normal spring (damped), then the acceleration is measured between 0.2 and 0.6 ms. Tolerances:
+// sliding acceleration within 1 %; a held block moves (between the same times) less than 1e-3 of
+// what a frictionless block would (it rocks on its tangential springs by ~1e-12 m).
+TEST(FdemVerify, BlockOnAnInclineSticksBelowTanPhiEqualsMuAndSlidesAbove) {
+  const double mu = 0.5, g = 9.81;
+  for (GrainKind kind : {GrainKind::rigid, GrainKind::tet4})
+    for (double tan_phi : {0.3, 0.6}) {
+      const double phi = std::atan(tan_phi);
+      SolverOptions o;
+      o.gravity = g * Eigen::Vector3d(std::sin(phi), 0, -std::cos(phi));
+      const Model m = box_on_floor(kind, 0.25e-3, 0, mu);
+      Solver s(m, o);
+      const double dt = s.time_step_limits().stable();
+      const auto run_to = [&](double t) {
+        while (s.state().time < t) s.step(dt);
+        return std::tuple{s.state().time, s.grain_velocity(0).x(), s.grain_centroid(0).x()};
+      };
+      const auto [t1, v1, x1] = run_to(2e-4);
+      const auto [t2, v2, x2] = run_to(6e-4);
+      const double sliding = g * (std::sin(phi) - mu * std::cos(phi));
+      if (tan_phi < mu) {
+        EXPECT_LT(std::abs(x2 - x1), 1e-3 * g * std::sin(phi) * (t2 * t2 - t1 * t1) / 2) << "kind " << int(kind);
+        RecordProperty(fmt::format("kind_{}_held_creep_m", int(kind)), fmt::format("{:.3g}", std::abs(x2 - x1)));
+      } else {
+        EXPECT_NEAR((v2 - v1) / (t2 - t1), sliding, 0.01 * sliding) << "kind " << int(kind);
+        RecordProperty(fmt::format("kind_{}_sliding_acceleration_over_exact", int(kind)), std::to_string((v2 - v1) / (t2 - t1) / sliding));
+      }
+    }
+}
+
+// An elastic (tet4) glass sphere (R = 1 mm, h = R / 3, no contact damping) dropped at 1 m/s on a
+// rigid platen rebounds, and the energy books balance: kinetic before = kinetic + strain + contact
+// after + dissipated, within 1 %. The Hertz contact radius here (33 um) is far below the element
+// size, so the lowest node alone carries the contact: the impact is the penalty spring
+// k = p_n A_pole on the sphere's mass, t_c = pi sqrt(M / k), F_max = v0 sqrt(M k) (the sphere's
+// own compliance adds a little: tolerance +3 % / -0.5 %). That is 3.1 x the Hertz time and 0.27 x
+// its peak force: Hertz needs elements well below the contact radius (the benchmark).
+TEST(FdemVerify, ElasticSphereReboundsOnItsContactNodesSpring) {
+  Model m;
+  m.materials[0] = Material{"glass", 2500, 48e9, 0.2, 0.0, 48e11, 48e11, 0.0};
+  GrainSpec sphere;
+  sphere.shape = "sphere";
+  sphere.size = Eigen::Vector3d::Constant(1e-3);
+  sphere.position = Eigen::Vector3d(0, 0, 1e-3 + 1e-7);
+  sphere.element_size = 1e-3 / 3;
+  sphere.kind = GrainKind::tet4;
+  sphere.label = 1;
+  append_ellipsoid_grain(m, sphere);
+  m.platens = {Platen{"floor", Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 0}};
+  const double v0 = 1.0;
+  Solver s(m, SolverOptions{});
+  s.set_grain_velocity(0, {0, 0, -v0}, Eigen::Vector3d::Zero());
+  const double dt = s.time_step_limits().stable();
+  const double M = s.body(0).mass;
+  std::int64_t first = -1, last = -1;
+  Energies start;
+  double peak = 0;
+  for (std::int64_t n = 0; n < 200000 && (last < 0 || n < last + 200); ++n) {
+    const StepReport r = s.step(dt);
+    if (n == 0) start = r.energies;
+    const double f = s.platen_force(0).norm();
+    peak = std::max(peak, f);
+    if (f > 0) {
+      if (first < 0) first = n;
+      last = -1;
+    } else if (first >= 0 && last < 0) {
+      last = n;
+    }
+  }
+  const Energies end = s.step(dt).energies;
+  ASSERT_GT(first, -1);
+  ASSERT_GT(last, first);
+  EXPECT_GT(s.grain_velocity(0).z(), 0.5 * v0);  // it comes back up
+  EXPECT_NEAR(end.mechanical() + end.dissipated, start.mechanical(), 0.01 * start.mechanical());
+  const std::vector<double> area = node_areas(m, Eigen::Vector3d::UnitZ());
+  std::size_t pole = 0;
+  for (std::size_t i = 0; i < m.nodes.size(); ++i)
+    if (m.nodes[i].z() < m.nodes[pole].z()) pole = i;
+  const double k_pole = 48e11 * area[pole], t_pole = std::numbers::pi * std::sqrt(M / k_pole);
+  const double t_c = (last - first) * dt;
+  EXPECT_GT(t_c, 0.995 * t_pole);
+  EXPECT_LT(t_c, 1.03 * t_pole);
+  EXPECT_NEAR(peak / (v0 * std::sqrt(M * k_pole)), 1.0, 0.03);
+  const double hertz = 2.868 * std::pow(M * M / (1e-3 * std::pow(48e9 / (1 - 0.04), 2) * v0), 0.2);
+  RecordProperty("contact_time_over_hertz", std::to_string(t_c / hertz));
+  RecordProperty("contact_time_over_single_node", std::to_string(t_c / t_pole));
+  RecordProperty("rebound_velocity_over_v0", std::to_string(s.grain_velocity(0).z() / v0));
 }
