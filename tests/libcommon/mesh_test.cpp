@@ -7,6 +7,8 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/mesh/gmsh_adapter.hpp"
+#include "graintwin/mesh/grain_mesher.hpp"
+#include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/mesh/surface.hpp"
 #include "graintwin/mesh/tet_mesh.hpp"
 #include "graintwin/shape/sh_surface.hpp"
@@ -160,4 +162,93 @@ TEST(Model, GrainsJoinAsContiguousBlocksWithOutwardSurfaces) {
     EXPECT_NEAR(mesh::enclosed_volume(s), 4.0 / 3.0 * M_PI, 0.1 * 4.0 / 3.0 * M_PI);
   }
   EXPECT_THROW(mesh::append_grain(model, a, 1, fdem::GrainKind::tet10), UsageError);
+}
+
+namespace {
+
+/// A grain record whose SH coefficients (degree 4) describe r(d) = c00 Y00 + c20 Y20.
+shape::GrainShape sh_grain(double r0, double c20, const Vector3d& centroid) {
+  shape::GrainShape g;
+  g.label = 3;
+  g.centroid = centroid;
+  g.coeffs = Eigen::VectorXd::Zero(25);
+  g.coeffs[0] = r0 * std::sqrt(4.0 * M_PI);
+  g.coeffs[6] = c20;  // index n*n + n + m for n = 2, m = 0
+  g.equivalent_diameter = 2.0 * r0;
+  g.surface_area = 4.0 * M_PI * r0 * r0;
+  g.semi_axes = Vector3d(r0, r0, r0);
+  return g;
+}
+
+}  // namespace
+
+TEST(Sizing, ContactRuleGivesTheTargetSurfaceNodesAndOverridesWin) {
+  const double d = 1e-3, area = M_PI * d * d;
+  mesh::SizeTargets t;
+  const auto s2 = mesh::choose_element_size(area, d, 2, t);
+  EXPECT_EQ(s2.rule, mesh::SizeRule::contact);
+  // Mid-edge nodes: the same surface node count at a coarser 10-node size.
+  t.volume_tolerance = 1.0;
+  EXPECT_LT(mesh::choose_element_size(area, d, 1, t).h * 1.5, s2.h);
+  t.volume_tolerance = 0.001;
+  EXPECT_EQ(mesh::choose_element_size(area, d, 1, t).rule, mesh::SizeRule::accuracy);
+  t.elements_per_diameter = 5;
+  EXPECT_DOUBLE_EQ(mesh::choose_element_size(area, d, 2, t).h, d / 5);
+  EXPECT_EQ(mesh::choose_element_size(area, d, 2, t).rule, mesh::SizeRule::given);
+}
+
+TEST(GrainMesher, SphereGrainMeetsTheContactTargetAndItsVolume) {
+  const mesh::ShSurfaceBasis basis(4, 4);
+  const double r0 = 0.3e-3, exact = 4.0 / 3.0 * M_PI * r0 * r0 * r0;
+  mesh::GrainMeshOptions o;
+  const auto r = mesh::mesh_grain(sh_grain(r0, 0.0, Vector3d(1e-3, 1e-3, 1e-3)), basis, nullptr, {}, o);
+  EXPECT_EQ(r.origin, mesh::SurfaceOrigin::sh);
+  EXPECT_EQ(r.kind, fdem::GrainKind::tet10);
+  EXPECT_TRUE(r.note.empty()) << r.note;
+  expect_valid(r.mesh);
+  EXPECT_NEAR(r.quality.volume, exact, 0.005 * exact);
+  // About 250 surface nodes: the rule's estimate holds within 25 %.
+  EXPECT_GT(r.quality.surface_nodes, 190u);
+  EXPECT_LT(r.quality.surface_nodes, 310u);
+  EXPECT_GE(r.quality.min_gamma, o.gamma_floor);
+}
+
+TEST(GrainMesher, BrokenShSurfaceIsCaughtAndTheGrainStillMeshed) {
+  const mesh::ShSurfaceBasis basis(4, 4);
+  // c20 this large makes r(d) negative around the equator: the surface folds through the centroid.
+  const shape::GrainShape g = sh_grain(0.3e-3, 1.5e-3, Vector3d::Zero());
+  const auto surface = mesh::sh_surface(basis.sphere, basis.basis, g.coeffs, g.centroid);
+  const auto check = mesh::check_surface(surface);
+  EXPECT_FALSE(check.ok());
+  mesh::GrainMeshOptions o;
+  o.order = 1;
+  const auto r = mesh::mesh_grain(g, basis, nullptr, {}, o);
+  EXPECT_EQ(r.origin, mesh::SurfaceOrigin::ellipsoid);
+  EXPECT_NE(r.note.find("SH surface has"), std::string::npos) << r.note;
+  expect_valid(r.mesh);
+}
+
+TEST(GrainMesher, UnreliableFitUsesTheVoxelsAndTinyGrainsAreRigid) {
+  // A ball of radius 8 voxels in a label image.
+  const double h = 1e-5;
+  Volume<std::uint32_t> labels({24, 24, 24}, {h, h, h});
+  for (std::size_t z = 0; z < 24; ++z)
+    for (std::size_t y = 0; y < 24; ++y)
+      for (std::size_t x = 0; x < 24; ++x)
+        if (Vector3d(double(x) - 11.5, double(y) - 11.5, double(z) - 11.5).norm() <= 8.0) labels(z, y, x) = 3;
+  const mesh::ShSurfaceBasis basis(3, 4);
+  shape::GrainShape g = sh_grain(8 * h, 0.0, Vector3d(11.5 * h, 11.5 * h, 11.5 * h));
+  g.flags = shape::shape_flag::unreliable_fit;
+  mesh::GrainMeshOptions o;
+  o.order = 1;
+  const auto r = mesh::mesh_grain(g, basis, &labels, {3, 3, 3, 21, 21, 21}, o);
+  EXPECT_EQ(r.origin, mesh::SurfaceOrigin::voxels);
+  expect_valid(r.mesh);
+  const double exact = 4.0 / 3.0 * M_PI * std::pow(8 * h, 3);
+  EXPECT_NEAR(r.surface_volume, exact, 0.05 * exact);
+  o.rigid_diameter = 1.0;  // everything is tiny
+  const auto tiny = mesh::mesh_grain(g, basis, &labels, {3, 3, 3, 21, 21, 21}, o);
+  EXPECT_EQ(tiny.kind, fdem::GrainKind::rigid);
+  EXPECT_EQ(tiny.size.rule, mesh::SizeRule::given);
+  EXPECT_LT(tiny.quality.elements, r.quality.elements);
 }

@@ -81,26 +81,42 @@ std::size_t count_inverted(const TetMesh& m) {
   return n;
 }
 
-/// Last resort for curved elements gmsh could not untangle: their mid-edge nodes go back to the
-/// edge midpoints (a straight element with valid corners is valid), repeated since a moved node
-/// is shared by neighbours.
-std::size_t straighten_inverted(TetMesh& m) {
+/// Restores validity of curved elements: the mid-edge nodes of every element whose Jacobian ratio
+/// is below `min_ratio` move towards the straight-edge midpoint by `fraction` (1: onto it; a
+/// straight element with valid corners has ratio 1); repeated since a moved node is shared.
+std::size_t pull_back_distorted(TetMesh& m, double min_ratio, double fraction, int passes) {
   static constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
   std::size_t moved = 0;
-  for (int pass = 0; pass < 4; ++pass) {
+  for (int pass = 0; pass < passes; ++pass) {
     bool any = false;
     for (std::size_t e = 0; e < m.element_count(); ++e) {
-      if (jacobian_ratio(m, e) > 0.0) continue;
+      if (jacobian_ratio(m, e) >= min_ratio) continue;
       any = true;
       const std::uint32_t* n = m.element(e);
       for (int k = 0; k < 6; ++k) {
         const Eigen::Vector3d mid = 0.5 * (m.nodes[n[kEdges[k][0]]] + m.nodes[n[kEdges[k][1]]]);
-        if (m.nodes[n[4 + k]] != mid) m.nodes[n[4 + k]] = mid, ++moved;
+        Eigen::Vector3d& p = m.nodes[n[4 + k]];
+        if (p != mid) p += fraction * (mid - p), ++moved;
       }
     }
     if (!any) break;
   }
   return moved;
+}
+
+/// Snapped elements must keep min det J / max det J at least this (barely valid curved elements
+/// would set a tiny stable time step in the solver).
+constexpr double kMinSnappedJacobianRatio = 0.2;
+
+/// Moves every boundary node of `m` onto the exact surface, then pulls back what that distorts.
+void snap_to_surface(TetMesh& m, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& project, TetReport& report) {
+  std::vector<char> on_boundary(m.nodes.size(), 0);
+  for (const auto& t : boundary_triangles(m))
+    for (std::uint32_t v : t) on_boundary[v] = 1;
+  for (std::size_t v = 0; v < m.nodes.size(); ++v)
+    if (on_boundary[v]) m.nodes[v] = project(m.nodes[v]);
+  report.inverted_after_curving = count_inverted(m);
+  report.straightened = pull_back_distorted(m, kMinSnappedJacobianRatio, 0.5, 4) + pull_back_distorted(m, kMinSnappedJacobianRatio, 1.0, 2);
 }
 
 /// Meshes the current gmsh model's volume at the options' size and order, with the Jacobian check.
@@ -111,6 +127,15 @@ TetMesh generate(const TetOptions& o, TetReport& report) {
   gmsh::option::setNumber("Mesh.Algorithm3D", 1);
   gmsh::model::mesh::generate(3);
   if (o.order == 1) return extract(1);
+  if (o.project) {
+    gmsh::option::setNumber("Mesh.SecondOrderLinear", 1);
+    gmsh::model::mesh::setOrder(2);
+    gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
+    TetMesh m = extract(2);
+    snap_to_surface(m, o.project, report);
+    report.inverted = count_inverted(m);
+    return m;
+  }
   gmsh::model::mesh::setOrder(2);
   TetMesh m = extract(2);
   report.inverted_after_curving = count_inverted(m);
@@ -124,7 +149,7 @@ TetMesh generate(const TetOptions& o, TetReport& report) {
     }
     m = extract(2);
   }
-  if (count_inverted(m) > 0) report.straightened = straighten_inverted(m);
+  if (count_inverted(m) > 0) report.straightened = pull_back_distorted(m, 1e-300, 1.0, 4);
   report.inverted = count_inverted(m);
   return m;
 }

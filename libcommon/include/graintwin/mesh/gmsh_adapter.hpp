@@ -2,6 +2,8 @@
 // The only code that touches gmsh (Debian's 4.8.4). gmsh keeps one global model and is not
 // thread-safe, so every call here holds one process-wide lock: callers may call from many threads,
 // but the gmsh part runs one at a time (parallel meshing needs worker processes).
+#include <functional>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -15,13 +17,19 @@ struct TetOptions {
   int order = 1;      ///< 1: 4-node, 2: 10-node (curved onto the surface)
   /// After setOrder(2), run optimize("HighOrder") when any element's Jacobian is not positive.
   bool fix_inverted = true;
+  /// Order 2 with an exact surface: gmsh places the mid-edge nodes straight, then every boundary
+  /// node is moved onto the surface by `project` (point -> nearest surface point), instead of
+  /// gmsh curving onto its reparametrised triangulation (exact geometry, and no optimisation
+  /// pass: an element this leaves with min det J / max det J below 0.2 gets its mid-edge nodes
+  /// pulled back halfway, up to 4 times, then straight).
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> project;
 };
 
 struct TetReport {
   std::size_t inverted_after_curving = 0;  ///< 10-node elements with min det J <= 0 straight after setOrder(2)
   bool optimized = false;                  ///< optimize("HighOrder") ran
   std::size_t inverted = 0;                ///< after the fix (0 unless the fix failed)
-  std::size_t straightened = 0;            ///< mid-edge nodes put back on straight edges as the last resort
+  std::size_t straightened = 0;            ///< mid-edge nodes pulled back towards straight edges to restore validity
   double seconds = 0.0;                    ///< wall time inside gmsh (classification, meshing, curving)
 };
 

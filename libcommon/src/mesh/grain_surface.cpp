@@ -1,0 +1,57 @@
+#include "graintwin/mesh/grain_surface.hpp"
+
+#include <cmath>
+#include <map>
+
+#include "graintwin/core/filters.hpp"
+#include "graintwin/shape/isosurface.hpp"
+
+namespace graintwin::mesh {
+
+TriangleSurface sh_surface(const shape::SphereMesh& sphere, const Eigen::MatrixXd& basis, const Eigen::VectorXd& coeffs,
+                           const Eigen::Vector3d& centroid) {
+  const Eigen::VectorXd r = basis * coeffs;
+  TriangleSurface s;
+  s.vertices = shape::displaced_vertices(sphere, r, centroid);
+  s.triangles = sphere.triangles;
+  return s;
+}
+
+TriangleSurface voxel_surface(const Volume<std::uint32_t>& labels, std::uint32_t label, const std::array<std::size_t, 6>& bbox,
+                              double smooth_vox) {
+  const auto pad = static_cast<std::size_t>(2 + std::ceil(3.0 * smooth_vox));
+  Shape3 shape;
+  std::array<long, 3> start;
+  for (int a = 0; a < 3; ++a) {
+    shape[static_cast<std::size_t>(a)] = bbox[static_cast<std::size_t>(a + 3)] - bbox[static_cast<std::size_t>(a)] + 2 * pad;
+    start[static_cast<std::size_t>(a)] = static_cast<long>(bbox[static_cast<std::size_t>(a)]) - static_cast<long>(pad);
+  }
+  const Vec3& h = labels.voxel_size();
+  Vec3 origin;
+  for (int a = 0; a < 3; ++a)
+    origin[static_cast<std::size_t>(a)] = labels.origin()[static_cast<std::size_t>(a)] +
+                                          static_cast<double>(start[static_cast<std::size_t>(a)]) * h[static_cast<std::size_t>(a)];
+  Volume<float> field(shape, h, origin, 0.0f);
+  for (std::size_t z = pad; z + pad < shape[0]; ++z)
+    for (std::size_t y = pad; y + pad < shape[1]; ++y)
+      for (std::size_t x = pad; x + pad < shape[2]; ++x)
+        if (labels(static_cast<std::size_t>(start[0]) + z, static_cast<std::size_t>(start[1]) + y,
+                   static_cast<std::size_t>(start[2]) + x) == label)
+          field(z, y, x) = 1.0f;
+  if (smooth_vox > 0.0) gaussian_blur(field, smooth_vox);
+
+  TriangleSurface s;
+  std::map<std::array<double, 3>, int> index;  // exact positions: each crossing is computed identically
+  const auto vertex = [&](const Eigen::Vector3d& p) {
+    const auto [it, fresh] = index.try_emplace({p.x(), p.y(), p.z()}, static_cast<int>(s.vertices.size()));
+    if (fresh) s.vertices.push_back(p);
+    return it->second;
+  };
+  shape::isosurface(field, 0.5f, [&](const shape::Triangle& t) {
+    const int a = vertex(t[0]), b = vertex(t[1]), c = vertex(t[2]);
+    if (a != b && b != c && c != a) s.triangles.push_back({a, b, c});
+  });
+  return s;
+}
+
+}  // namespace graintwin::mesh

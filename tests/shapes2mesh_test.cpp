@@ -1,0 +1,171 @@
+// shapes2mesh: CLI contract; the twin of a phantom scan (labels -> labels2shapes -> shapes2mesh)
+// checked against the balls' exact volumes, element validity and watertight grain surfaces; a
+// broken SH surface caught and replaced; the .vtu and .msh views; bad inputs failing cleanly.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "graintwin/fdem/model_file.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/mesh/surface.hpp"
+#include "graintwin/segment/labels.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "graintwin/shape/shapes_file.hpp"
+#include "support/cli_contract.hpp"
+#include "support/phantoms.hpp"
+#include "support/vtk_summary.hpp"
+
+using namespace graintwin;
+using test::run_tool;
+
+namespace {
+
+constexpr double kVoxel = 2e-5;
+// Eight spheres of radius 6-8 voxels, apart from each other.
+const std::vector<test::Ball> kBalls = test::jittered_lattice(2, 7.0, 18.0, 11.0, 0.5, 0.1, 3);
+
+struct Inputs {
+  std::filesystem::path labels, shapes;
+};
+
+Inputs write_inputs(const test::TempDir& dir) {
+  segment::LabelsFile c;
+  c.labels = test::label_balls({40, 40, 40}, kBalls, {kVoxel, kVoxel, kVoxel});
+  c.grains = segment::grain_table(c.labels);
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / "labels.h5", c, {"phantom labels"});
+  const auto r = run_tool("labels2shapes", {(dir / "labels.h5").string(), (dir / "shapes.h5").string(), "-q"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return {dir / "labels.h5", dir / "shapes.h5"};
+}
+
+double ball_volume(std::size_t i) { return 4.0 / 3.0 * M_PI * std::pow(kBalls[i].r * kVoxel, 3); }
+
+/// Grain g's triangles as a stand-alone surface over the model's nodes.
+mesh::TriangleSurface grain_surface(const fdem::Model& m, std::size_t g) {
+  mesh::TriangleSurface s;
+  s.vertices = m.nodes;
+  for (std::uint32_t t = m.grains[g].triangle_begin; t < m.grains[g].triangle_end; ++t)
+    s.triangles.push_back({int(m.triangles[t][0]), int(m.triangles[t][1]), int(m.triangles[t][2])});
+  return s;
+}
+
+}  // namespace
+
+TEST(Shapes2mesh, StandardCli) { test::expect_standard_cli("shapes2mesh"); }
+
+TEST(Shapes2mesh, PhantomTwinHasEveryBallAtItsVolumeWithValidElements) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const auto r = run_tool("shapes2mesh", {in.shapes.string(), in.labels.string(), (dir / "model.h5").string(), "--vtu",
+                                          (dir / "model.vtu").string(), "--msh", (dir / "model.msh").string(), "-j", "2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("8 from SH"), std::string::npos) << r.err;
+  const fdem::Model m = fdem::read_model_file(dir / "model.h5");
+  ASSERT_EQ(m.grains.size(), kBalls.size());
+  const io::H5File f = io::H5File::open(dir / "model.h5");
+  const auto volume = f.read<double>("/mesh/volume"), surface_volume = f.read<double>("/mesh/surface_volume");
+  const auto surface_nodes = f.read<std::uint64_t>("/mesh/surface_nodes");
+  for (std::size_t g = 0; g < m.grains.size(); ++g) {
+    SCOPED_TRACE(g);
+    EXPECT_EQ(m.grains[g].label, g + 1);
+    EXPECT_EQ(m.grains[g].kind, fdem::GrainKind::tet10);
+    // The mesh keeps the volume of the SH surface it was given (curved faces on the exact surface);
+    // labels2shapes' SH fit of a voxelised ball of radius 6-8 voxels is itself about 4 % small.
+    EXPECT_NEAR(volume[g], surface_volume[g], 0.01 * surface_volume[g]);
+    EXPECT_NEAR(volume[g], ball_volume(g), 0.06 * ball_volume(g));
+    EXPECT_GT(surface_nodes[g], 150u);
+    const mesh::SurfaceCheck c = mesh::check_surface(grain_surface(m, g));
+    EXPECT_TRUE(c.ok()) << c.problems();
+    // Linear triangles through the mid-edge nodes cut the curved faces' caps: about 2.5 % here.
+    EXPECT_NEAR(c.volume, volume[g], 0.04 * volume[g]);
+  }
+  for (std::size_t e = 0; e < m.element_count(); ++e) {
+    const auto* n = m.element_nodes.data() + m.element_offset[e];
+    const auto& a = m.nodes[n[0]];
+    ASSERT_GT((m.nodes[n[1]] - a).cross(m.nodes[n[2]] - a).dot(m.nodes[n[3]] - a), 0.0) << "element " << e;
+  }
+  for (double j : f.read<double>("/mesh/min_jacobian_ratio")) EXPECT_GT(j, 0.0);
+  ASSERT_TRUE(m.sample.has_value());
+  EXPECT_EQ(m.platens.size(), 2u);
+  EXPECT_NEAR(m.platens[1].point.z() - m.platens[0].point.z(), m.sample->z_max - m.sample->z_min, 1e-12);
+  EXPECT_DOUBLE_EQ(m.sample->membrane_thickness, 0.3e-3);
+  EXPECT_EQ(m.materials.size(), 1u);
+  EXPECT_EQ(m.materials[0].young, 92.1e9);
+  const auto history = io::read_history(f);
+  ASSERT_GE(history.size(), 3u);
+  EXPECT_NE(history.back().find("shapes2mesh"), std::string::npos);
+  const auto s = test::vtk_summary(dir / "model.vtu");
+  EXPECT_EQ(s["cells"], m.element_count());
+  double total = 0;
+  for (double v : volume) total += v;
+  EXPECT_NEAR(s["volume"].get<double>(), total, 0.03 * total);  // VTK splits curved cells into straight ones
+  EXPECT_TRUE(std::filesystem::exists(dir / "model.msh"));
+}
+
+TEST(Shapes2mesh, BrokenShSurfaceFallsBackToVoxelsOrEllipsoidWithANote) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  shape::ShapesFile s = shape::read_shapes_file(in.shapes);
+  s.grains[0].coeffs.setZero();
+  s.grains[0].coeffs[0] = 1e-4 * std::sqrt(4.0 * M_PI);
+  s.grains[0].coeffs[6] = 5e-4;  // r(direction) < 0 around the equator: the surface folds through the centroid
+  shape::write_shapes_file(dir / "broken.h5", s, {"broken"});
+  const auto with_labels = run_tool("shapes2mesh", {(dir / "broken.h5").string(), in.labels.string(), (dir / "a.h5").string(),
+                                                    "--order", "1", "-v", "-v"});
+  ASSERT_EQ(with_labels.exit_code, 0) << with_labels.err;
+  EXPECT_NE(with_labels.err.find("SH surface has"), std::string::npos) << with_labels.err;
+  const io::H5File a = io::H5File::open(dir / "a.h5");
+  EXPECT_EQ(a.read<std::uint8_t>("/mesh/surface_origin")[0], 1);  // smoothed voxels
+  EXPECT_NEAR(a.read<double>("/mesh/volume")[0], ball_volume(0), 0.06 * ball_volume(0));
+  const auto alone = run_tool("shapes2mesh", {(dir / "broken.h5").string(), (dir / "b.h5").string(), "--order", "1"});
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  const io::H5File b = io::H5File::open(dir / "b.h5");
+  EXPECT_EQ(b.read<std::uint8_t>("/mesh/surface_origin")[0], 2);  // inertia ellipsoid
+  EXPECT_NE(b.read_strings("/mesh/note")[0].find("pairs of triangles that cross each other"), std::string::npos);
+  EXPECT_NE(alone.err.find("1 as ellipsoids"), std::string::npos) << alone.err;
+}
+
+TEST(Shapes2mesh, OverridesAndRigidSmallGrains) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const auto r = run_tool("shapes2mesh", {in.shapes.string(), (dir / "m.h5").string(), "--order", "1",
+                                          "--elements-per-diameter", "4", "--rigid-below", "1.0"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fdem::Model m = fdem::read_model_file(dir / "m.h5");
+  std::size_t rigid = 0;
+  for (const auto& g : m.grains) rigid += g.kind == fdem::GrainKind::rigid;
+  EXPECT_GT(rigid, 0u);  // the balls below d50
+  EXPECT_LT(rigid, m.grains.size());
+  for (std::size_t e = 0; e < m.element_count(); ++e) EXPECT_EQ(m.nodes_of(e), 4u);
+  const io::H5File f = io::H5File::open(dir / "m.h5");
+  const auto d = shape::read_shapes_file(in.shapes).grains;
+  const auto h = f.read<double>("/mesh/element_size");
+  const auto kind = f.read<std::uint8_t>("/mesh/kind");
+  for (std::size_t g = 0; g < h.size(); ++g)
+    if (kind[g] != 0) EXPECT_NEAR(h[g], d[g].equivalent_diameter / 4, 1e-12);
+}
+
+TEST(Shapes2mesh, BadInputsFailCleanly) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const std::string out = (dir / "m.h5").string();
+  test::expect_clean_failure("shapes2mesh", dir, {in.labels.string(), out}, 2, "pass the output of labels2shapes");
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), in.shapes.string(), out}, 2, "pass the output of ct2labels");
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), out, "--order", "3"}, 2, "--order");
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), (dir / "m.vtk").string()}, 2, "must end in .h5");
+  shape::ShapesFile empty = shape::read_shapes_file(in.shapes);
+  empty.grains.clear();
+  shape::write_shapes_file(dir / "empty.h5", empty, {"empty"});
+  test::expect_clean_failure("shapes2mesh", dir, {(dir / "empty.h5").string(), out}, 1, "holds no grain");
+  // Labels of another scan: a grain of the shapes file missing from them.
+  segment::LabelsFile other;
+  other.labels = test::label_balls({40, 40, 40}, {kBalls[0]}, {kVoxel, kVoxel, kVoxel});
+  other.grains = segment::grain_table(other.labels);
+  other.parameters_json = "{}";
+  segment::write_labels_file(dir / "other.h5", other, {"other"});
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), (dir / "other.h5").string(), out}, 2,
+                             "pass the labels file the shapes were measured from");
+}
