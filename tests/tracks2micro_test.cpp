@@ -1,6 +1,7 @@
 // tracks2micro: CLI contract; a lattice series with an exact affine step and then one displaced
-// grain (analytic D2min and strain read back from the kind=micro file and its VTK view); bad
-// inputs failing cleanly.
+// grain (analytic D2min and strain read back from the kind=micro file and its VTK view);
+// simulation frames (a kind=fdem_results file from the real solver and ResultsWriter) in affine
+// motion giving D2min = 0 and the exact strain; bad inputs failing cleanly.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -12,6 +13,7 @@
 #include "graintwin/shape/shapes_file.hpp"
 #include "graintwin/track/tracks_file.hpp"
 #include "support/cli_contract.hpp"
+#include "support/simulation_results.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
@@ -204,4 +206,57 @@ TEST(Tracks2micro, BadInputsFailCleanly) {
   fail({(dir / "one.h5").string(), out}, 2, "single scan");
   ASSERT_EQ(run_tool("tracks2micro", {in, out}).exit_code, 0);
   fail({in, out}, 2, "--force");
+}
+
+TEST(Tracks2micro, SimulationFramesInAffineMotionGiveTheExactStrain) {
+  test::TempDir dir;
+  test::LatticeRun run;  // 4^3 rigid boxes 1 mm wide, 1.5 mm apart; frames every 10 us
+  run.velocity_gradient << -120, 30, 0, 0, 60, -20, 10, 0, 40;
+  const auto results = dir / "results.h5";
+  test::write_lattice_results(results, run);
+  const auto r = run_tool("tracks2micro", {results.string(), (dir / "micro.h5").string(), "--from", "1", "--to", "3"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Grain positions are x(t) = (I + t L) x0, so the map between frames a and b is F_b F_a^-1.
+  std::vector<double> time;
+  for (std::size_t k = 0; k < run.frames; ++k) time.push_back(fdem::read_results_frame(results, k).time);
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d lambda = (I + time[3] * run.velocity_gradient) * (I + time[1] * run.velocity_gradient).inverse();
+  const Eigen::Matrix3d eps = I - 0.5 * (lambda + lambda.transpose());
+  const double want[6] = {eps(0, 0), eps(1, 1), eps(2, 2), eps(1, 2), eps(0, 2), eps(0, 1)};
+  ASSERT_GT(std::abs(want[0]), 1e-4);
+  const io::H5File f = io::H5File::open(dir / "micro.h5");
+  std::vector<hsize_t> dims;
+  const auto d2min = f.read<double>("/grains/d2min", &dims);
+  ASSERT_EQ(dims, (std::vector<hsize_t>{64, 1}));
+  const auto strain = f.read<double>("/grains/strain");
+  const auto status = f.read<std::uint8_t>("/grains/status");
+  for (std::size_t i = 0; i < 64; ++i) {
+    ASSERT_EQ(status[i], 0u) << i;  // every lattice grain has 3 or more neighbours spanning a volume
+    EXPECT_LT(d2min[i], 1e-20) << i;
+    for (int c = 0; c < 6; ++c) EXPECT_NEAR(strain[i * 6 + std::size_t(c)], want[c], 1e-12) << i;
+  }
+  // Every grain in every frame, labelled as in the simulation; states are the frames.
+  const auto label = f.read<std::uint32_t>("/grains/label", &dims);
+  ASSERT_EQ(dims, (std::vector<hsize_t>{64, 4}));
+  EXPECT_EQ(label[5 * 4 + 3], test::lattice_label(5));
+  EXPECT_EQ(f.read_strings("/states/file")[2], results.string() + ":/frames/2");
+  // d50 from the grains' volumes (equal boxes: the volume-equivalent diameter of one).
+  EXPECT_NEAR(f.read<double>("/states/d50")[0], std::cbrt(6.0 / std::numbers::pi) * run.box, 1e-15);
+  // Coordination from the frames' contacts: the solver ran without contact, so none.
+  EXPECT_EQ(*f.attr_string("/states/0/coordination", "source"), "contacts");
+  EXPECT_EQ(f.attr_doubles("/states/0/coordination", "mean").at(0), 0.0);
+  EXPECT_NE(f.read_strings("/micro/parameters")[0].find("\"source\":\"fdem_results\""), std::string::npos);
+
+  // Default increments: consecutive frames.
+  ASSERT_EQ(run_tool("tracks2micro", {results.string(), (dir / "all.h5").string()}).exit_code, 0);
+  EXPECT_EQ(io::H5File::open(dir / "all.h5").read<std::uint64_t>("/increments/from"), (std::vector<std::uint64_t>{0, 1, 2}));
+
+  // Tracks-only options and a single frame fail cleanly.
+  test::expect_clean_failure("tracks2micro", dir, {results.string(), (dir / "x.h5").string(), "--contacts", "a.h5", "b.h5"}, 2,
+                             "belong to tracks");
+  test::expect_clean_failure("tracks2micro", dir, {results.string(), (dir / "x.h5").string(), "--from", "0", "--to", "4"}, 2,
+                             "frames 0..3");
+  run.frames = 1;
+  test::write_lattice_results(dir / "one.h5", run);
+  test::expect_clean_failure("tracks2micro", dir, {(dir / "one.h5").string(), (dir / "x.h5").string()}, 2, "single frame");
 }

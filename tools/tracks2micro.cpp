@@ -13,6 +13,7 @@
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/micro_file.hpp"
+#include "graintwin/micro/simulation.hpp"
 #include "graintwin/shape/shapes_file.hpp"
 #include "graintwin/track/tracks_file.hpp"
 
@@ -40,13 +41,98 @@ void by_label(const track::TracksTable& tr, std::size_t t, const std::vector<std
   }
 }
 
+/// The states of a tracked series: the tracks' centroids, the scans' shapes files for volumes, d50
+/// and PSD, coordination numbers from contacts files when given.
+MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std::vector<fs::path>& shapes_override,
+                         const std::vector<fs::path>& contacts) {
+  const io::H5File tracks_h5 = io::open_kind(input, schema::kind::tracks, "pass the output of shapes2tracks (tracks) or of fdemrun (simulation frames)");
+  ctx.add_input_history(tracks_h5);
+  const track::TracksTable tr = track::read_tracks_file(input);
+  const std::vector<double> d50 = tracks_h5.read<double>(schema::tracks::scan_d50);
+  if (tr.scans < 2)
+    throw UsageError(input.string() + " holds a single scan; micro-mechanics needs two states, so track two scans or more with shapes2tracks");
+  if (d50.size() != tr.scans) throw DataError(input.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
+  std::vector<fs::path> shapes_paths(tr.scan_files.begin(), tr.scan_files.end());
+  if (!shapes_override.empty()) {
+    if (shapes_override.size() != tr.scans)
+      throw UsageError("--shapes lists " + std::to_string(shapes_override.size()) + " files but " + input.string() + " has " +
+                       std::to_string(tr.scans) + " scans; give one per scan");
+    shapes_paths = shapes_override;
+  }
+  for (const fs::path& p : shapes_paths) {
+    std::error_code ec;
+    if (!fs::exists(p, ec))
+      throw UsageError("the shapes file " + p.string() + " listed in " + input.string() +
+                       " does not exist; run from the directory shapes2tracks ran in, or pass --shapes");
+  }
+  if (!contacts.empty() && contacts.size() != tr.scans)
+    throw UsageError("--contacts lists " + std::to_string(contacts.size()) + " files but " + input.string() + " has " +
+                     std::to_string(tr.scans) + " scans; give one per scan");
+  for (const fs::path& p : contacts) check_exists(p, "contacts file");
+
+  MicroFile content;
+  SeriesStates& s = content.series;
+  s.grains = tr.tracks, s.states = tr.scans, s.d50 = d50;
+  s.position.resize(tr.tracks * tr.scans);
+  for (std::size_t c = 0; c < s.position.size(); ++c)
+    s.position[c] = Eigen::Vector3d(tr.centroid[3 * c], tr.centroid[3 * c + 1], tr.centroid[3 * c + 2]);
+  s.volume.assign(s.position.size(), std::nan(""));
+  for (std::size_t t = 0; t < tr.scans; ++t) {
+    ctx.add_input_history(io::open_kind(shapes_paths[t], schema::kind::shapes, "pass the labels2shapes output of that scan"));
+    const shape::ShapesFile sh = shape::read_shapes_file(shapes_paths[t]);
+    std::vector<std::uint32_t> labels;
+    for (const auto& g : sh.grains) labels.push_back(g.label);
+    std::size_t found = 0;
+    by_label<double>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.volume[i * s.states + t] = sh.grains[k].volume, ++found; });
+    std::size_t present = 0;
+    for (std::size_t i = 0; i < tr.tracks; ++i) present += tr.label[i * tr.scans + t] != 0;
+    if (found != present)
+      throw DataError(shapes_paths[t].string() + " lacks " + std::to_string(present - found) + " grains the tracks name in scan " +
+                      std::to_string(t) + "; pass the shapes files the tracks were made from (--shapes)");
+    s.psd.push_back(sh.psd);
+    content.state_files.push_back(shapes_paths[t].string());
+  }
+  if (!contacts.empty()) {
+    s.coordination.resize(tr.scans);
+    for (std::size_t t = 0; t < tr.scans; ++t) {
+      const io::H5File cf = io::open_kind(contacts[t], schema::kind::contacts, "pass the labels2contacts output of that scan");
+      ctx.add_input_history(cf);
+      const auto labels = cf.read<std::uint32_t>(schema::contacts::grain_label);
+      const auto z = cf.read<std::uint32_t>(schema::contacts::grain_coordination);
+      if (labels.size() != z.size()) throw DataError(contacts[t].string() + ": /grains/label and /grains/coordination differ in length; rewrite it with labels2contacts");
+      s.coordination[t].assign(tr.tracks, 0);
+      by_label<std::uint32_t>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.coordination[t][i] = z[k]; });
+    }
+  }
+  content.label = tr.label;
+  return content;
+}
+
+/// The states of a simulation: every frame of a kind=fdem_results file, all grains in each, with
+/// volumes from /grains/volume and coordination numbers from the frames' grain-grain contacts.
+MicroFile simulation_content(cli::RunContext& ctx, const fs::path& input) {
+  ctx.add_input_history(io::open_kind(input, schema::kind::fdem_results, "pass the output of fdemrun"));
+  const SimulationGrains grains = read_simulation_grains(input);
+  MicroFile content;
+  content.series = simulation_states(input, grains, nullptr);
+  const std::size_t t = content.series.states;
+  if (t < 2) throw UsageError(input.string() + " holds a single frame; micro-mechanics needs two states, so save more frames with fdemrun");
+  for (std::size_t k = 0; k < t; ++k) content.state_files.push_back(input.string() + ":" + schema::fdem_results::frames + "/" + std::to_string(k));
+  content.label.resize(grains.label.size() * t);
+  for (std::size_t i = 0; i < grains.label.size(); ++i)
+    for (std::size_t k = 0; k < t; ++k) content.label[i * t + k] = grains.label[i];
+  return content;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   cli::Tool tool(
       "tracks2micro",
       "Micro-mechanics of a tracked series (kind=tracks, from shapes2tracks; the scans' shapes files it lists give the "
-      "grain volumes, d50 and PSD): per grain and increment (consecutive scans, or --from/--to) the Falk-Langer D2min "
+      "grain volumes, d50 and PSD) or of simulation frames (kind=fdem_results, from fdemrun; every grain in every frame, "
+      "volumes from its grain table, coordination from each frame's grain-grain contacts): per grain and increment "
+      "(consecutive scans or frames, or --from/--to) the Falk-Langer D2min "
       "over the neighbours within --radius-d50 (reported over d50^2), the affine tensor Lambda, the local strain "
       "eps^L = I - (Lambda + Lambda^T)/2 (compression positive) and eps_q = sqrt(2/3 e_dev:e_dev); log-binned PDFs of "
       "D2min and eps_q; clusters of the --top-fraction highest D2min linked by contact distance, their sizes, "
@@ -54,26 +140,27 @@ int main(int argc, char** argv) {
       "dimension from R_g ~ s^(1/d_f); incremental displacement distributions over d50; per scan g(r) with Ripley's "
       "edge correction in the region the centres fill, the coordination-number distribution (from --contacts files, "
       "else by centroid distance) and the PSD. Writes kind=micro (.h5) and, with --vtk, grain points with D2min and "
-      "eps_q for ParaView. Simulation frames (kind=fdem_results) are not read yet: that format has not landed.");
+      "eps_q for ParaView.");
   fs::path input, output, vtk;
   std::vector<fs::path> shapes_override, contacts;
   long long from = -1, to = -1;
   std::string region = "cylinder";
   MicroOptions o;
   auto& app = tool.cli();
-  tool.add_input("tracks", input, "Tracks file (.h5, kind=tracks, from shapes2tracks)");
+  tool.add_input("input", input, "Tracks file (.h5, kind=tracks, from shapes2tracks) or simulation results (.h5, kind=fdem_results, from fdemrun)");
   tool.add_output("micro", output, "Micro-mechanics file to write (.h5, kind=micro)");
-  app.add_option("--from", from, "First scan of one increment (with --to; default: every pair of consecutive scans)")
+  app.add_option("--from", from, "First scan (or frame) of one increment (with --to; default: every pair of consecutive scans or frames)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--to", to, "Second scan of that increment")->check(CLI::NonNegativeNumber);
+  app.add_option("--to", to, "Second scan (or frame) of that increment")->check(CLI::NonNegativeNumber);
   app.add_option("--shapes", shapes_override,
-                 "The scans' shapes files in order, in place of the paths stored in the tracks file (when it was moved)")
+                 "The scans' shapes files in order, in place of the paths stored in the tracks file (when it was moved; tracks only)")
       ->expected(2, -1);
   app.add_option("--contacts", contacts,
                  "One contacts file per scan (kind=contacts, from labels2contacts): coordination numbers from its "
-                 "contacts; without it, grains whose centroids are within --contact-factor (r_i + r_j) count as touching")
+                 "contacts; without it, grains whose centroids are within --contact-factor (r_i + r_j) count as touching (tracks "
+                 "only: simulation frames carry their contacts)")
       ->expected(2, -1);
-  app.add_option("--radius-d50", o.radius_d50, "D2min neighbourhood radius (d50 of the first scan of the increment)")
+  app.add_option("--radius-d50", o.radius_d50, "D2min neighbourhood radius (d50 of the first state of the increment)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--min-neighbours", o.min_neighbours, "Fewest neighbours for a local deformation (fewer: flagged, NaN)")
       ->check(CLI::Range(3, 1000))->capture_default_str();
@@ -98,7 +185,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_option("--vtk", vtk, "Also write the grains as VTK points with D2min, eps_q and cluster per increment (.vtp, ParaView)");
   tool.set_examples({"tracks2micro runs/sand_small/tracks.h5 runs/sand_small/micro.h5 --vtk runs/sand_small/micro.vtp",
-                     "tracks2micro tracks.h5 micro.h5 --from 0 --to 2 --contacts scan_000/contacts.h5 scan_001/contacts.h5 scan_002/contacts.h5"});
+                     "tracks2micro tracks.h5 micro.h5 --from 0 --to 2 --contacts scan_000/contacts.h5 scan_001/contacts.h5 scan_002/contacts.h5",
+                     "tracks2micro runs/sand_small/results.h5 runs/sand_small/micro_sim.h5 --from 0 --to 4"});
 
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     // Options and files first, before reading any table.
@@ -106,76 +194,25 @@ int main(int argc, char** argv) {
     o.clusters.link_factor = o.contact_factor;  // one definition of touching for cluster links and coordination
     if (output.extension() != ".h5") throw UsageError("the micro file " + output.string() + " must end in .h5");
     if (!vtk.empty() && vtk.extension() != ".vtp") throw UsageError("--vtk " + vtk.string() + " must end in .vtp");
-    if ((from < 0) != (to < 0)) throw UsageError("--from and --to go together: give both scans of the increment");
-    if (from >= 0 && from == to) throw UsageError("--from and --to name the same scan; give two different scans");
+    if ((from < 0) != (to < 0)) throw UsageError("--from and --to go together: give both states (scans or frames) of the increment");
+    if (from >= 0 && from == to) throw UsageError("--from and --to name the same state; give two different scans or frames");
     io::AtomicOutput out(output, ctx.force());
     std::optional<io::AtomicOutput> vtk_out;
     if (!vtk.empty()) vtk_out.emplace(vtk, ctx.force());
-    const io::H5File tracks_h5 = io::open_kind(input, schema::kind::tracks, "pass the output of shapes2tracks");
-    ctx.add_input_history(tracks_h5);
-    const track::TracksTable tr = track::read_tracks_file(input);
-    const std::vector<double> d50 = tracks_h5.read<double>(schema::tracks::scan_d50);
-    if (tr.scans < 2)
-      throw UsageError(input.string() + " holds a single scan; micro-mechanics needs two states, so track two scans or more with shapes2tracks");
-    if (d50.size() != tr.scans) throw DataError(input.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
-    if (to >= static_cast<long long>(tr.scans) || from >= static_cast<long long>(tr.scans))
-      throw UsageError("--from/--to must name scans 0.." + std::to_string(tr.scans - 1) + " of " + input.string());
-    std::vector<fs::path> shapes_paths(tr.scan_files.begin(), tr.scan_files.end());
-    if (!shapes_override.empty()) {
-      if (shapes_override.size() != tr.scans)
-        throw UsageError("--shapes lists " + std::to_string(shapes_override.size()) + " files but " + input.string() + " has " +
-                         std::to_string(tr.scans) + " scans; give one per scan");
-      shapes_paths = shapes_override;
-    }
-    for (const fs::path& p : shapes_paths) {
-      std::error_code ec;
-      if (!fs::exists(p, ec))
-        throw UsageError("the shapes file " + p.string() + " listed in " + input.string() +
-                         " does not exist; run from the directory shapes2tracks ran in, or pass --shapes");
-    }
-    if (!contacts.empty() && contacts.size() != tr.scans)
-      throw UsageError("--contacts lists " + std::to_string(contacts.size()) + " files but " + input.string() + " has " +
-                       std::to_string(tr.scans) + " scans; give one per scan");
-    for (const fs::path& p : contacts) check_exists(p, "contacts file");
-
-    MicroFile content;
-    SeriesStates& s = content.series;
-    s.grains = tr.tracks, s.states = tr.scans, s.d50 = d50;
-    s.position.resize(tr.tracks * tr.scans);
-    for (std::size_t c = 0; c < s.position.size(); ++c)
-      s.position[c] = Eigen::Vector3d(tr.centroid[3 * c], tr.centroid[3 * c + 1], tr.centroid[3 * c + 2]);
-    s.volume.assign(s.position.size(), std::nan(""));
-    for (std::size_t t = 0; t < tr.scans; ++t) {
-      ctx.add_input_history(io::open_kind(shapes_paths[t], schema::kind::shapes, "pass the labels2shapes output of that scan"));
-      const shape::ShapesFile sh = shape::read_shapes_file(shapes_paths[t]);
-      std::vector<std::uint32_t> labels;
-      for (const auto& g : sh.grains) labels.push_back(g.label);
-      std::size_t found = 0;
-      by_label<double>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.volume[i * s.states + t] = sh.grains[k].volume, ++found; });
-      std::size_t present = 0;
-      for (std::size_t i = 0; i < tr.tracks; ++i) present += tr.label[i * tr.scans + t] != 0;
-      if (found != present)
-        throw DataError(shapes_paths[t].string() + " lacks " + std::to_string(present - found) + " grains the tracks name in scan " +
-                        std::to_string(t) + "; pass the shapes files the tracks were made from (--shapes)");
-      s.psd.push_back(sh.psd);
-      content.state_files.push_back(shapes_paths[t].string());
-    }
-    if (!contacts.empty()) {
-      s.coordination.resize(tr.scans);
-      for (std::size_t t = 0; t < tr.scans; ++t) {
-        const io::H5File cf = io::open_kind(contacts[t], schema::kind::contacts, "pass the labels2contacts output of that scan");
-        ctx.add_input_history(cf);
-        const auto labels = cf.read<std::uint32_t>(schema::contacts::grain_label);
-        const auto z = cf.read<std::uint32_t>(schema::contacts::grain_coordination);
-        if (labels.size() != z.size()) throw DataError(contacts[t].string() + ": /grains/label and /grains/coordination differ in length; rewrite it with labels2contacts");
-        s.coordination[t].assign(tr.tracks, 0);
-        by_label<std::uint32_t>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.coordination[t][i] = z[k]; });
-      }
-    }
-    content.label = tr.label;
+    const std::string kind = io::file_kind(io::H5File::open(input));
+    const bool simulation = kind == schema::kind::fdem_results;
+    if (simulation && (!shapes_override.empty() || !contacts.empty()))
+      throw UsageError("--shapes and --contacts belong to tracks; " + input.string() +
+                       " holds simulation frames, whose volumes and contacts it carries itself");
+    MicroFile content = simulation ? simulation_content(ctx, input) : tracks_content(ctx, input, shapes_override, contacts);
+    const SeriesStates& s = content.series;
+    const std::string state = simulation ? "frame" : "scan";
+    if (to >= static_cast<long long>(s.states) || from >= static_cast<long long>(s.states))
+      throw UsageError("--from/--to must name " + state + "s 0.." + std::to_string(s.states - 1) + " of " + input.string());
     const auto increments = from >= 0 ? std::vector<std::pair<std::size_t, std::size_t>>{{std::size_t(from), std::size_t(to)}}
-                                      : consecutive_increments(tr.scans);
-    spdlog::info("{} grains over {} scans (d50 {:.4g} mm in scan 0), {} increment(s)", tr.tracks, tr.scans, d50[0] * 1e3, increments.size());
+                                      : consecutive_increments(s.states);
+    spdlog::info("{} grains over {} {}s (d50 {:.4g} mm in {} 0), {} increment(s)", s.grains, s.states, state, s.d50[0] * 1e3, state,
+                 increments.size());
     content.result = analyse_series(s, increments, o, ctx.progress_callback("micro-mechanics"));
 
     for (const IncrementResult& r : content.result.increments) {
@@ -198,17 +235,17 @@ int main(int argc, char** argv) {
     }
     for (std::size_t t = 0; t < content.result.states.size(); ++t) {
       const StateResult& r = content.result.states[t];
-      spdlog::info("scan {}: mean coordination {:.2f} ({}), g(r) over {} grains", t, r.coordination_distribution.mean,
+      spdlog::info("{} {}: mean coordination {:.2f} ({}), g(r) over {} grains", state, t, r.coordination_distribution.mean,
                    r.coordination_from_contacts ? "contacts" : "distance criterion", r.rdf.points);
     }
-    nlohmann::json p = {{"source", "tracks"},
+    nlohmann::json p = {{"source", simulation ? "fdem_results" : "tracks"},
                         {"increments", increments},
                         {"radius_d50", o.radius_d50},
                         {"min_neighbours", o.min_neighbours},
                         {"top_fraction", o.clusters.top_fraction},
                         {"contact_factor", o.contact_factor},
                         {"cluster_links", "contact distance"},
-                        {"coordination", contacts.empty() ? "distance" : "contacts"},
+                        {"coordination", simulation || !contacts.empty() ? "contacts" : "distance"},
                         {"min_tail", o.clusters.min_tail},
                         {"pdf_bins_per_decade", o.pdf_per_decade},
                         {"rdf_max_d50", o.rdf_max_d50},

@@ -13,8 +13,6 @@ namespace graintwin::micro {
 namespace sm = schema::micro;
 using io::units;
 
-namespace {
-
 void write_histogram(io::H5File& f, const std::string& group, const Histogram& h, const std::string& unit) {
   f.ensure_group(group);
   f.write(group + "/" + sm::edges, h.edges, units(unit));
@@ -23,6 +21,8 @@ void write_histogram(io::H5File& f, const std::string& group, const Histogram& h
   f.set_attr(group, "used", static_cast<long long>(h.used));
   f.set_attr(group, "outside", static_cast<long long>(h.outside));
 }
+
+namespace {
 
 void write_increment(io::H5File& f, const std::string& g, const IncrementResult& r) {
   write_histogram(f, g + "/pdf_d2min", r.pdf_d2min, "1");

@@ -16,6 +16,7 @@ inline constexpr const char* fdem_model = "fdem_model";
 inline constexpr const char* fdem_results = "fdem_results";
 inline constexpr const char* ground_truth = "ground_truth";
 inline constexpr const char* micro = "micro";
+inline constexpr const char* forces = "forces";
 }  // namespace kind
 
 namespace attr {
@@ -185,3 +186,34 @@ inline constexpr const char* contact_normal = "contacts/normal";      ///< (M x 
 inline constexpr const char* contact_force = "contacts/force";        ///< (M x 3) N, on the second (the platen)
 inline constexpr const char* contact_overlap = "contacts/overlap";    ///< (M) m
 }  // namespace graintwin::schema::fdem_results
+
+// kind=forces (fdem2forces), layout in docs/formats.md. G grains, F analysed frames, W strain
+// windows; per-frame groups /frames/<f>/pdf and /frames/<f>/rose (f = 0..F-1, row of /frames/index).
+namespace graintwin::schema::forces {
+inline constexpr const char* grain_label = "/grains/label";            ///< uint32 (G)
+inline constexpr const char* grain_q = "/grains/q";                    ///< (G x F) Pa; attribute `definition`
+inline constexpr const char* grain_volatility = "/grains/volatility";  ///< (G x W)
+inline constexpr const char* grain_d2min = "/grains/d2min";            ///< (G x W) D2min / d50^2; attribute `source`
+inline constexpr const char* frames = "/frames";                       ///< group; /frames/<f>/pdf, /frames/<f>/rose
+inline constexpr const char* frame_index = "/frames/index";            ///< uint64 (F), frame of the results file
+inline constexpr const char* frame_time = "/frames/time";              ///< (F) s
+inline constexpr const char* frame_contacts = "/frames/contacts";      ///< uint64 (F), grain-grain contacts
+inline constexpr const char* frame_platen_contacts = "/frames/platen_contacts";  ///< uint64 (F)
+inline constexpr const char* frame_mean_force = "/frames/mean_normal_force";     ///< (F) N, <f_n>
+inline constexpr const char* frame_strong = "/frames/strong_contacts";           ///< uint64 (F), f_n >= threshold <f_n>
+inline constexpr const char* frame_strong_scale = "/frames/strong_scale";        ///< (F) exponential scale of f >= 1
+inline constexpr const char* frame_strong_scale_error = "/frames/strong_scale_error";  ///< (F)
+inline constexpr const char* frame_weak_theta = "/frames/weak_theta";            ///< (F) P(f) ~ f^theta for f < 1
+inline constexpr const char* frame_weak_theta_error = "/frames/weak_theta_error";  ///< (F)
+inline constexpr const char* window_from = "/windows/from";            ///< uint64 (W), frame
+inline constexpr const char* window_to = "/windows/to";                ///< uint64 (W), frame
+inline constexpr const char* window_r = "/windows/pearson_r";          ///< (W) volatility against D2min
+inline constexpr const char* window_p = "/windows/p_value";            ///< (W) two-sided
+inline constexpr const char* window_count = "/windows/count";          ///< uint64 (W) grains in the correlation
+inline constexpr const char* parameters = "/forces/parameters";        ///< string (1), JSON
+// Members of each frame's rose group (the pdf group uses schema::micro's edges/count/density).
+inline constexpr const char* rose_theta_edges = "theta_edges";       ///< rad
+inline constexpr const char* rose_phi_edges = "phi_edges";           ///< rad
+inline constexpr const char* rose_count = "count";                   ///< uint64 (n_theta x n_phi)
+inline constexpr const char* rose_mean_force = "mean_force";         ///< (n_theta x n_phi) N, NaN in empty bins
+}  // namespace graintwin::schema::forces

@@ -9,7 +9,15 @@
 
 #include "graintwin/micro/analysis.hpp"
 
+namespace graintwin::io {
+class H5File;
+}
+
 namespace graintwin::micro {
+
+/// Writes `h` as group `group` with datasets edges (units `unit`), count and density (1/unit) and
+/// attributes used and outside; shared by the kind=micro and kind=forces writers.
+void write_histogram(io::H5File& file, const std::string& group, const Histogram& h, const std::string& unit);
 
 struct MicroFile {
   std::vector<std::string> state_files;  ///< what each state was read from (the shapes files)
