@@ -1,7 +1,9 @@
 // micro/: local deformation (D2min, affine tensor, local strain) against exact affine and
 // single-grain motions; histograms; power-law fits on samples drawn from known laws; clusters and
 // radii of gyration; g(r) of a lattice and of an ideal gas in a cylinder; coordination numbers;
-// force statistics, grain stress q, volatility and Pearson's r with its p-value.
+// force statistics, grain stress q, volatility and Pearson's r with its p-value; simulation frames
+// read as states (grain table checks, grain-grain contacts and their normal forces) and the strong
+// network.
 #include <gtest/gtest.h>
 #include <gsl/gsl_sf_zeta.h>
 
@@ -13,9 +15,14 @@
 
 #include "graintwin/micro/clusters.hpp"
 #include "graintwin/micro/distributions.hpp"
+#include "graintwin/core/error.hpp"
 #include "graintwin/micro/forces.hpp"
+#include "graintwin/micro/forces_file.hpp"
 #include "graintwin/micro/local_deformation.hpp"
+#include "graintwin/micro/simulation.hpp"
 #include "graintwin/micro/structure.hpp"
+#include "support/run_tool.hpp"
+#include "support/simulation_results.hpp"
 
 using namespace graintwin;
 using namespace graintwin::micro;
@@ -346,4 +353,64 @@ TEST(Forces, GrainStressVolatilityAndCorrelation) {
   EXPECT_NEAR(c.p_value, 2.0 * (0.5 - (std::atan(x) + x / (1.0 + x * x)) / std::numbers::pi), 1e-10);
   EXPECT_EQ(pearson({1, 2, 3}, {2, 4, 6}).p_value, 0.0);
   EXPECT_TRUE(std::isnan(pearson({1, 2}, {1, 2}).r));
+}
+
+TEST(Forces, StrongNetworkAndGrainQ) {
+  const std::vector<double> fn{1.0, 4.0, 0.0, -2.0, 3.0, 2.0};
+  EXPECT_EQ(strong_contacts(fn, 2.5, 1.0), (std::vector<std::size_t>{1, 4}));
+  EXPECT_EQ(strong_contacts(fn, 2.5, 0.8), (std::vector<std::size_t>{1, 4, 5}));
+  EXPECT_TRUE(strong_contacts(fn, 0.0, 1.0).empty());
+  // Two grains: pure pressure (q = 0) and pressure plus a shear tau (q = tau).
+  std::vector<double> stress(18, 0.0);
+  for (int i : {0, 4, 8}) stress[std::size_t(i)] = 3e5, stress[9 + std::size_t(i)] = 3e5;
+  stress[9 + 1] = stress[9 + 3] = 2e4;
+  const auto q = grain_q(stress);
+  EXPECT_NEAR(q[0], 0.0, 1e-9);
+  EXPECT_NEAR(q[1], 2e4, 1e-9);
+  EXPECT_THROW(grain_q(std::vector<double>(10)), UsageError);
+}
+
+TEST(Simulation, FrameContactsLeavePlatensOutAndProjectTheForce) {
+  test::TempDir dir;
+  test::LatticeRun run;
+  run.side = 2;
+  test::write_lattice_results(dir / "r.h5", run);
+  const SimulationGrains grains = read_simulation_grains(dir / "r.h5");
+  ASSERT_EQ(grains.label.size(), 8u);
+  EXPECT_NEAR(grains.psd.d50, std::cbrt(6.0 / std::numbers::pi) * run.box, 1e-15);
+  fdem::ResultsFrame frame;
+  frame.pair = {test::lattice_label(0), test::lattice_label(1), test::lattice_label(2), 0};
+  frame.platen = {-1, 1};
+  frame.normal = {0, 1, 0, 0, 0, -1};
+  frame.force = {0.5, 7, 2, 0, 0, -50};
+  const FrameContacts c = frame_contacts(frame, grains, dir / "r.h5", 0);
+  ASSERT_EQ(c.pair.size(), 1u);
+  EXPECT_EQ(c.pair[0], (std::pair<std::size_t, std::size_t>{0, 1}));
+  EXPECT_DOUBLE_EQ(c.normal_force[0], 7.0);  // F . n: the tangential parts drop out
+  EXPECT_EQ(c.platen_contacts, 1u);
+  frame.pair[1] = 999;  // a label the grain table lacks
+  EXPECT_THROW(frame_contacts(frame, grains, dir / "r.h5", 0), DataError);
+  frame.force.pop_back();
+  EXPECT_THROW(frame_contacts(frame, grains, dir / "r.h5", 0), DataError);
+  // Every frame as a state, coordination from the (contact-free) frames.
+  std::vector<double> times;
+  const SeriesStates s = simulation_states(dir / "r.h5", grains, &times);
+  EXPECT_EQ(s.states, run.frames);
+  EXPECT_NEAR(times[2], 2.0 * double(run.steps_per_frame) * run.dt, 1e-15);
+  EXPECT_LT((s.position[7 * s.states] - test::lattice_site(run, 7)).norm(), 1e-15);
+  EXPECT_EQ(s.coordination[1], std::vector<std::uint32_t>(8, 0));
+}
+
+TEST(Simulation, BadGrainTablesAndNoFramesAreDataErrors) {
+  test::TempDir dir;
+  test::LatticeRun run;
+  run.side = 2;
+  run.frames = 0;
+  test::write_lattice_results(dir / "empty.h5", run);
+  const SimulationGrains grains = read_simulation_grains(dir / "empty.h5");
+  EXPECT_THROW(simulation_states(dir / "empty.h5", grains, nullptr), DataError);
+  test::replace_dataset(dir / "empty.h5", schema::fdem_results::grain_label, std::vector<std::uint32_t>(8, 5), {8});
+  EXPECT_THROW(read_simulation_grains(dir / "empty.h5"), DataError);
+  test::replace_dataset(dir / "empty.h5", schema::fdem_results::grain_volume, std::vector<double>(3, 1e-9), {3});
+  EXPECT_THROW(read_simulation_grains(dir / "empty.h5"), DataError);
 }
