@@ -46,8 +46,9 @@ int main(int argc, char** argv) {
       "Checkpoints (--checkpoint) let --restart continue a run exactly; --vtk writes every frame as a .vtu of the "
       "deformed meshes with a .pvd index for ParaView. Grains come from a kind=fdem_model file (shapes2mesh) and/or "
       "primitives: boxes (structured mesh), spheres and ellipsoids (gmsh). Contact (penalty, dashpot, friction, "
-      "platens) comes from the fdem contact module and is switched off with [run] contact = false; its verification "
-      "against impact solutions is not finished (docs/fdemrun.md). Not yet: the membrane, servo control. "
+      "platens) comes from the fdem contact module and is switched off with [run] contact = false; it is verified "
+      "against a spring-dashpot bounce (restitution, contact time) and a block on an incline, not yet against Hertz or "
+      "Chung & Ooi (2011) impacts (docs/fdemrun.md). Not yet: the membrane, servo control. "
       "The scene format is in docs/fdemrun.md.");
   fs::path scene_path, output, checkpoint, restart;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
