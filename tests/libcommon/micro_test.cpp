@@ -414,3 +414,16 @@ TEST(Simulation, BadGrainTablesAndNoFramesAreDataErrors) {
   test::replace_dataset(dir / "empty.h5", schema::fdem_results::grain_volume, std::vector<double>(3, 1e-9), {3});
   EXPECT_THROW(read_simulation_grains(dir / "empty.h5"), DataError);
 }
+
+TEST(Structure, EnclosingRegionHoldsEveryPoint) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  for (int trial = 0; trial < 50; ++trial) {
+    std::vector<Eigen::Vector3d> p(27);
+    for (auto& q : p) q = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    for (const auto kind : {Region::Kind::box, Region::Kind::cylinder}) {
+      const Region r = enclosing_region(p, kind);
+      for (const auto& q : p) EXPECT_TRUE(r.contains(q)) << trial;
+    }
+  }
+}

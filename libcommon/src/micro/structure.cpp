@@ -14,7 +14,9 @@ namespace graintwin::micro {
 
 bool Region::contains(const Eigen::Vector3d& p) const {
   if (kind == Kind::box) return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
-  return p.z() >= lo.z() && p.z() <= hi.z() && (p.head<2>() - axis).squaredNorm() <= radius * radius;
+  // The same expression as enclosing_region's radius, so the farthest point is inside (squaring
+  // the radius can round it below that point's squared distance).
+  return p.z() >= lo.z() && p.z() <= hi.z() && (p.head<2>() - axis).norm() <= radius;
 }
 
 double Region::volume() const {
