@@ -70,8 +70,9 @@ int main(int argc, char** argv) {
                  "relaxed), partial-volume rendering with blur, noise, rings and cupping, and per scan a "
                  "kind=volume scan_NNN.h5 plus a kind=ground_truth truth_NNN.h5. Every scene key is an option "
                  "of the same name; options given on the command line override the scene file. Limit: the packer "
-                 "reaches about 0.55 solid fraction for sand grains in a cylinder 5-6 d50 wide (0.58 is the target; "
-                 "larger samples pack denser); states are prescribed kinematics, not mechanics.");
+                 "jams near 0.58 solid fraction for sand grains in a cylinder 5-7 d50 wide (the bundled series packs "
+                 "0.578; the loose layer at the wall costs the most, wider samples pack denser); states are prescribed "
+                 "kinematics, not mechanics.");
   Options o;
   fs::path outdir, scene;
   auto& app = tool.cli();
