@@ -24,6 +24,17 @@ void write_scene(const fs::path& p, const std::string& extra = "") {
                       "voxel-size = \"35um\"\nstrains = [0.0, 0.03]\nband-width = \"0.7mm\"\n"
                    << extra;
 }
+
+// Every grain appears in the truth's label image, and its voxel count (35 um voxels) matches its
+// true volume within 15 % (the voxel counts of 8-12 voxel grains).
+void expect_label_counts_match_volumes(const io::H5File& truth, std::size_t grains) {
+  const auto labels = io::read_image_as<std::uint32_t>(truth, "/labels");
+  std::vector<double> count(grains + 1, 0.0);
+  for (auto l : labels.values()) count[l] += 1.0;
+  const auto volume = truth.read<double>("/grains/volume");
+  const double vv = std::pow(35e-6, 3);
+  for (std::size_t i = 0; i < grains; ++i) EXPECT_NEAR(count[i + 1] * vv / volume[i], 1.0, 0.15) << "grain " << i + 1;
+}
 }  // namespace
 
 TEST(Ctsynth, StandardCli) { test::expect_standard_cli("ctsynth", "scene"); }
@@ -48,13 +59,7 @@ TEST(Ctsynth, MakesAConsistentSeries) {
     EXPECT_EQ(io::read_image_header(truth, "/labels").shape, hs.shape);
     EXPECT_EQ(truth.read<std::uint32_t>("/grains/label").size(), n);
     EXPECT_NEAR(*truth.attr_doubles("/", "axial_strain").begin(), k == 0 ? 0.0 : 0.03, 1e-12);
-    // Every grain appears in the label image, and its voxel count matches its true volume.
-    const auto labels = io::read_image_as<std::uint32_t>(truth, "/labels");
-    std::vector<double> count(n + 1, 0.0);
-    for (auto l : labels.values()) count[l] += 1.0;
-    const auto volume = truth.read<double>("/grains/volume");
-    const double vv = std::pow(35e-6, 3);
-    for (std::size_t i = 0; i < n; ++i) EXPECT_NEAR(count[i + 1] * vv / volume[i], 1.0, 0.15) << "grain " << i + 1;
+    expect_label_counts_match_volumes(truth, n);
     // Contacts: low < high, unit normals pointing from low to high, touching ones within tolerance.
     std::vector<hsize_t> dims;
     const auto pair = truth.read<std::uint32_t>("/contacts/pair", &dims);
@@ -96,6 +101,28 @@ TEST(Ctsynth, SameSeedSameBytesOtherSeedOtherBytes) {
   };
   EXPECT_EQ(vol("a"), vol("b")) << "the bytes must not depend on the thread count";
   EXPECT_NE(vol("a"), vol("c"));
+}
+
+// The other grain shapes: spheres come out as spheres and ellipsoids with the asked aspect ratio,
+// packed and rendered like sand (label voxels near each grain's exact volume).
+TEST(Ctsynth, SphereAndEllipsoidScenes) {
+  test::TempDir dir;
+  write_scene(dir / "scene.toml");
+  for (const auto& [shape, aspect] : std::vector<std::pair<std::string, double>>{{"sphere", 1.0}, {"ellipsoid", 1.4}}) {
+    const fs::path out = dir / shape;
+    const auto r = run_tool("ctsynth", {(dir / "scene.toml").string(), out.string(), "--strains", "0", "--grain-shape",
+                                        shape, "--aspect-ratio", std::to_string(aspect), "-q"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const io::H5File truth = io::H5File::open(out / "truth_000.h5");
+    const auto ar = truth.read<double>("/grains/aspect_ratio");
+    const auto sph = truth.read<double>("/grains/sphericity");
+    ASSERT_GT(ar.size(), 30u) << shape;
+    for (std::size_t i = 0; i < ar.size(); ++i) {
+      EXPECT_NEAR(ar[i], aspect, 0.01 * aspect) << shape << " grain " << i;
+      if (shape == "sphere") EXPECT_NEAR(sph[i], 1.0, 1e-3) << "grain " << i;
+    }
+    expect_label_counts_match_volumes(truth, ar.size());
+  }
 }
 
 TEST(Ctsynth, OverfullSceneFailsClearlyAndWritesNothing) {
