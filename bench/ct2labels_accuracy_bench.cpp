@@ -24,13 +24,13 @@
 #include <iostream>
 #include <map>
 #include <sstream>
-#include <unordered_map>
 
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/metaimage.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "harness.hpp"
+#include "label_match.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
@@ -39,115 +39,10 @@ using nlohmann::json;
 namespace {
 
 const std::string kSource = GRAINTWIN_SOURCE_DIR;
-constexpr double kIouMatched = 0.8;
-
-/// How one true grain came out.
-enum class Outcome { matched, split, merged, split_and_merged, missed, boundary };
-const char* name(Outcome o) {
-  switch (o) {
-    case Outcome::matched: return "matched";
-    case Outcome::split: return "over-segmented";
-    case Outcome::merged: return "under-segmented";
-    case Outcome::split_and_merged: return "over- and under-segmented";
-    case Outcome::missed: return "missed";
-    case Outcome::boundary: return "boundary (IoU < 0.8, not split or merged)";
-  }
-  return "?";
-}
-
-struct TruthGrain {
-  std::uint32_t label = 0;
-  std::uint64_t voxels = 0;
-  double best_iou = 0.0;
-  Outcome outcome = Outcome::missed;
-};
-
-/// The metric. A true grain is matched if some label covers it with IoU >= 0.8 (above 0.5 a match
-/// is necessarily one-to-one). Each label has a home grain (the true grain, or the background,
-/// holding most of its voxels) and each true grain a home label (likewise): a grain that is home
-/// to two or more labels is over-segmented (split); a grain whose home label is home-label of
-/// another grain too is under-segmented (merged); a grain mostly left unlabelled is missed; an
-/// unmatched grain that is none of these has a poor boundary. Labels whose home is the background
-/// are spurious (e.g. a membrane taken for solid).
-struct MatchResult {
-  std::vector<TruthGrain> grains;  ///< index = true label - 1
-  std::size_t labels = 0, spurious = 0;
-  std::size_t count(Outcome o) const {
-    return static_cast<std::size_t>(
-        std::count_if(grains.begin(), grains.end(), [&](const TruthGrain& g) { return g.outcome == o; }));
-  }
-  std::size_t matched() const { return count(Outcome::matched); }
-  std::size_t split() const { return count(Outcome::split) + count(Outcome::split_and_merged); }
-  std::size_t merged() const { return count(Outcome::merged) + count(Outcome::split_and_merged); }
-  double matched_share() const { return grains.empty() ? 0.0 : static_cast<double>(matched()) / grains.size(); }
-};
-
-MatchResult match_labels(const Volume<std::uint32_t>& truth, const Volume<std::uint32_t>& pred) {
-  if (truth.shape() != pred.shape()) throw std::runtime_error("truth and labels differ in shape");
-  const std::uint32_t* t = truth.data();
-  const std::uint32_t* p = pred.data();
-  const std::size_t n = truth.size();
-  const std::uint32_t nt = *std::max_element(t, t + n), np = *std::max_element(p, p + n);
-  std::vector<std::uint64_t> size_t_(nt + 1, 0), size_p(np + 1, 0);
-  // Overlap counts of (true, predicted) pairs; runs of equal pairs along x are counted at once.
-  std::unordered_map<std::uint64_t, std::uint64_t> pairs;
-  for (std::size_t i = 0; i < n;) {
-    const std::uint32_t a = t[i], b = p[i];
-    std::size_t j = i + 1;
-    while (j < n && t[j] == a && p[j] == b) ++j;
-    size_t_[a] += j - i;
-    size_p[b] += j - i;
-    if (a != 0 || b != 0) pairs[std::uint64_t{a} << 32 | b] += j - i;
-    i = j;
-  }
-  // Homes: argmax of the overlap, background included (0 = background).
-  std::vector<std::uint32_t> home_of_pred(np + 1, 0), home_of_truth(nt + 1, 0);
-  std::vector<std::uint64_t> best_of_pred(np + 1, 0), best_of_truth(nt + 1, 0);
-  MatchResult r;
-  r.grains.resize(nt);
-  for (const auto& [key, c] : pairs) {
-    const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key & 0xFFFFFFFFu);
-    if (b != 0 && (c > best_of_pred[b] || (c == best_of_pred[b] && a < home_of_pred[b]))) {
-      best_of_pred[b] = c;
-      home_of_pred[b] = a;
-    }
-    if (a != 0 && (c > best_of_truth[a] || (c == best_of_truth[a] && b < home_of_truth[a]))) {
-      best_of_truth[a] = c;
-      home_of_truth[a] = b;
-    }
-    if (a != 0 && b != 0) {
-      const double iou = static_cast<double>(c) / static_cast<double>(size_t_[a] + size_p[b] - c);
-      r.grains[a - 1].best_iou = std::max(r.grains[a - 1].best_iou, iou);
-    }
-  }
-  std::vector<std::uint32_t> labels_homed(nt + 1, 0), grains_homed(np + 1, 0);
-  for (std::uint32_t b = 1; b <= np; ++b) {
-    if (size_p[b] == 0) continue;
-    ++r.labels;
-    if (home_of_pred[b] == 0) ++r.spurious;
-    else ++labels_homed[home_of_pred[b]];
-  }
-  for (std::uint32_t a = 1; a <= nt; ++a)
-    if (home_of_truth[a] != 0) ++grains_homed[home_of_truth[a]];
-  for (std::uint32_t a = 1; a <= nt; ++a) {
-    TruthGrain& g = r.grains[a - 1];
-    g.label = a;
-    g.voxels = size_t_[a];
-    const bool split = labels_homed[a] >= 2;
-    const bool merged = home_of_truth[a] != 0 && grains_homed[home_of_truth[a]] >= 2;
-    if (g.best_iou >= kIouMatched) g.outcome = Outcome::matched;
-    else if (split && merged) g.outcome = Outcome::split_and_merged;
-    else if (split) g.outcome = Outcome::split;
-    else if (merged) g.outcome = Outcome::merged;
-    else if (home_of_truth[a] == 0) g.outcome = Outcome::missed;
-    else g.outcome = Outcome::boundary;
-  }
-  // Labels absent from the truth volume (grains of zero voxels) cannot be scored; there are none
-  // in ctsynth scans, whose grains all lie inside the field of view.
-  r.grains.erase(std::remove_if(r.grains.begin(), r.grains.end(), [](const TruthGrain& g) { return g.voxels == 0; }),
-                 r.grains.end());
-  return r;
-}
+using Outcome = bench::LabelOutcome;
+using bench::match_labels;
+using bench::MatchResult;
+using bench::TruthGrain;
 
 Volume<std::uint32_t> read_truth_labels(const fs::path& truth) {
   return io::read_image_as<std::uint32_t>(io::open_kind(truth, "ground_truth"), "/labels");
