@@ -144,6 +144,38 @@ TEST(FillHoles, FillsEnclosedCavitiesOnly) {
   EXPECT_EQ(shell(0, 2, 2), 0);
 }
 
+TEST(FillHoles, MatchesACoordinateFloodOnRandomMasks) {
+  // fill_holes steps by linear index and relies on wrapped steps landing on settled face voxels;
+  // a flood with explicit coordinates on uneven shapes checks that reasoning.
+  std::mt19937 rng(11);
+  for (const Shape3 shape : {Shape3{7, 9, 11}, Shape3{1, 6, 5}, Shape3{12, 3, 8}, Shape3{5, 5, 1}}) {
+    for (double solid : {0.55, 0.7, 0.85}) {
+      Volume<std::uint8_t> m(shape);
+      for (auto& v : m.values()) v = std::uniform_real_distribution<double>(0, 1)(rng) < solid ? 1 : 0;
+      Volume<std::uint8_t> expect = m;
+      std::vector<std::array<long, 3>> stack;
+      const long nz = long(shape[0]), ny = long(shape[1]), nx = long(shape[2]);
+      const auto push = [&](long z, long y, long x) {
+        if (z < 0 || y < 0 || x < 0 || z >= nz || y >= ny || x >= nx || expect(z, y, x) != 0) return;
+        expect(z, y, x) = 2;
+        stack.push_back({z, y, x});
+      };
+      for (long z = 0; z < nz; ++z)
+        for (long y = 0; y < ny; ++y)
+          for (long x = 0; x < nx; ++x)
+            if (z == 0 || y == 0 || x == 0 || z == nz - 1 || y == ny - 1 || x == nx - 1) push(z, y, x);
+      while (!stack.empty()) {
+        const auto [z, y, x] = stack.back();
+        stack.pop_back();
+        push(z - 1, y, x), push(z + 1, y, x), push(z, y - 1, x), push(z, y + 1, x), push(z, y, x - 1), push(z, y, x + 1);
+      }
+      for (auto& v : expect.values()) v = v == 2 ? 0 : 1;
+      fill_holes(m);
+      EXPECT_EQ(m.values(), expect.values()) << shape[0] << "x" << shape[1] << "x" << shape[2] << " solid " << solid;
+    }
+  }
+}
+
 TEST(BinaryOpen, MatchesBruteForceErosionThenDilation) {
   // Random blobs; the ball is every offset with |o|^2 <= r^2; outside the volume is neutral.
   std::mt19937 rng(5);

@@ -171,27 +171,28 @@ void fill_holes(Volume<std::uint8_t>& mask) {
         } else if (x == 1) {
           x = s[2] - 2;  // skip the interior of the row
         }
-  const std::size_t sy = s[2], sz = s[1] * s[2];
+  // Neighbours by linear index without coordinates: a step that wraps across a row or a slice
+  // lands on a face voxel, which the seeding above already settled (reached or solid), so only
+  // the ends of the array need checks. This saves three integer divisions per voxel.
+  const std::size_t sy = s[2], sz = s[1] * s[2], n = mask.size();
   while (!front.empty()) {
     for (std::size_t p : front) {
-      const std::size_t x = p % s[2], y = (p / sy) % s[1], z = p / sz;
       const auto visit = [&](std::size_t q) {
         if (m[q] == 0) {
           m[q] = kReached;
           next.push_back(q);
         }
       };
-      if (x > 0) visit(p - 1);
-      if (x + 1 < s[2]) visit(p + 1);
-      if (y > 0) visit(p - sy);
-      if (y + 1 < s[1]) visit(p + sy);
-      if (z > 0) visit(p - sz);
-      if (z + 1 < s[0]) visit(p + sz);
+      if (p >= 1) visit(p - 1);
+      if (p + 1 < n) visit(p + 1);
+      if (p >= sy) visit(p - sy);
+      if (p + sy < n) visit(p + sy);
+      if (p >= sz) visit(p - sz);
+      if (p + sz < n) visit(p + sz);
     }
     front.swap(next);
     next.clear();
   }
-  const std::size_t n = mask.size();
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) m[i] = m[i] == kReached ? 0 : 1;
 }
