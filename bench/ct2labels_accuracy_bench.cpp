@@ -222,16 +222,11 @@ int main(int argc, char** argv) {
   }
   bool quick = false;
   fs::path work = "/tmp/graintwin_ct2labels_accuracy";
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") quick = true;
-    else if (a == "--work" && i + 1 < argc) work = argv[++i];
-    else {
-      std::cerr << "usage: ct2labels_accuracy_bench [--quick] [--work DIR]\n"
-                   "       ct2labels_accuracy_bench --match LABELS(.h5|.mhd) TRUTH.h5 OUT.json\n"
-                   "       ct2labels_accuracy_bench --scene SCENE.toml DIR [CTSYNTH OPTIONS...]\n";
-      return 2;
-    }
+  if (!bench::parse_quick_work(argc, argv, quick, work)) {
+    std::cerr << "usage: ct2labels_accuracy_bench [--quick] [--work DIR]\n"
+                 "       ct2labels_accuracy_bench --match LABELS(.h5|.mhd) TRUTH.h5 OUT.json\n"
+                 "       ct2labels_accuracy_bench --scene SCENE.toml DIR [CTSYNTH OPTIONS...]\n";
+    return 2;
   }
   fs::create_directories(work);
   const std::string scene = kSource + "/bench/scenes/ct2labels_accuracy.toml";
@@ -265,7 +260,7 @@ int main(int argc, char** argv) {
   sigma_runs.reserve(ks.size() * noises.size() * 5);
   std::vector<SigmaRow> sigma_rows;
   for (double sigma : quick ? std::vector<double>{} : std::vector<double>{0.3, 0.4, 0.5, 0.6, 0.7}) {
-    SigmaRow row{sigma};
+    SigmaRow row{sigma, 0.0, {}};
     for (int k : ks)
       for (double noise : noises) {
         const fs::path dir = work / fmt::format("k{}_noise{:02.0f}", k, 100 * noise);
@@ -387,9 +382,10 @@ int main(int argc, char** argv) {
                              r->match.matched() == r->match.grains.size() ? " (all)" : "", r->row.seconds,
                              std::max(0.1, 100.0 * (1.0 - r->match.matched_share())));
   }
-  const std::string cmd = "/usr/bin/python3 " + kSource + "/bench/plot_xy.py " + csv_path.string() + " " + kSource +
-                          "/docs/img/ct2labels_accuracy.png 'ct2labels: voxels per d50 (labels) against accuracy' "
-                          "'wall time per run (s)' 'grains not matched, IoU < 0.8 (%)'";
   if (ctsynth_seconds > 0) std::cout << fmt::format("(ctsynth took {:.0f} s to make the scenes)\n", ctsynth_seconds);
-  return std::system(cmd.c_str()) == 0 ? 0 : 1;
+  return bench::plot_xy(csv_path, kSource + "/docs/img/ct2labels_accuracy.png",
+                        "ct2labels: voxels per d50 (labels) against accuracy", "wall time per run (s)",
+                        "grains not matched, IoU < 0.8 (%)")
+             ? 0
+             : 1;
 }

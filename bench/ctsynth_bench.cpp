@@ -161,8 +161,8 @@ int main(int argc, char** argv) {
   }
   csv.close();
   knob.publish("none", kSource + "/docs/benchmarks.md");
-  const std::string cmd = "/usr/bin/python3 " + kSource + "/bench/plot_xy.py " + kSource + "/docs/img/ctsynth_supersample.csv " +
-                          kSource + "/docs/img/ctsynth_supersample.png 'ctsynth: partial volumes' 'ms per grain (1 core)' "
-                          "'rms volume error (%)'";
-  return std::system(cmd.c_str()) == 0 ? 0 : 1;
+  return bench::plot_xy(kSource + "/docs/img/ctsynth_supersample.csv", kSource + "/docs/img/ctsynth_supersample.png",
+                        "ctsynth: partial volumes", "ms per grain (1 core)", "rms volume error (%)")
+             ? 0
+             : 1;
 }

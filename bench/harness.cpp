@@ -130,4 +130,26 @@ void Report::publish(const std::string& reference, const std::filesystem::path& 
   std::cout << "updated " << benchmarks_md.string() << " (section " << name_ << ")\n";
 }
 
+bool parse_quick_work(int argc, char** argv, bool& quick, std::filesystem::path& work) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") quick = true;
+    else if (a == "--work" && i + 1 < argc) work = argv[++i];
+    else return false;
+  }
+  return true;
+}
+
+bool plot_xy(const std::filesystem::path& csv, const std::filesystem::path& png, const std::string& title,
+             const std::string& x_label, const std::string& y_label) {
+  const std::string script = std::string(GRAINTWIN_SOURCE_DIR) + "/bench/plot_xy.py";
+  try {
+    run_child("chart", "plot_xy.py", {"/usr/bin/python3", script, csv.string(), png.string(), title, x_label, y_label});
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "the chart " << png.string() << " was not drawn: " << e.what() << "\n";
+    return false;
+  }
+}
+
 }  // namespace graintwin::bench

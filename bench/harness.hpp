@@ -49,4 +49,13 @@ std::filesystem::path bin_dir();
 /// Machine line for the report: CPU model, cores, date.
 std::string machine_summary();
 
+/// The options the accuracy benches share, `[--quick] [--work DIR]`, read from argv[1..]. `work`
+/// keeps its default unless given. Returns false on anything else (the caller prints its usage).
+bool parse_quick_work(int argc, char** argv, bool& quick, std::filesystem::path& work);
+
+/// Draws an accuracy-against-cost chart from a CSV (columns series,label,x,y) with bench/plot_xy.py
+/// under Debian's python3. Returns false (and says so on stderr) when the chart was not drawn.
+bool plot_xy(const std::filesystem::path& csv, const std::filesystem::path& png, const std::string& title,
+             const std::string& x_label, const std::string& y_label);
+
 }  // namespace graintwin::bench

@@ -295,11 +295,8 @@ int main(int argc, char** argv) {
   }
   csv.close();
   acc.publish("none", kDocs);
-  const std::string plot = "/usr/bin/python3 " + kSource + "/bench/plot_xy.py " + kSource +
-                           "/docs/img/labels2contacts_normals.csv " + kSource +
-                           "/docs/img/labels2contacts_normals.png 'labels2contacts: touching spheres' "
-                           "'voxels per diameter' 'mean normal error (degrees)'";
-  if (std::system(plot.c_str()) != 0) std::cerr << "labels2contacts_bench: the chart was not drawn\n";
+  bench::plot_xy(kSource + "/docs/img/labels2contacts_normals.csv", kSource + "/docs/img/labels2contacts_normals.png",
+                 "labels2contacts: touching spheres", "voxels per diameter", "mean normal error (degrees)");
 
   bench::Report gaps("labels2contacts_gaps", "labels2contacts: false contacts against the true gap",
                      fmt::format("Two spheres a given gap apart (same protocol, {} pairs per row). Merged: the global "

@@ -129,14 +129,9 @@ int main(int argc, char** argv) {
   bool quick = false;
   // The same scenes as ct2labels_accuracy_bench (same scene file and options): made once, used by both.
   fs::path work = "/tmp/graintwin_ct2labels_accuracy";
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") quick = true;
-    else if (a == "--work" && i + 1 < argc) work = argv[++i];
-    else {
-      std::cerr << "usage: labels2shapes_accuracy_bench [--quick] [--work DIR]\n";
-      return 2;
-    }
+  if (!bench::parse_quick_work(argc, argv, quick, work)) {
+    std::cerr << "usage: labels2shapes_accuracy_bench [--quick] [--work DIR]\n";
+    return 2;
   }
   fs::create_directories(work);
   const double d50 = 0.551e-3;
@@ -192,11 +187,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   const std::string png = kSource + "/docs/img/labels2shapes_accuracy.png";
-  const std::string cmd = fmt::format("/usr/bin/python3 {}/bench/plot_xy.py {} {} '{}' '{}' '{}'", kSource,
-                                      (work / "labels2shapes_surface_vs_time.csv").string(), png,
-                                      "labels2shapes: surface error against cost (points: SH degree L)",
-                                      "measurement time per grain (ms, one thread)", "median surface error / r_eq");
-  if (std::system(cmd.c_str()) != 0) std::cerr << "chart failed: " << cmd << "\n";
+  bench::plot_xy(work / "labels2shapes_surface_vs_time.csv", png,
+                 "labels2shapes: surface error against cost (points: SH degree L)",
+                 "measurement time per grain (ms, one thread)", "median surface error / r_eq");
   report.publish("ct2labels + grey", kSource + "/docs/benchmarks.md");
   return 0;
 }

@@ -105,10 +105,9 @@ int main(int argc, char** argv) {
                             r.quality.elements, r.quality.surface_nodes, 100 * (r.quality.volume / grain.volume - 1))});
   }
   csv.close();
-  const std::string plot = "/usr/bin/python3 " + kSource + "/bench/plot_xy.py " + kSource + "/docs/img/shapes2mesh_accuracy.csv " +
-                           kSource + "/docs/img/shapes2mesh_accuracy.png \"shapes2mesh: volume error against cost\" "
-                           "\"elements per grain\" \"|volume error| (labels: elements per diameter)\"";
-  if (std::system(plot.c_str()) != 0) std::cerr << "shapes2mesh_bench: the chart could not be drawn\n";
+  bench::plot_xy(kSource + "/docs/img/shapes2mesh_accuracy.csv", kSource + "/docs/img/shapes2mesh_accuracy.png",
+                 "shapes2mesh: volume error against cost", "elements per grain",
+                 "|volume error| (labels: elements per diameter)");
 
   // Whole models: sand_small's reference scan, if the pipeline has produced its shapes.
   const std::filesystem::path shapes = kSource + "/runs/sand_small/scan_000/shapes.h5";

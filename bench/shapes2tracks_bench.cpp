@@ -295,14 +295,9 @@ std::string outcome_note(const Outcome& o) {
 int main(int argc, char** argv) {
   bool quick = false;
   fs::path work = kSource + "/bench/out/shapes2tracks";
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") quick = true;
-    else if (a == "--work" && i + 1 < argc) work = argv[++i];
-    else {
-      std::cerr << "usage: shapes2tracks_bench [--quick] [--work DIR]\n";
-      return 2;
-    }
+  if (!bench::parse_quick_work(argc, argv, quick, work)) {
+    std::cerr << "usage: shapes2tracks_bench [--quick] [--work DIR]\n";
+    return 2;
   }
   if (quick) work /= "quick";
   const fs::path series = work / "series";
@@ -491,11 +486,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   const std::string png = kSource + "/docs/img/shapes2tracks_accuracy.png";
-  const std::string cmd = fmt::format("/usr/bin/python3 {}/bench/plot_xy.py {} {} '{}' '{}' '{}'", kSource,
-                                      (work / "accuracy.csv").string(), png,
-                                      "shapes2tracks: grains not matched correctly",
-                                      "axial strain step (%)", "faithful grains not correct: wrong or lost (%, floor 0.01)");
-  if (std::system(cmd.c_str()) != 0) std::cerr << "chart failed: " << cmd << "\n";
+  bench::plot_xy(work / "accuracy.csv", png, "shapes2tracks: grains not matched correctly", "axial strain step (%)",
+                 "faithful grains not correct: wrong or lost (%, floor 0.01)");
   const std::string md = kSource + "/docs/benchmarks.md";
   acc.publish("paper", md);
   rot.publish("axes", md);
