@@ -119,7 +119,9 @@ TEST(Ctsynth, SphereAndEllipsoidScenes) {
     ASSERT_GT(ar.size(), 30u) << shape;
     for (std::size_t i = 0; i < ar.size(); ++i) {
       EXPECT_NEAR(ar[i], aspect, 0.01 * aspect) << shape << " grain " << i;
-      if (shape == "sphere") EXPECT_NEAR(sph[i], 1.0, 1e-3) << "grain " << i;
+      if (shape == "sphere") {
+        EXPECT_NEAR(sph[i], 1.0, 1e-3) << "grain " << i;
+      }
     }
     expect_label_counts_match_volumes(truth, ar.size());
   }

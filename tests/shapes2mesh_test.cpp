@@ -145,7 +145,9 @@ TEST(Shapes2mesh, OverridesAndRigidSmallGrains) {
   const auto h = f.read<double>("/mesh/element_size");
   const auto kind = f.read<std::uint8_t>("/mesh/kind");
   for (std::size_t g = 0; g < h.size(); ++g)
-    if (kind[g] != 0) EXPECT_NEAR(h[g], d[g].equivalent_diameter / 4, 1e-12);
+    if (kind[g] != 0) {
+      EXPECT_NEAR(h[g], d[g].equivalent_diameter / 4, 1e-12);
+    }
 }
 
 TEST(Shapes2mesh, BadInputsFailCleanly) {

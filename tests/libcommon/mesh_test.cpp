@@ -97,7 +97,7 @@ TEST(Gmsh, SphereFromExactGeometryMeetsItsVolumeInBothOrders) {
   for (int order : {1, 2}) {
     mesh::TetReport report;
     const mesh::TetMesh m = mesh::mesh_ellipsoid(Vector3d(1e-3, 2e-3, 3e-3), Vector3d(r, r, r), Eigen::Quaterniond::Identity(),
-                                                 {0.3 * r, order, true}, &report);
+                                                 {0.3 * r, order, true, {}}, &report);
     SCOPED_TRACE(order);
     expect_valid(m);
     EXPECT_EQ(report.inverted, 0u);
@@ -114,7 +114,7 @@ TEST(Gmsh, TriangulatedSurfaceBecomesValidTetsOfItsVolume) {
   const double surface_volume = mesh::enclosed_volume(s);
   for (int order : {1, 2}) {
     mesh::TetReport report;
-    const mesh::TetMesh m = mesh::tetrahedralize(s, {0.35, order, true}, &report);
+    const mesh::TetMesh m = mesh::tetrahedralize(s, {0.35, order, true, {}}, &report);
     SCOPED_TRACE(order);
     expect_valid(m);
     // Chords of length h = 0.35 sag by h^2 / 8 = 1.5 % of the radius: about 3 % of the volume for
@@ -127,7 +127,7 @@ TEST(Gmsh, TriangulatedSurfaceBecomesValidTetsOfItsVolume) {
 TEST(Gmsh, EllipsoidIsRotatedAndPlaced) {
   const Eigen::Quaterniond q(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
   const Vector3d c(1, -2, 0.5), axes(2, 1, 0.5);
-  const mesh::TetMesh m = mesh::mesh_ellipsoid(c, axes, q, {0.2, 2, true});
+  const mesh::TetMesh m = mesh::mesh_ellipsoid(c, axes, q, {0.2, 2, true, {}});
   expect_valid(m);
   EXPECT_NEAR(mesh::mesh_volume(m), 4.0 / 3.0 * M_PI * 2 * 1 * 0.5, 0.002 * 4.0 / 3.0 * M_PI);
   for (const Vector3d& p : m.nodes) {
@@ -138,14 +138,14 @@ TEST(Gmsh, EllipsoidIsRotatedAndPlaced) {
 
 TEST(Gmsh, RefusesBadSizesAndOrders) {
   const auto s = sphere_surface(1.0, 2);
-  EXPECT_THROW(mesh::tetrahedralize(s, {0.0, 1, true}), UsageError);
-  EXPECT_THROW(mesh::tetrahedralize(s, {0.3, 3, true}), UsageError);
+  EXPECT_THROW(mesh::tetrahedralize(s, {0.0, 1, true, {}}), UsageError);
+  EXPECT_THROW(mesh::tetrahedralize(s, {0.3, 3, true, {}}), UsageError);
 }
 
 TEST(Model, GrainsJoinAsContiguousBlocksWithOutwardSurfaces) {
   fdem::Model model;
-  const mesh::TetMesh a = mesh::mesh_ellipsoid(Vector3d::Zero(), Vector3d(1, 1, 1), Eigen::Quaterniond::Identity(), {0.5, 1, true});
-  const mesh::TetMesh b = mesh::mesh_ellipsoid(Vector3d(3, 0, 0), Vector3d(1, 1, 1), Eigen::Quaterniond::Identity(), {0.5, 2, true});
+  const mesh::TetMesh a = mesh::mesh_ellipsoid(Vector3d::Zero(), Vector3d(1, 1, 1), Eigen::Quaterniond::Identity(), {0.5, 1, true, {}});
+  const mesh::TetMesh b = mesh::mesh_ellipsoid(Vector3d(3, 0, 0), Vector3d(1, 1, 1), Eigen::Quaterniond::Identity(), {0.5, 2, true, {}});
   mesh::append_grain(model, a, 7, fdem::GrainKind::tet4);
   mesh::append_grain(model, b, 9, fdem::GrainKind::tet10);
   EXPECT_NO_THROW(fdem::validate_model(model, "test"));
