@@ -297,7 +297,7 @@ Volume<std::uint32_t> peak_markers(const Volume<float>& edt, double min_distance
   return labels;
 }
 
-MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c) {
+MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c, Volume<std::uint32_t>* basins) {
   MaximaDynamics out;
   out.unit = smallest_voxel(edt);
   Volume<std::uint32_t> labels(edt.shape(), edt.voxel_size(), edt.origin());
@@ -306,6 +306,7 @@ MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c) {
   out.peak.resize(k);
   for (std::uint32_t i = 0; i < k; ++i) out.peak[i] = f[out.first_voxel[i]];
   out.saddle.assign(k, kMinusInf);
+  out.absorbed_by.assign(k, 0);
 
   // Saddles by union-find over the maxima while flooding down from all of them: when two basins
   // first touch, the one with the lower peak dies there (ties: the larger label dies). A contact
@@ -326,45 +327,46 @@ MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c) {
     const auto peak_of = [&](std::uint32_t l) { return out.peak[l - 1]; };
     if (peak_of(a) > peak_of(b) || (peak_of(a) == peak_of(b) && a < b)) std::swap(a, b);  // a is the loser
     out.saddle[a - 1] = std::min(f[p], f[q]);
+    out.absorbed_by[a - 1] = b;
     parent[a] = b;
   };
   if (edt.size() < (std::size_t{1} << 32))
     detail::priority_flood<std::uint32_t>(edt, labels.data(), c, levels, meet);
   else
     detail::priority_flood<std::uint64_t>(edt, labels.data(), c, levels, meet);
+  if (basins) *basins = std::move(labels);
   return out;
 }
 
-Volume<std::uint32_t> h_maxima_markers(const Volume<float>& edt, const MaximaDynamics& d, double h_vox,
-                                       Connectivity c) {
+Volume<std::uint32_t> watershed_from_dynamics(Volume<std::uint32_t> basins, const MaximaDynamics& d, double h_vox) {
   check_h(h_vox, "h");
   const auto h = static_cast<float>(h_vox * d.unit);
-  const Shape3& s = edt.shape();
-  const float* f = edt.data();
-  Volume<std::uint32_t> labels(s, edt.voxel_size(), edt.origin());
-  std::uint32_t* l = labels.data();
-  const std::vector<NeighbourStep> steps = neighbour_steps(c, s);
-  const IndexSplitter split(s);
-  std::vector<std::size_t> stack;
-  std::uint32_t k = 0;
-  for (std::size_t i = 0; i < d.peak.size(); ++i) {
-    // The same float arithmetic as the reconstruction (edt - h), so both give the same plateaus.
-    const float top = d.peak[i] - h;
-    if (!(d.saddle[i] < top)) continue;  // a higher peak is reachable without descending below top
-    l[d.first_voxel[i]] = ++k;
-    stack.push_back(d.first_voxel[i]);
-    while (!stack.empty()) {
-      const std::size_t a = stack.back();
-      stack.pop_back();
-      for_each_neighbour(steps, s, split, a, [&](std::size_t q) {
-        if (l[q] == 0 && f[q] >= top && f[q] > 0.0f) {
-          l[q] = k;
-          stack.push_back(q);
-        }
-      });
-    }
+  const std::size_t k = d.peak.size();
+  // Absorbers have higher peaks (ties: smaller labels), so in that order each absorber's final
+  // label is known before the basins it absorbed ask for it.
+  std::vector<std::uint32_t> order(k);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return d.peak[a] > d.peak[b] || (d.peak[a] == d.peak[b] && a < b);
+  });
+  std::vector<std::uint32_t> joins(k + 1, 0);  // the marker maximum each basin ends in; 0 -> 0
+  for (std::uint32_t i : order) {
+    // The same float arithmetic as the reconstruction (edt - h), so both find the same markers.
+    const bool marker = d.saddle[i] < d.peak[i] - h;
+    joins[i + 1] = marker ? i + 1 : joins[d.absorbed_by[i]];
   }
-  return labels;
+  // Markers numbered in the order of their maxima (raster order of their first voxels).
+  std::vector<std::uint32_t> number(k + 1, 0);
+  std::uint32_t markers = 0;
+  for (std::uint32_t l = 1; l <= k; ++l)
+    if (joins[l] == l) number[l] = ++markers;
+  std::vector<std::uint32_t> final_label(k + 1, 0);
+  for (std::uint32_t l = 1; l <= k; ++l) final_label[l] = number[joins[l]];
+  std::uint32_t* b = basins.data();
+  const std::size_t n = basins.size();
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) b[i] = final_label[b[i]];
+  return basins;
 }
 
 HProposal propose_h(const MaximaDynamics& d, double expected_radius_m) {

@@ -155,20 +155,19 @@ SegmentResult segment_grains(Volume<T> grey, const SegmentOptions& o) {
   const bool need_proposal = (o.markers == MarkerMethod::h_maxima && !o.h_vox) ||
                              (o.markers == MarkerMethod::peaks && !o.min_distance_vox && o.expected_d50_m <= 0.0) ||
                              (!o.min_volume_vox && o.expected_d50_m <= 0.0);
+  // The flood that measures the dynamics is also the watershed from every regional maximum: with
+  // h-maxima markers it is kept, and the watershed for h (chosen or given) only merges its basins,
+  // which costs less than a reconstruction plus a marker flood even when h is given.
+  const bool h_maxima = o.markers == MarkerMethod::h_maxima;
   std::optional<MaximaDynamics> dynamics;
-  if (need_proposal) {
-    dynamics = maxima_dynamics(edt, o.connectivity);
-    out.h_proposal = propose_h(*dynamics, o.expected_d50_m / 2.0);
-  }
+  Volume<std::uint32_t> basins;
+  if (need_proposal || h_maxima) dynamics = maxima_dynamics(edt, o.connectivity, h_maxima ? &basins : nullptr);
+  if (need_proposal) out.h_proposal = propose_h(*dynamics, o.expected_d50_m / 2.0);
   out.reference_radius_m = o.expected_d50_m > 0.0 ? o.expected_d50_m / 2.0 : out.h_proposal->reference_radius_m;
   Volume<std::uint32_t> markers;
-  if (o.markers == MarkerMethod::h_maxima) {
+  if (h_maxima) {
     out.marker_parameter_automatic = !o.h_vox;
     out.marker_parameter_vox = o.h_vox ? *o.h_vox : out.h_proposal->h_vox;
-    // With the dynamics at hand the markers cost only their own size; a given h alone is cheaper
-    // by reconstruction than by a flood.
-    markers = dynamics ? h_maxima_markers(edt, *dynamics, out.marker_parameter_vox, o.connectivity)
-                       : h_maxima_markers(edt, out.marker_parameter_vox, o.connectivity);
   } else {
     out.marker_parameter_automatic = !o.min_distance_vox;
     out.marker_parameter_vox = o.min_distance_vox ? *o.min_distance_vox : std::max(1.0, out.reference_radius_m / unit);
@@ -176,7 +175,8 @@ SegmentResult segment_grains(Volume<T> grey, const SegmentOptions& o) {
   }
 
   step("watershed");
-  out.labels = watershed(edt, std::move(markers), o.connectivity);
+  out.labels = h_maxima ? watershed_from_dynamics(std::move(basins), *dynamics, out.marker_parameter_vox)
+                        : watershed(edt, std::move(markers), o.connectivity);
   out.markers = relabel_sequential(out.labels);
 
   step("fragments");

@@ -33,6 +33,9 @@ struct MaximaDynamics {
   /// Highest level at which the maximum's basin meets the basin of a higher peak (ties: of a peak
   /// with a smaller raster index), metres; -inf for the top of each connected piece of solid.
   std::vector<float> saddle;
+  /// Label (1-based index) of the maximum whose basin absorbed maximum i's basin at its saddle,
+  /// always one with a higher peak (ties: smaller label); 0 for the tops.
+  std::vector<std::uint32_t> absorbed_by;
   double unit = 1.0;                     ///< smallest voxel size, metres
   /// How far one descends from maximum i before a higher peak is reachable, metres (+inf for tops).
   double dynamic(std::size_t i) const { return static_cast<double>(peak[i]) - static_cast<double>(saddle[i]); }
@@ -41,16 +44,23 @@ struct MaximaDynamics {
 /// Floods the EDT once from all its regional maxima (priority flood of decreasing distance,
 /// union-find over the basins). Saddles are exact for isotropic voxels; with anisotropic voxels the
 /// flood order is quantised to 1/8 squared smallest voxel, which may shift a saddle by as much.
-/// Memory: a uint32 and a bit per voxel plus the flood front, released on return.
-MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c = Connectivity::corners);
+/// If `basins` is given it receives the flood itself: every solid voxel labelled with the maximum
+/// (1..K, the indices of the result plus one) whose basin reached it first, 0 elsewhere; that is
+/// the watershed from all regional maxima, which watershed_from_dynamics coarsens for any h.
+/// Memory: a uint32 and a bit per voxel plus the flood front (the uint32 kept in `basins`).
+MaximaDynamics maxima_dynamics(const Volume<float>& edt, Connectivity c = Connectivity::corners,
+                               Volume<std::uint32_t>* basins = nullptr);
 
-/// The h-maxima markers from the dynamics, without a reconstruction: maximum i survives iff
-/// saddle < peak - h, and its marker is the connected set of solid voxels with edt >= peak - h
-/// around it (which holds no higher peak and no other survivor): the same plateaus as
-/// h_maxima_markers(edt, h_vox, c) above when d comes from this edt (for isotropic voxels), labelled
-/// 1..K in the raster order of their maxima. Cost: the size of the markers.
-Volume<std::uint32_t> h_maxima_markers(const Volume<float>& edt, const MaximaDynamics& d, double h_vox,
-                                       Connectivity c = Connectivity::corners);
+/// The marker watershed for the h-maxima markers of h_vox, from the basins of maxima_dynamics
+/// without a second flood: a maximum is a marker iff saddle < peak - h (the test of the
+/// h-maxima transform), and every other basin joins, through the absorbed_by chain, the marker
+/// whose basin absorbed it at its saddle. Each marker's plateau (edt >= peak - h around it) gets
+/// the marker's label exactly as in watershed(edt, h_maxima_markers(edt, h_vox)); below the plateaus
+/// the two differ only where the flood order decides a boundary voxel between two basins (the
+/// flood starts from all maxima here, from the plateaus there). Labels 1..K' in the order of the
+/// markers' maxima, 0 stays 0. Cost: one parallel pass over the voxels plus a sort of the maxima.
+Volume<std::uint32_t> watershed_from_dynamics(Volume<std::uint32_t> basins, const MaximaDynamics& d,
+                                              double h_vox);
 
 /// Markers at EDT peaks at least `min_distance_vox` apart: candidates are the solid voxels not lower
 /// than any neighbour (connectivity c); taken greedily from the highest EDT down (ties: lowest
