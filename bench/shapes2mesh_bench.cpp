@@ -1,7 +1,8 @@
 // shapes2mesh_bench: what a grain mesh costs and how close it is to the exact surface, against the
-// element size (elements per diameter) and order, for the two 10-node curvings; chart of volume
+// element size (elements per diameter) and order, for the two 10-node curvings; the automatic size
+// on a sand-like and a rough grain against the 2 % volume target of 4-node meshes; chart of volume
 // error against elements per grain (docs/img/shapes2mesh_accuracy.png); and whole models of
-// sand_small's reference scan on 1 and 2 threads (gmsh serialised) when runs/ has its shapes.
+// sand_small's reference scan with 1 and 2 gmsh worker processes when runs/ has its shapes.
 //   shapes2mesh_bench [--quick]
 #include <Eigen/Geometry>
 #include <cmath>
@@ -11,8 +12,11 @@
 
 #include <fmt/format.h>
 
+#include "graintwin/fdem/model_file.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
+#include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
+#include "graintwin/shape/shapes_file.hpp"
 #include "harness.hpp"
 
 using namespace graintwin;
@@ -22,18 +26,20 @@ namespace {
 const std::string kSource = GRAINTWIN_SOURCE_DIR;
 
 /// A sand-like test grain (the anchors' shape, radius about 0.3 mm): r = R (1 + 0.075 (3 cos^2 t - 1)
-/// + 0.08 sin^2 t cos 2p + 0.04 sin^3 t cos 3p + 0.02 cos 5t), fitted exactly at degree 8.
-shape::GrainShape test_grain(double radius) {
-  const int degree = 8;
+/// + 0.08 sin^2 t cos 2p + 0.04 sin^3 t cos 3p + 0.02 cos 5t), fitted exactly at degree 8; `rough`
+/// adds bumps of degree 6 to 9 (0.05 sin^6 t cos 6p + 0.03 cos 9t), fitted at degree 12.
+shape::GrainShape test_grain(double radius, bool rough) {
+  const int degree = rough ? 12 : 8;
   shape::GrainShape g;
   g.label = 1;
   g.coeffs = shape::sh_fit(
       [&](const Eigen::Vector3d& d) {
         const double ct = d.z(), st = std::sqrt(std::max(0.0, 1 - ct * ct)), p = std::atan2(d.y(), d.x()), t = std::acos(ct);
+        const double bumps = rough ? 0.05 * std::pow(st, 6) * std::cos(6 * p) + 0.03 * std::cos(9 * t) : 0.0;
         return radius * (1 + 0.075 * (3 * ct * ct - 1) + 0.08 * st * st * std::cos(2 * p) + 0.04 * st * st * st * std::cos(3 * p) +
-                         0.02 * std::cos(5 * t));
+                         0.02 * std::cos(5 * t) + bumps);
       },
-      degree, 2000);
+      degree, 4000);
   const shape::ShMoments mom = shape::sh_moments(g.coeffs, degree);
   g.volume = mom.volume;
   g.equivalent_diameter = std::cbrt(6 * g.volume / M_PI);
@@ -53,18 +59,30 @@ double surface_error(const mesh::TetMesh& m, const shape::GrainShape& g, double 
   return worst / radius;
 }
 
+/// The 1-minute load average (the machine is shared: other jobs slow timed runs down).
+double load_average() {
+  std::ifstream in("/proc/loadavg");
+  double load = 0;
+  in >> load;
+  return load;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::string(argv[1]) == "--quick";
   const double radius = 0.3e-3;
-  const shape::GrainShape grain = test_grain(radius);
-  const mesh::ShSurfaceBasis basis(4, 8);
+  const shape::GrainShape grain = test_grain(radius, false), rough = test_grain(radius, true);
+  const mesh::ShSurfaceBasis basis(4, 8), rough_basis(4, 12);
   bench::Report report("shapes2mesh_bench", "shapes2mesh: cost and accuracy of grain meshes",
                        "One sand-like SH grain (radius 0.3 mm, degree 8, exact volume from the SH moments) meshed through "
                        "mesh::mesh_grain at fixed elements per diameter: seconds in gmsh (best of 3), elements, surface nodes, "
                        "volume error against the exact SH volume, largest distance of boundary triangle centroids from the "
-                       "exact surface (/ radius), min gamma and min Jacobian ratio. " + bench::machine_summary());
+                       "exact surface (/ radius), min gamma and min Jacobian ratio; boundary nodes snapped onto the exact SH "
+                       "surface except for 'tet10 gmsh'. Then the automatic size (250 surface nodes; 4-node: the 2 % volume "
+                       "target from the measured total mean curvature) on it and on a rougher grain (degree 12). Then whole "
+                       "models of sand_small scan 0 with -j 1 and -j 2 (threads = gmsh worker processes), wall time of the "
+                       "tool. " + bench::machine_summary());
   std::ofstream csv(kSource + "/docs/img/shapes2mesh_accuracy.csv");
   csv << "series,label,x,y\n";
   struct Variant {
@@ -74,6 +92,7 @@ int main(int argc, char** argv) {
   };
   const std::vector<Variant> variants = {{"tet4", 1, true}, {"tet10 snap", 2, true}, {"tet10 gmsh", 2, false}};
   const std::vector<double> per_diameter = quick ? std::vector<double>{3, 6} : std::vector<double>{3, 4, 6, 8, 12};
+  double fewest = 1e300, most = 0;  // elements, for the target line
   for (const Variant& v : variants)
     for (double n : per_diameter) {
       mesh::GrainMeshOptions o;
@@ -94,29 +113,53 @@ int main(int argc, char** argv) {
                               r.quality.elements, r.quality.surface_nodes, 100 * volume_error, surf, r.quality.min_gamma,
                               r.quality.mean_gamma, r.quality.min_jacobian_ratio, r.gmsh.optimized ? ", optimize(HighOrder) ran" : "")});
       csv << v.name << "," << n << "," << r.quality.elements << "," << std::max(std::abs(volume_error), 1e-6) << "\n";
+      fewest = std::min(fewest, double(r.quality.elements)), most = std::max(most, double(r.quality.elements));
     }
-  // The default (contact-driven) size.
-  for (const Variant& v : {variants[0], variants[1]}) {
-    mesh::GrainMeshOptions o;
-    o.order = v.order;
-    const auto r = mesh::mesh_grain(grain, basis, nullptr, {}, o);
-    report.add({"automatic (250 surface nodes)", v.name, r.gmsh.seconds, 0,
-                fmt::format("{:.1f} per diameter, {} elements, {} surface nodes, volume error {:+.3f} %", grain.equivalent_diameter / r.size.h,
-                            r.quality.elements, r.quality.surface_nodes, 100 * (r.quality.volume / grain.volume - 1))});
-  }
+  // The automatic size (contact: 250 surface nodes; 4-node: also the volume target).
+  for (const Variant& v : {variants[0], variants[1]})
+    for (const auto& [name, g, b] : {std::tuple{"sand-like", &grain, &basis}, std::tuple{"rough", &rough, &rough_basis}}) {
+      mesh::GrainMeshOptions o;
+      o.order = v.order;
+      const auto r = mesh::mesh_grain(*g, *b, nullptr, {}, o);
+      const double volume_error = r.quality.volume / g->volume - 1;
+      // Total mean curvature over volume against the sphere of the same volume's 3 / R^2.
+      const auto surface = mesh::sh_surface(b->sphere, b->basis, g->coeffs, g->centroid);
+      const double curvature = mesh::total_mean_curvature(surface) / mesh::enclosed_volume(surface) /
+                               (12.0 / (g->equivalent_diameter * g->equivalent_diameter));
+      report.add({fmt::format("automatic, {} grain", name), v.name, r.gmsh.seconds, 0,
+                  fmt::format("{:.1f} per diameter ({} rule), {} elements, {} surface nodes, volume error {:+.3f} %, "
+                              "curvature {:.3f} x the sphere's",
+                              g->equivalent_diameter / r.size.h, mesh::size_rule_name(r.size.rule), r.quality.elements,
+                              r.quality.surface_nodes, 100 * volume_error, curvature)});
+      csv << v.name << " automatic," << name << "," << r.quality.elements << "," << std::max(std::abs(volume_error), 1e-6) << "\n";
+    }
+  for (double x : {fewest, most}) csv << "tet4 volume target (2 %),," << x << ",0.02\n";
   csv.close();
   bench::plot_xy(kSource + "/docs/img/shapes2mesh_accuracy.csv", kSource + "/docs/img/shapes2mesh_accuracy.png",
                  "shapes2mesh: volume error against cost", "elements per grain",
-                 "|volume error| (labels: elements per diameter)");
+                 "|volume error| (labels: elements per diameter or grain)");
 
   // Whole models: sand_small's reference scan, if the pipeline has produced its shapes.
   const std::filesystem::path shapes = kSource + "/runs/sand_small/scan_000/shapes.h5";
   if (!quick && std::filesystem::exists(shapes)) {
     const std::string tool = (bench::bin_dir() / "shapes2mesh").string();
-    for (int threads : {1, 2})
-      report.add(bench::run_child("sand_small scan 0 (210 grains), 10-node, snap", fmt::format("shapes2mesh -j {}", threads),
-                                  {tool, shapes.string(), "/tmp/shapes2mesh_bench_model.h5", "--force", "-q", "-j",
-                                   std::to_string(threads)}));
+    const std::size_t grains = shape::read_shapes_file(shapes).grains.size();
+    std::vector<fdem::Model> models;
+    for (int processes : {1, 2}) {
+      const std::string model = fmt::format("/tmp/shapes2mesh_bench_model_{}.h5", processes);
+      const double load = load_average();
+      bench::Row row = bench::run_child(fmt::format("sand_small scan 0 ({} grains), 10-node, snap", grains),
+                                        fmt::format("shapes2mesh -j {} ({} gmsh process{})", processes, processes, processes > 1 ? "es" : ""),
+                                        {tool, shapes.string(), model, "--force", "-q", "-j", std::to_string(processes)});
+      models.push_back(fdem::read_model_file(model));
+      row.note = fmt::format("load average {:.2f} before the run{}", load, load > 1.0 ? " (shared machine)" : "");
+      if (models.size() == 2)
+        row.note += models[1].nodes == models[0].nodes && models[1].element_nodes == models[0].element_nodes
+                        ? "; model identical to -j 1"
+                        : "; MODEL DIFFERS FROM -j 1";
+      report.add(row);
+      std::filesystem::remove(model);
+    }
   }
   report.publish("tet10 snap", kSource + "/docs/benchmarks.md");
 }

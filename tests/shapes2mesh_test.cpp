@@ -1,10 +1,20 @@
 // shapes2mesh: CLI contract; the twin of a phantom scan (labels -> labels2shapes -> shapes2mesh)
 // checked against the balls' exact volumes, element validity and watertight grain surfaces; a
-// broken SH surface caught and replaced; the .vtu and .msh views; bad inputs failing cleanly.
+// broken SH surface caught and replaced; the .vtu and .msh views; the same model whatever the
+// number of gmsh worker processes; Ctrl-C ending the workers; bad inputs failing cleanly.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <Eigen/Geometry>
+#include <chrono>
 #include <cmath>
+#include <fstream>
+#include <thread>
 
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
@@ -19,6 +29,8 @@
 
 using namespace graintwin;
 using test::run_tool;
+
+extern char** environ;
 
 namespace {
 
@@ -50,6 +62,32 @@ mesh::TriangleSurface grain_surface(const fdem::Model& m, std::size_t g) {
   for (std::uint32_t t = m.grains[g].triangle_begin; t < m.grains[g].triangle_end; ++t)
     s.triangles.push_back({int(m.triangles[t][0]), int(m.triangles[t][1]), int(m.triangles[t][2])});
   return s;
+}
+
+/// Starts build/bin/<tool> with `args` (output to /dev/null) and returns its pid without waiting.
+pid_t spawn_tool(const std::string& tool, const std::vector<std::string>& args) {
+  std::vector<std::string> words{(std::filesystem::path(GRAINTWIN_TOOL_DIR) / tool).string()};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw std::runtime_error("cannot start " + words[0]);
+  return pid;
+}
+
+/// Children of process `pid`'s main thread (Linux /proc).
+std::vector<pid_t> child_pids(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/task/" + std::to_string(pid) + "/children");
+  std::vector<pid_t> out;
+  for (pid_t c; in >> c;) out.push_back(c);
+  return out;
 }
 
 }  // namespace
@@ -103,6 +141,37 @@ TEST(Shapes2mesh, PhantomTwinHasEveryBallAtItsVolumeWithValidElements) {
   for (double v : volume) total += v;
   EXPECT_NEAR(s["volume"].get<double>(), total, 0.03 * total);  // VTK splits curved cells into straight ones
   EXPECT_TRUE(std::filesystem::exists(dir / "model.msh"));
+  // One gmsh worker process instead of two: the same model, node for node.
+  const auto one = run_tool("shapes2mesh", {in.shapes.string(), in.labels.string(), (dir / "one.h5").string(), "-j", "1", "-q"});
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const fdem::Model m1 = fdem::read_model_file(dir / "one.h5");
+  EXPECT_EQ(m1.nodes, m.nodes);
+  EXPECT_EQ(m1.element_nodes, m.element_nodes);
+  EXPECT_EQ(m1.triangles, m.triangles);
+}
+
+TEST(Shapes2mesh, InterruptEndsTheWorkersAndWritesNothing) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  // Fine meshes so that meshing lasts well beyond the interrupt.
+  const pid_t tool = spawn_tool("shapes2mesh", {in.shapes.string(), (dir / "m.h5").string(), "-j", "2", "-q",
+                                                      "--elements-per-diameter", "40"});
+  std::vector<pid_t> workers;
+  for (int tries = 0; tries < 200 && workers.size() < 2; ++tries) {  // the workers are forked at the start
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    workers = child_pids(tool);
+  }
+  ASSERT_EQ(workers.size(), 2u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ASSERT_EQ(::kill(tool, SIGINT), 0);
+  const auto start = std::chrono::steady_clock::now();
+  int status = 0;
+  ASSERT_EQ(::waitpid(tool, &status, 0), tool);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  for (pid_t w : workers) EXPECT_NE(::kill(w, 0), 0) << "worker " << w << " outlived the tool";
+  EXPECT_EQ(test::list_dir(dir.path()), (std::vector<std::string>{"labels.h5", "shapes.h5"}));
 }
 
 TEST(Shapes2mesh, BrokenShSurfaceFallsBackToVoxelsOrEllipsoidWithANote) {
@@ -148,6 +217,44 @@ TEST(Shapes2mesh, OverridesAndRigidSmallGrains) {
     if (kind[g] != 0) {
       EXPECT_NEAR(h[g], d[g].equivalent_diameter / 4, 1e-12);
     }
+}
+
+TEST(Shapes2mesh, EquivalentPackingDrawsTheLibraryIntoACylinderAtTheSolidFraction) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const auto r = run_tool("shapes2mesh", {in.shapes.string(), (dir / "s.h5").string(), "--packing", "equivalent",
+                                          "--solid-fraction", "0.3", "--aspect", "1.2", "--grains", "10", "--order", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("equivalent sample: 10 grains drawn from 8"), std::string::npos) << r.err;
+  const fdem::Model m = fdem::read_model_file(dir / "s.h5");
+  ASSERT_EQ(m.grains.size(), 10u);
+  ASSERT_TRUE(m.sample.has_value());
+  const fdem::SampleCylinder& c = *m.sample;
+  EXPECT_NEAR(c.z_max - c.z_min, 1.2 * 2 * c.radius, 1e-12);
+  const io::H5File f = io::H5File::open(dir / "s.h5");
+  const auto label = f.read<std::uint32_t>("/mesh/label"), source = f.read<std::uint32_t>("/mesh/source_label");
+  const auto volume = f.read<double>("/mesh/volume"), surface_volume = f.read<double>("/mesh/surface_volume");
+  double total = 0, drawn = 0;
+  for (std::size_t g = 0; g < 10; ++g) {
+    EXPECT_EQ(label[g], g + 1);
+    EXPECT_GE(source[g], 1u);
+    EXPECT_LE(source[g], 8u);
+    total += volume[g], drawn += surface_volume[g];
+  }
+  // The drawn grains' SH volume over the cylinder is the solid fraction asked for (the packer's
+  // tables and the level-4 surfaces agree to a fraction of a percent); the linear meshes lose ~2 %.
+  const double cylinder = M_PI * c.radius * c.radius * (c.z_max - c.z_min);
+  EXPECT_NEAR(drawn / cylinder, 0.3, 0.01);
+  EXPECT_NEAR(total / cylinder, 0.3, 0.015);
+  // Every node inside the cylinder, within a hundredth of the smallest grain.
+  for (const auto& p : m.nodes) {
+    EXPECT_LE((p.head<2>() - c.axis_xy).norm(), c.radius * 1.01);
+    EXPECT_GE(p.z(), c.z_min - 0.01 * c.radius);
+    EXPECT_LE(p.z(), c.z_max + 0.01 * c.radius);
+  }
+  // Without LABELS the scan's solid fraction is unknown.
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), (dir / "t.h5").string(), "--packing", "equivalent"}, 2,
+                             "--solid-fraction");
 }
 
 TEST(Shapes2mesh, BadInputsFailCleanly) {

@@ -1,5 +1,6 @@
 // shapes2mesh: the FDEM twin of the reference scan (SPEC.md sections 5, 7, 8; issue 8).
 //   shapes2mesh scan_000/shapes.h5 scan_000/labels.h5 model.h5 --vtu model.vtu --msh model.msh
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
@@ -15,6 +16,7 @@
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "graintwin/mesh/equivalent_packing.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "graintwin/shape/shapes_file.hpp"
@@ -36,14 +38,15 @@ std::set<std::uint32_t> tracked_labels(const fs::path& tracks) {
 
 /// Per-grain figures of the run, written under /mesh.
 struct Report {
-  std::vector<std::uint32_t> label;
+  std::vector<std::uint32_t> label, source_label;
   std::vector<std::uint8_t> origin, kind, optimized, remeshed;
   std::vector<std::uint64_t> elements, nodes, surface_nodes, inverted_after_curving, inverted;
   std::vector<double> size, min_gamma, mean_gamma, min_jacobian, volume, surface_volume, volume_error, seconds;
   std::vector<std::string> note;
 
-  void add(std::uint32_t l, const mesh::GrainMeshResult& r) {
+  void add(std::uint32_t l, std::uint32_t source, const mesh::GrainMeshResult& r) {
     label.push_back(l);
+    source_label.push_back(source);
     origin.push_back(static_cast<std::uint8_t>(r.origin));
     kind.push_back(static_cast<std::uint8_t>(r.kind));
     optimized.push_back(r.gmsh.optimized);
@@ -66,6 +69,7 @@ struct Report {
   void write(io::H5File& f, const std::string& parameters) const {
     using io::units;
     f.write("/mesh/label", label);
+    f.write("/mesh/source_label", source_label);
     f.write("/mesh/surface_origin", origin);
     f.set_attr("/mesh/surface_origin", "codes", std::string("0 SH fit, 1 smoothed voxels, 2 inertia ellipsoid"));
     f.write("/mesh/kind", kind);
@@ -102,19 +106,26 @@ int main(int argc, char** argv) {
       "LABELS are used, and without LABELS (or if those fail too) its inertia ellipsoid, with a note. gmsh meshes the "
       "surface (4-node, or 10-node: by default with straight mid-edge nodes whose boundary nodes are then moved "
       "onto the exact SH surface, --curving gmsh for gmsh's own curving with optimize(HighOrder); either way every "
-      "element's Jacobian is checked and inverted ones have their mid-edge nodes pulled back). The element size follows what contact needs (about "
-      "--surface-nodes nodes on each grain's surface) and, for 4-node meshes, a volume accuracy target; "
+      "element's Jacobian is checked and inverted ones have their mid-edge nodes pulled back; 4-node meshes get their "
+      "boundary nodes snapped onto the SH surface too). The element size follows what contact needs (about "
+      "--surface-nodes nodes on each grain's surface) and, for 4-node meshes, the volume target --volume-tol from the "
+      "grain's measured total mean curvature; "
       "--elements-per-diameter overrides both. Quality (gamma = 3 inradius / circumradius) is measured per element; "
       "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Grains smaller than --rigid-below d50 get "
       "a coarse linear mesh and are marked rigid. LABELS also gives the sample cylinder (ct2labels' region) when it "
-      "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel, but gmsh is not "
-      "thread-safe, so the gmsh part of each grain runs one at a time (docs/shapes2mesh.md). Not yet: the "
-      "statistically equivalent packing mode.");
+      "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel: -j threads, each "
+      "handing its gmsh work to its own gmsh worker process (gmsh is not thread-safe); the model does not depend on -j, "
+      "and a worker that crashes is reported for its grain, which falls back as above. --packing equivalent builds a "
+      "statistically equivalent sample instead of the twin: the grains of SHAPES (the shape library; each once, or "
+      "--grains drawn with replacement) packed at random positions and orientations into a cylinder (height / diameter "
+      "--aspect) at --solid-fraction, by ctsynth's packer; the PSD is the library's (exactly, or in expectation) and "
+      "the solid fraction holds by construction of the cylinder.");
   fs::path shapes_path, labels_path, model_path, vtu_path, msh_path, tracks_path;
   mesh::GrainMeshOptions mo;
   int subdivisions = 4;
   double rigid_below_d50 = 0.3, platen_friction = 0.0;
-  std::string membrane_thickness = "0.3mm", curving = "snap";
+  std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan";
+  mesh::EquivalentPackingOptions po;
   tool.add_input("SHAPES", shapes_path, "Shapes of the reference scan (.h5, kind=shapes)");
   tool.add_optional_input("LABELS", labels_path,
                           "Labels of the same scan (.h5, kind=labels): voxel surfaces for unreliable SH fits, the sample cylinder");
@@ -147,11 +158,25 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 2.0))->capture_default_str();
   app.add_option("--tracked-only", tracks_path, "Keep only grains tracked from the first scan to the last in this kind=tracks file")
       ->check(CLI::ExistingFile);
+  app.add_option("--packing", packing,
+                 "scan: every grain at its CT position (the twin); equivalent: a statistically equivalent sample packed "
+                 "from the grains of SHAPES")
+      ->check(CLI::IsMember({"scan", "equivalent"}))->capture_default_str();
+  app.add_option("--grains", po.grains,
+                 "--packing equivalent: grains drawn from the library with replacement (0: every library grain once)")
+      ->capture_default_str();
+  app.add_option("--solid-fraction", po.solid_fraction,
+                 "--packing equivalent: grain volume / cylinder volume (0: the scan's, from LABELS' sample cylinder)")
+      ->check(CLI::Range(0.0, 0.74))->capture_default_str();
+  app.add_option("--aspect", po.aspect, "--packing equivalent: cylinder height / diameter (0: the scan's, from LABELS, else 1)")
+      ->check(CLI::Range(0.0, 10.0))->capture_default_str();
+  app.add_option("--seed", po.seed, "--packing equivalent: seed of the draw and the packing")->capture_default_str();
   app.add_option("--vtu", vtu_path, "Also write the model for ParaView (.vtu)");
   app.add_option("--msh", msh_path, "Also write the model for gmsh (.msh, format 2.2)");
   tool.set_examples({"shapes2mesh scan_000/shapes.h5 scan_000/labels.h5 model.h5 --vtu model.vtu --msh model.msh",
                      "shapes2mesh shapes.h5 model.h5 --order 1 --elements-per-diameter 6",
-                     "shapes2mesh shapes.h5 labels.h5 model.h5 --tracked-only tracks.h5"});
+                     "shapes2mesh shapes.h5 labels.h5 model.h5 --tracked-only tracks.h5",
+                     "shapes2mesh shapes.h5 labels.h5 sample.h5 --packing equivalent --grains 500 --seed 2"});
 
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     if (model_path.extension() != ".h5") throw UsageError("the model " + model_path.string() + " must end in .h5");
@@ -159,6 +184,9 @@ int main(int argc, char** argv) {
     if (!msh_path.empty() && msh_path.extension() != ".msh") throw UsageError("--msh " + msh_path.string() + " must end in .msh");
     const double thickness = parse_length_m(membrane_thickness, "--membrane-thickness");
     mo.snap_to_sh = curving == "snap";
+    const bool equivalent = packing == "equivalent";
+    if (equivalent && po.solid_fraction == 0.0 && labels_path.empty())
+      throw UsageError("--packing equivalent needs --solid-fraction, or LABELS whose sample cylinder gives the scan's");
     io::AtomicOutput out(model_path, ctx.force());
     std::optional<io::AtomicOutput> vtu_out, msh_out;
     if (!vtu_path.empty()) vtu_out.emplace(vtu_path, ctx.force());
@@ -167,6 +195,9 @@ int main(int argc, char** argv) {
     if (!labels_path.empty()) ctx.add_input_history(io::open_kind(labels_path, schema::kind::labels, "pass the output of ct2labels"));
     if (!tracks_path.empty()) io::open_kind(tracks_path, schema::kind::tracks, "pass the output of shapes2tracks");
 
+    // Forked now, while the process is small and has no threads running.
+    mesh::GmshWorkers workers(ctx.threads());
+    mo.workers = &workers;
     shape::ShapesFile shapes = shape::read_shapes_file(shapes_path);
     if (shapes.grains.empty()) throw DataError(shapes_path.string() + " holds no grain; check the segmentation and labels2shapes run");
     std::optional<segment::LabelsFile> labels;
@@ -191,17 +222,62 @@ int main(int argc, char** argv) {
     }
     mo.rigid_diameter = rigid_below_d50 * shapes.psd.d50;
 
+    // What is meshed: the scan's grains where they are, or an equivalent sample drawn from them
+    // (copies centred on their body origin, meshed there and then placed).
+    std::optional<mesh::EquivalentSample> sample;
+    std::vector<shape::GrainShape> members;
+    if (equivalent) {
+      // The scan's sample: ct2labels' cylinder, over the whole scan height unless bounded in z.
+      const segment::Cylinder region = labels ? labels->sample.region : segment::Cylinder{};
+      const bool bounded = labels && std::isfinite(region.radius) && region.radius > 0;
+      double height = 0.0;
+      if (bounded) {
+        const auto& v = labels->labels;
+        const double z0 = v.position_xyz(0, 0, 0)[2], z1 = v.position_xyz(static_cast<double>(v.shape()[0] - 1), 0, 0)[2];
+        const double half = 0.5 * v.voxel_size()[0];
+        height = std::min(region.z_max, std::max(z0, z1) + half) - std::max(region.z_min, std::min(z0, z1) - half);
+      }
+      if (!bounded && po.solid_fraction == 0.0)
+        throw UsageError(labels_path.string() + " has no bounded sample cylinder to take the solid fraction from; give --solid-fraction");
+      if (po.solid_fraction == 0.0) {
+        double solid = 0.0;
+        for (const auto& g : shapes.grains) solid += g.volume;
+        po.solid_fraction = solid / (M_PI * region.radius * region.radius * height);
+        if (po.solid_fraction > 0.74)
+          throw DataError(fmt::format("the scan's solid fraction comes out at {:.3f} from {}, above what packs; give --solid-fraction",
+                                      po.solid_fraction, labels_path.string()));
+      }
+      if (po.aspect == 0.0) po.aspect = bounded ? height / (2.0 * region.radius) : 1.0;
+      sample = mesh::pack_equivalent_sample(grains, shapes.degree, po, ctx.progress_callback("packing"));
+      cli::throw_if_interrupted();
+      for (std::size_t i = 0; i < sample->source.size(); ++i) {
+        members.push_back(*grains[sample->source[i]]);
+        members.back().centroid.setZero();
+      }
+      spdlog::info("equivalent sample: {} grains drawn from {} ({} unusable), d50 {:.3f} mm (library {:.3f} mm); packed at solid "
+                   "fraction {:.4f} (core {:.4f}) into a cylinder of radius {:.3f} mm, height {:.3f} mm; max overlap {:.3g} um, "
+                   "{} sweeps, {:.1f} s",
+                   members.size(), grains.size(), sample->unusable, sample->psd.d50 * 1e3, shapes.psd.d50 * 1e3,
+                   sample->report.solid_fraction, sample->report.core_solid_fraction, sample->container.radius * 1e3,
+                   sample->container.height * 1e3, sample->report.max_overlap * 1e6, sample->report.sweeps, sample->report.seconds);
+    }
+    const std::size_t count = sample ? members.size() : grains.size();
+    const auto grain = [&](std::size_t i) -> const shape::GrainShape& { return sample ? members[i] : *grains[i]; };
+    const auto source_label = [&](std::size_t i) { return sample ? grains[sample->source[i]]->label : grains[i]->label; };
+
     const mesh::ShSurfaceBasis basis(subdivisions, shapes.degree);
-    std::vector<mesh::GrainMeshResult> results(grains.size());
-    std::vector<std::string> failures(grains.size());
-    auto progress = ctx.progress("meshing", grains.size());
-    const Volume<std::uint32_t>* label_volume = labels ? &labels->labels : nullptr;
+    std::vector<mesh::GrainMeshResult> results(count);
+    std::vector<std::string> failures(count);
+    auto progress = ctx.progress("meshing", count);
+    // Voxel surfaces exist only where the grains are, in the scan.
+    const Volume<std::uint32_t>* label_volume = labels && !sample ? &labels->labels : nullptr;
 #pragma omp parallel for schedule(dynamic, 1)
-    for (std::size_t i = 0; i < grains.size(); ++i) {
+    for (std::size_t i = 0; i < count; ++i) {
       if (cli::interrupted()) continue;
-      const auto box = label_volume ? bbox.at(grains[i]->label) : std::array<std::size_t, 6>{};
+      const auto box = label_volume ? bbox.at(grain(i).label) : std::array<std::size_t, 6>{};
       try {
-        results[i] = mesh::mesh_grain(*grains[i], basis, label_volume, box, mo);
+        results[i] = mesh::mesh_grain(grain(i), basis, label_volume, box, mo);
+        if (sample) mesh::place_mesh(results[i].mesh, sample->poses[i]);
       } catch (const Error& e) {
         failures[i] = e.message();
       }
@@ -209,18 +285,19 @@ int main(int argc, char** argv) {
     }
     progress.reset();
     cli::throw_if_interrupted();
-    for (std::size_t i = 0; i < grains.size(); ++i)
+    for (std::size_t i = 0; i < count; ++i)
       if (!failures[i].empty())
-        throw DataError("grain " + std::to_string(grains[i]->label) + " could not be meshed: " + failures[i]);
+        throw DataError("grain " + std::to_string(source_label(i)) + " could not be meshed: " + failures[i]);
 
     fdem::Model model;
     Report report;
     std::size_t origin_count[3] = {0, 0, 0}, rigid = 0, remeshed = 0, optimized = 0, below = 0, curving_inverted = 0;
     double seconds = 0.0;
-    for (std::size_t i = 0; i < grains.size(); ++i) {
+    for (std::size_t i = 0; i < count; ++i) {
       const auto& r = results[i];
-      mesh::append_grain(model, r.mesh, grains[i]->label, r.kind);
-      report.add(grains[i]->label, r);
+      const std::uint32_t label = sample ? static_cast<std::uint32_t>(i + 1) : grains[i]->label;
+      mesh::append_grain(model, r.mesh, label, r.kind);
+      report.add(label, source_label(i), r);
       ++origin_count[static_cast<int>(r.origin)];
       rigid += r.kind == fdem::GrainKind::rigid;
       remeshed += r.remeshed;
@@ -228,22 +305,29 @@ int main(int argc, char** argv) {
       curving_inverted += r.gmsh.inverted_after_curving > 0;
       below += r.quality.below_floor > 0 || r.quality.inverted > 0;
       seconds += r.gmsh.seconds;
-      if (!r.note.empty()) spdlog::debug("grain {}: {}", grains[i]->label, r.note);
+      if (!r.note.empty()) spdlog::debug("grain {}: {}", label, r.note);
     }
-    // The sample: ct2labels' region when it is bounded, else the cylinder around the grains.
-    fdem::SampleCylinder sample = mesh::enclosing_cylinder(model, thickness);
+    // The sample: the equivalent packing's cylinder, ct2labels' region when it is bounded, else
+    // the cylinder around the grains.
+    fdem::SampleCylinder cylinder = mesh::enclosing_cylinder(model, thickness);
     std::string sample_source = "grains";
-    if (labels && std::isfinite(labels->sample.region.radius) && labels->sample.region.radius > 0) {
+    if (sample) {
+      cylinder.axis_xy.setZero();
+      cylinder.radius = sample->container.radius;
+      cylinder.z_min = 0.0, cylinder.z_max = sample->container.height;
+      sample_source = "equivalent packing";
+    } else if (labels && std::isfinite(labels->sample.region.radius) && labels->sample.region.radius > 0) {
       const auto& c = labels->sample.region;
-      sample.axis_xy = {c.centre_x, c.centre_y};
-      sample.radius = c.radius;
-      if (std::isfinite(c.z_min) && std::isfinite(c.z_max)) sample.z_min = c.z_min, sample.z_max = c.z_max;
+      cylinder.axis_xy = {c.centre_x, c.centre_y};
+      cylinder.radius = c.radius;
+      if (std::isfinite(c.z_min) && std::isfinite(c.z_max)) cylinder.z_min = c.z_min, cylinder.z_max = c.z_max;
       sample_source = "labels";
     }
-    model.sample = sample;
-    model.platens = mesh::end_platens(sample, platen_friction);
+    model.sample = cylinder;
+    model.platens = mesh::end_platens(cylinder, platen_friction);
+    const fdem::SampleCylinder& sample_cylinder = cylinder;
 
-    const std::size_t n = grains.size();
+    const std::size_t n = count;
     spdlog::info("{} grains: {} from SH, {} from voxels, {} as ellipsoids; {} rigid (below {:.3g} mm)", n, origin_count[0],
                  origin_count[1], origin_count[2], rigid, mo.rigid_diameter * 1e3);
     spdlog::info("{} nodes, {} elements ({:.0f} per grain), {} surface triangles; {:.2f} s in gmsh ({:.3f} s per grain)",
@@ -253,14 +337,20 @@ int main(int argc, char** argv) {
                  "nodes pulled back); {} grains remeshed, {} still below the gamma floor {} or inverted",
                  curving_inverted, optimized, remeshed, below, mo.gamma_floor);
     spdlog::info("sample cylinder ({}): axis ({:.4g}, {:.4g}) mm, radius {:.4g} mm, z {:.4g} .. {:.4g} mm", sample_source,
-                 sample.axis_xy.x() * 1e3, sample.axis_xy.y() * 1e3, sample.radius * 1e3, sample.z_min * 1e3, sample.z_max * 1e3);
+                 sample_cylinder.axis_xy.x() * 1e3, sample_cylinder.axis_xy.y() * 1e3, sample_cylinder.radius * 1e3,
+                 sample_cylinder.z_min * 1e3, sample_cylinder.z_max * 1e3);
 
-    const nlohmann::json parameters = {
+    nlohmann::json parameters = {
         {"order", mo.order}, {"elements_per_diameter", mo.size.elements_per_diameter}, {"surface_nodes", mo.size.surface_nodes},
         {"volume_tolerance", mo.size.volume_tolerance}, {"gamma_floor", mo.gamma_floor}, {"rigid_below_d50", rigid_below_d50},
         {"rigid_diameter_m", mo.rigid_diameter}, {"surface_subdivisions", subdivisions}, {"smooth_vox", mo.smooth_vox}, {"curving", curving},
         {"membrane_thickness_m", thickness}, {"platen_friction", platen_friction}, {"sample_source", sample_source},
-        {"tracked_only", tracks_path.string()}, {"gmsh_serialised", true}};
+        {"tracked_only", tracks_path.string()}, {"gmsh_processes", workers.size()}, {"packing", packing}};
+    if (sample)
+      parameters["equivalent_packing"] = {{"grains", po.grains}, {"solid_fraction", po.solid_fraction}, {"aspect", po.aspect},
+                                          {"seed", po.seed}, {"packed_solid_fraction", sample->report.solid_fraction},
+                                          {"core_solid_fraction", sample->report.core_solid_fraction},
+                                          {"d50_m", sample->psd.d50}, {"library_d50_m", shapes.psd.d50}};
     fdem::write_model_file(out.temp_path(), model, ctx.history(), [&](io::H5File& f) { report.write(f, parameters.dump()); });
     if (vtu_out) io::write_vtu(vtu_out->temp_path(), fdem::model_grid(model));
     if (msh_out) fdem::write_model_msh(msh_out->temp_path(), model);

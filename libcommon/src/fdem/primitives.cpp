@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <unordered_map>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/element.hpp"
@@ -14,11 +15,6 @@ namespace {
 
 /// Outward faces of a positively oriented tetrahedron (0, 1, 2, 3), as local corner indices.
 constexpr std::array<std::array<int, 3>, 4> kOutwardFaces{{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}}};
-
-std::array<std::uint32_t, 3> sorted(std::array<std::uint32_t, 3> f) {
-  std::sort(f.begin(), f.end());
-  return f;
-}
 
 }  // namespace
 
@@ -57,9 +53,97 @@ TetMesh box_mesh(const Eigen::Vector3d& size, double element_size) {
 
 std::uint32_t add_grain(Model& model, const TetMesh& mesh, const Eigen::Vector3d& offset, GrainKind kind,
                         std::uint32_t material, std::uint32_t label) {
+  std::vector<Eigen::Vector3d> nodes;
+  nodes.reserve(mesh.nodes.size());
+  for (const Eigen::Vector3d& p : mesh.nodes) nodes.push_back(p + offset);
+  const bool quadratic = kind == GrainKind::tet10;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edge_node;  // corner ids, low first
+  std::vector<std::uint32_t> elements;
+  elements.reserve(mesh.tets.size() * (quadratic ? 10 : 4));
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    const auto& c = mesh.tets[t];
+    for (std::uint32_t a : c)
+      if (a >= mesh.nodes.size())
+        throw DataError("tetrahedron " + std::to_string(t) + " of grain label " + std::to_string(label) + " uses a missing node");
+    elements.insert(elements.end(), c.begin(), c.end());
+    if (!quadratic) continue;
+    for (const auto& [a, b] : kTet10Edges) {
+      const auto key = std::minmax(c[static_cast<std::size_t>(a)], c[static_cast<std::size_t>(b)]);
+      const auto [it, fresh] = edge_node.try_emplace({key.first, key.second}, static_cast<std::uint32_t>(nodes.size()));
+      if (fresh) nodes.push_back(0.5 * (nodes[key.first] + nodes[key.second]));
+      elements.push_back(it->second);
+    }
+  }
+  return append_grain_elements(model, nodes, quadratic ? 10 : 4, elements, kind, material, label);
+}
+
+std::vector<std::array<std::uint32_t, 3>> boundary_triangles(int nodes_per_element, std::span<const std::uint32_t> elements) {
+  if (nodes_per_element != 4 && nodes_per_element != 10)
+    throw UsageError("boundary_triangles: elements of " + std::to_string(nodes_per_element) + " nodes (4 or 10 expected)");
+  const auto npe = static_cast<std::size_t>(nodes_per_element);
+  const std::size_t count = elements.size() / npe;
+  struct FaceUse {
+    std::uint32_t element;
+    std::uint8_t face, uses;
+  };
+  std::unordered_map<std::uint64_t, FaceUse> faces;  // key: sorted corner triple, 21 bits each
+  faces.reserve(2 * count);
+  const auto key = [](std::array<std::uint32_t, 3> c) {
+    std::sort(c.begin(), c.end());
+    if (c[2] >= (1u << 21)) throw UsageError("boundary_triangles: a grain mesh of over 2 million nodes");
+    return static_cast<std::uint64_t>(c[0]) << 42 | static_cast<std::uint64_t>(c[1]) << 21 | c[2];
+  };
+  for (std::size_t e = 0; e < count; ++e) {
+    const std::uint32_t* n = elements.data() + e * npe;
+    for (std::uint8_t f = 0; f < 4; ++f) {
+      const auto& corner = kOutwardFaces[f];
+      auto [it, fresh] = faces.try_emplace(key({n[corner[0]], n[corner[1]], n[corner[2]]}),
+                                           FaceUse{static_cast<std::uint32_t>(e), f, 0});
+      ++it->second.uses;
+    }
+  }
+  std::vector<std::pair<std::uint32_t, std::uint8_t>> boundary;  // sorted, so the result is deterministic
+  for (const auto& [k, use] : faces)
+    if (use.uses == 1) boundary.emplace_back(use.element, use.face);
+  std::sort(boundary.begin(), boundary.end());
+  const auto mid_node = [](int a, int b) {
+    for (int k = 0; k < 6; ++k)
+      if ((kTet10Edges[k][0] == a && kTet10Edges[k][1] == b) || (kTet10Edges[k][0] == b && kTet10Edges[k][1] == a)) return 4 + k;
+    return -1;
+  };
+  std::vector<std::array<std::uint32_t, 3>> out;
+  out.reserve(boundary.size() * (npe == 10 ? 4 : 1));
+  for (const auto& [e, f] : boundary) {
+    const std::uint32_t* n = elements.data() + e * npe;
+    const int a = kOutwardFaces[f][0], b = kOutwardFaces[f][1], c = kOutwardFaces[f][2];
+    if (npe == 4) {
+      out.push_back({n[a], n[b], n[c]});
+      continue;
+    }
+    const std::uint32_t ab = n[mid_node(a, b)], bc = n[mid_node(b, c)], ca = n[mid_node(c, a)];
+    out.insert(out.end(), {{n[a], ab, ca}, {ab, n[b], bc}, {ca, bc, n[c]}, {ab, bc, ca}});
+  }
+  return out;
+}
+
+std::uint32_t append_grain_elements(Model& model, std::span<const Eigen::Vector3d> nodes, int nodes_per_element,
+                                    std::span<const std::uint32_t> elements, GrainKind kind, std::uint32_t material,
+                                    std::uint32_t label) {
   if (material >= model.materials.size())
     throw UsageError("grain label " + std::to_string(label) + " names material " + std::to_string(material) +
                      " but the model has " + std::to_string(model.materials.size()));
+  const auto npe = static_cast<std::size_t>(nodes_per_element);
+  const std::vector<std::array<std::uint32_t, 3>> surface = boundary_triangles(nodes_per_element, elements);
+  for (std::size_t e = 0; e < elements.size() / npe; ++e) {
+    const std::uint32_t* n = elements.data() + e * npe;
+    for (std::size_t k = 0; k < npe; ++k)
+      if (n[k] >= nodes.size())
+        throw DataError("element " + std::to_string(e) + " of grain label " + std::to_string(label) + " uses a missing node");
+    const Eigen::Vector3d& p0 = nodes[n[0]];
+    if (!((nodes[n[1]] - p0).cross(nodes[n[2]] - p0).dot(nodes[n[3]] - p0) > 0))
+      throw DataError("element " + std::to_string(e) + " of grain label " + std::to_string(label) +
+                      " is flat or inverted; remesh the grain");
+  }
   const auto grain_index = static_cast<std::uint32_t>(model.grains.size());
   Grain g;
   g.label = label;
@@ -68,57 +152,14 @@ std::uint32_t add_grain(Model& model, const TetMesh& mesh, const Eigen::Vector3d
   g.node_begin = static_cast<std::uint32_t>(model.nodes.size());
   g.element_begin = static_cast<std::uint32_t>(model.element_count());
   g.triangle_begin = static_cast<std::uint32_t>(model.triangles.size());
-  for (const Eigen::Vector3d& p : mesh.nodes) model.nodes.push_back(p + offset);
-  const bool quadratic = kind == GrainKind::tet10;
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edge_node;  // global corner ids, low first
-  const auto mid_node = [&](std::uint32_t a, std::uint32_t b) {
-    const auto key = std::minmax(a, b);
-    auto [it, fresh] = edge_node.try_emplace({key.first, key.second}, static_cast<std::uint32_t>(model.nodes.size()));
-    if (fresh) model.nodes.push_back(0.5 * (model.nodes[a] + model.nodes[b]));
-    return it->second;
-  };
-  std::map<std::array<std::uint32_t, 3>, std::pair<int, std::array<std::uint32_t, 3>>> faces;  // sorted -> (uses, oriented)
-  std::vector<std::array<std::uint32_t, 10>> element_nodes;
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    std::array<std::uint32_t, 10> n{};
-    for (int a = 0; a < 4; ++a) {
-      if (mesh.tets[t][a] >= mesh.nodes.size())
-        throw DataError("tetrahedron " + std::to_string(t) + " of grain label " + std::to_string(label) + " uses a missing node");
-      n[a] = g.node_begin + mesh.tets[t][a];
-    }
-    const Eigen::Vector3d& p0 = model.nodes[n[0]];
-    const double six_volume = (model.nodes[n[1]] - p0).cross(model.nodes[n[2]] - p0).dot(model.nodes[n[3]] - p0);
-    if (!(six_volume > 0))
-      throw DataError("tetrahedron " + std::to_string(t) + " of grain label " + std::to_string(label) +
-                      " is flat or inverted; remesh the grain");
-    if (quadratic)
-      for (int k = 0; k < 6; ++k) n[4 + k] = mid_node(n[kTet10Edges[k][0]], n[kTet10Edges[k][1]]);
-    element_nodes.push_back(n);
-    for (const auto& f : kOutwardFaces) {
-      const std::array<std::uint32_t, 3> oriented{n[f[0]], n[f[1]], n[f[2]]};
-      auto& entry = faces[sorted(oriented)];
-      ++entry.first;
-      entry.second = oriented;
-    }
-  }
-  for (const auto& n : element_nodes) {
-    model.element_nodes.insert(model.element_nodes.end(), n.begin(), n.begin() + (quadratic ? 10 : 4));
-    if (model.element_offset.empty()) model.element_offset.push_back(0);
+  model.nodes.insert(model.nodes.end(), nodes.begin(), nodes.end());
+  if (model.element_offset.empty()) model.element_offset.push_back(0);
+  for (std::size_t e = 0; e < elements.size() / npe; ++e) {
+    for (std::size_t k = 0; k < npe; ++k) model.element_nodes.push_back(g.node_begin + elements[e * npe + k]);
     model.element_offset.push_back(static_cast<std::uint32_t>(model.element_nodes.size()));
     model.element_grain.push_back(grain_index);
   }
-  for (const auto& [key, entry] : faces) {
-    if (entry.first != 1) continue;
-    const auto [a, b, c] = entry.second;
-    if (!quadratic) {
-      model.triangles.push_back({a, b, c});
-    } else {
-      const std::uint32_t ab = mid_node(a, b), bc = mid_node(b, c), ca = mid_node(c, a);
-      for (const std::array<std::uint32_t, 3>& t : {std::array{a, ab, ca}, std::array{ab, b, bc}, std::array{ca, bc, c},
-                                                    std::array{ab, bc, ca}})
-        model.triangles.push_back(t);
-    }
-  }
+  for (const auto& t : surface) model.triangles.push_back({g.node_begin + t[0], g.node_begin + t[1], g.node_begin + t[2]});
   model.triangle_grain.resize(model.triangles.size(), grain_index);
   g.node_end = static_cast<std::uint32_t>(model.nodes.size());
   g.element_end = static_cast<std::uint32_t>(model.element_count());

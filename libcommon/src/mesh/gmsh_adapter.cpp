@@ -2,6 +2,7 @@
 
 #include <gmsh.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -10,6 +11,8 @@
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/element.hpp"
+#include "gmsh_request.hpp"
 
 namespace graintwin::mesh {
 namespace {
@@ -85,7 +88,6 @@ std::size_t count_inverted(const TetMesh& m) {
 /// is below `min_ratio` move towards the straight-edge midpoint by `fraction` (1: onto it; a
 /// straight element with valid corners has ratio 1); repeated since a moved node is shared.
 std::size_t pull_back_distorted(TetMesh& m, double min_ratio, double fraction, int passes) {
-  static constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
   std::size_t moved = 0;
   for (int pass = 0; pass < passes; ++pass) {
     bool any = false;
@@ -94,7 +96,7 @@ std::size_t pull_back_distorted(TetMesh& m, double min_ratio, double fraction, i
       any = true;
       const std::uint32_t* n = m.element(e);
       for (int k = 0; k < 6; ++k) {
-        const Eigen::Vector3d mid = 0.5 * (m.nodes[n[kEdges[k][0]]] + m.nodes[n[kEdges[k][1]]]);
+        const Eigen::Vector3d mid = 0.5 * (m.nodes[n[fdem::kTet10Edges[k][0]]] + m.nodes[n[fdem::kTet10Edges[k][1]]]);
         Eigen::Vector3d& p = m.nodes[n[4 + k]];
         if (p != mid) p += fraction * (mid - p), ++moved;
       }
@@ -108,38 +110,72 @@ std::size_t pull_back_distorted(TetMesh& m, double min_ratio, double fraction, i
 /// would set a tiny stable time step in the solver).
 constexpr double kMinSnappedJacobianRatio = 0.2;
 
-/// Moves every boundary node of `m` onto the exact surface, then pulls back what that distorts.
-void snap_to_surface(TetMesh& m, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& project, TetReport& report) {
-  std::vector<char> on_boundary(m.nodes.size(), 0);
-  for (const auto& t : boundary_triangles(m))
-    for (std::uint32_t v : t) on_boundary[v] = 1;
-  for (std::size_t v = 0; v < m.nodes.size(); ++v)
-    if (on_boundary[v]) m.nodes[v] = project(m.nodes[v]);
-  report.inverted_after_curving = count_inverted(m);
-  report.straightened = pull_back_distorted(m, kMinSnappedJacobianRatio, 0.5, 4) + pull_back_distorted(m, kMinSnappedJacobianRatio, 1.0, 2);
+double corner_six_volume(const TetMesh& m, std::size_t e) {
+  const std::uint32_t* n = m.element(e);
+  const Eigen::Vector3d& a = m.nodes[n[0]];
+  return (m.nodes[n[1]] - a).cross(m.nodes[n[2]] - a).dot(m.nodes[n[3]] - a);
 }
 
-/// Meshes the current gmsh model's volume at the options' size and order, with the Jacobian check.
-TetMesh generate(const TetOptions& o, TetReport& report) {
-  gmsh::option::setNumber("Mesh.MeshSizeMin", o.size);
-  gmsh::option::setNumber("Mesh.MeshSizeMax", o.size);
+/// Moves every boundary node of `m` onto the exact surface. An element whose corners that leaves
+/// flat or inverted gets its corners back where gmsh put them (on the triangulated surface, a
+/// small fraction of h away); then, for 10-node elements, mid-edge nodes are pulled back where the
+/// curving distorts an element.
+void snap_to_surface(TetMesh& m, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& project, TetReport& report) {
+  const std::vector<Eigen::Vector3d> before = m.nodes;
+  std::vector<char> moved(m.nodes.size(), 0);
+  for (const auto& t : boundary_triangles(m))
+    for (std::uint32_t v : t) moved[v] = 1;
+  for (std::size_t v = 0; v < m.nodes.size(); ++v)
+    if (moved[v]) m.nodes[v] = project(m.nodes[v]);
+  for (bool again = true; again;) {  // restoring a corner can flatten a neighbour, rarely
+    again = false;
+    for (std::size_t e = 0; e < m.element_count(); ++e) {
+      if (corner_six_volume(m, e) > 0.0) continue;
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t v = m.element(e)[k];
+        if (moved[v]) m.nodes[v] = before[v], moved[v] = 0, ++report.unsnapped, again = true;
+      }
+    }
+  }
+  report.inverted_after_curving = count_inverted(m);
+  if (m.nodes_per_element == 10)
+    report.straightened = pull_back_distorted(m, kMinSnappedJacobianRatio, 0.5, 4) + pull_back_distorted(m, kMinSnappedJacobianRatio, 1.0, 2);
+  report.inverted = count_inverted(m);
+}
+
+/// Meshes the current gmsh model's volume at the request's size and order, with the Jacobian check.
+TetMesh generate(const detail::GmshRequest& q, TetReport& report) {
+  // gmsh clamps every size, the callback's too, to [MeshSizeMin, MeshSizeMax].
+  gmsh::option::setNumber("Mesh.MeshSizeMin", q.size_at ? 0.0 : q.size);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", q.size);
   gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
   gmsh::option::setNumber("Mesh.Algorithm3D", 1);
-  gmsh::model::mesh::generate(3);
-  if (o.order == 1) return extract(1);
-  if (o.project) {
+  if (q.size_at) {
+    gmsh::model::mesh::setSizeCallback(
+        [&q](int, int, double x, double y, double z) { return std::min(q.size, q.size_at(Eigen::Vector3d(x, y, z))); });
+    struct Unset {  // the callback refers to q: gone before q is, even when generate throws
+      ~Unset() {
+        try {
+          gmsh::model::mesh::removeSizeCallback();
+        } catch (...) {
+        }
+      }
+    } unset;
+    gmsh::model::mesh::generate(3);
+  } else {
+    gmsh::model::mesh::generate(3);
+  }
+  if (q.order == 1) return extract(1);
+  if (q.straight) {
     gmsh::option::setNumber("Mesh.SecondOrderLinear", 1);
     gmsh::model::mesh::setOrder(2);
     gmsh::option::setNumber("Mesh.SecondOrderLinear", 0);
-    TetMesh m = extract(2);
-    snap_to_surface(m, o.project, report);
-    report.inverted = count_inverted(m);
-    return m;
+    return extract(2);
   }
   gmsh::model::mesh::setOrder(2);
   TetMesh m = extract(2);
   report.inverted_after_curving = count_inverted(m);
-  if (report.inverted_after_curving > 0 && o.fix_inverted) {
+  if (report.inverted_after_curving > 0 && q.fix_inverted) {
     report.optimized = true;
     try {
       gmsh::model::mesh::optimize("HighOrder");
@@ -154,23 +190,74 @@ TetMesh generate(const TetOptions& o, TetReport& report) {
   return m;
 }
 
-/// Runs `build` (which sets up the current model) and `generate` under the lock, in a fresh model
-/// that is removed afterwards; gmsh's exceptions become one DataError naming `what`.
-template <class Build>
-TetMesh run_in_model(const TetOptions& o, TetReport* report, const std::string& what, Build&& build) {
+/// Sets up the request's body in the current (empty) model.
+void build(const detail::GmshRequest& q) {
+  if (q.body == detail::GmshRequest::Body::ellipsoid) {
+    const int v = gmsh::model::occ::addSphere(0, 0, 0, 1);
+    if (q.semi_axes != Eigen::Vector3d::Ones())
+      gmsh::model::occ::dilate({{3, v}}, 0, 0, 0, q.semi_axes.x(), q.semi_axes.y(), q.semi_axes.z());
+    gmsh::model::occ::synchronize();
+    return;
+  }
+  const TriangleSurface& surface = q.surface;
+  const int s = gmsh::model::addDiscreteEntity(2);
+  std::vector<std::size_t> tags(surface.vertices.size());
+  std::vector<double> xyz;
+  xyz.reserve(3 * tags.size());
+  for (std::size_t i = 0; i < tags.size(); ++i) {
+    tags[i] = i + 1;
+    xyz.insert(xyz.end(), {surface.vertices[i].x(), surface.vertices[i].y(), surface.vertices[i].z()});
+  }
+  gmsh::model::mesh::addNodes(2, s, tags, xyz);
+  std::vector<std::size_t> connectivity;
+  connectivity.reserve(3 * surface.triangles.size());
+  for (const auto& t : surface.triangles)
+    for (int k : t) connectivity.push_back(static_cast<std::size_t>(k) + 1);
+  gmsh::model::mesh::addElementsByType(s, 2, {}, connectivity);
+  // forReparametrization splits the closed surface into patches that each have one map.
+  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
+  gmsh::model::mesh::createGeometry();
+  gmsh::vectorpair surfaces;
+  gmsh::model::getEntities(surfaces, 2);
+  std::vector<int> loop;
+  for (const auto& [dim, tag] : surfaces) loop.push_back(tag);
+  const int l = gmsh::model::geo::addSurfaceLoop(loop);
+  gmsh::model::geo::addVolume({l});
+  gmsh::model::geo::synchronize();
+}
+
+void check_options(const TetOptions& o) {
   if (!(o.size > 0.0) || (o.order != 1 && o.order != 2))
     throw UsageError(fmt::format("tetrahedralize: the element size must be positive and the order 1 or 2 (got {} and {})", o.size, o.order));
-  std::lock_guard lock(gmsh_lock());
-  ensure_initialized();
-  const auto t0 = std::chrono::steady_clock::now();
+}
+
+/// Runs the request (here or in a worker), then snaps onto the exact surface when asked.
+TetMesh run(detail::GmshRequest& q, const TetOptions& o, TetReport* report, GmshWorkers* workers,
+            const std::function<void(TetMesh&)>& place) {
   TetReport local;
   TetReport& r = report ? *report : local;
   r = TetReport{};
+  q.size = o.size, q.order = o.order, q.fix_inverted = o.fix_inverted, q.straight = o.order == 2 && o.project;
+  if (q.size_at && workers) throw UsageError("tetrahedralize: graded sizes (size_at) run in this process only, not in gmsh workers");
+  TetMesh m = workers ? workers->run(q, r) : detail::run_gmsh(q, r);
+  if (place) place(m);
+  if (o.project) snap_to_surface(m, o.project, r);
+  return m;
+}
+
+}  // namespace
+
+namespace detail {
+
+TetMesh run_gmsh_unlocked(const GmshRequest& q, TetReport& r) {
+  ensure_initialized();
+  const char* what = q.body == GmshRequest::Body::ellipsoid ? "the ellipsoid" : "the surface";
+  const auto t0 = std::chrono::steady_clock::now();
   gmsh::model::add("graintwin");
   TetMesh m;
   try {
-    build();
-    m = generate(o, r);
+    build(q);
+    m = generate(q, r);
     gmsh::model::remove();
   } catch (...) {
     const std::string message = last_gmsh_error();
@@ -186,53 +273,39 @@ TetMesh run_in_model(const TetOptions& o, TetReport* report, const std::string& 
   return m;
 }
 
-}  // namespace
+TetMesh run_gmsh(const GmshRequest& q, TetReport& r) {
+  std::lock_guard lock(gmsh_lock());
+  return run_gmsh_unlocked(q, r);
+}
 
-TetMesh tetrahedralize(const TriangleSurface& surface, const TetOptions& options, TetReport* report) {
-  return run_in_model(options, report, "the surface", [&] {
-    const int s = gmsh::model::addDiscreteEntity(2);
-    std::vector<std::size_t> tags(surface.vertices.size());
-    std::vector<double> xyz;
-    xyz.reserve(3 * tags.size());
-    for (std::size_t i = 0; i < tags.size(); ++i) {
-      tags[i] = i + 1;
-      xyz.insert(xyz.end(), {surface.vertices[i].x(), surface.vertices[i].y(), surface.vertices[i].z()});
-    }
-    gmsh::model::mesh::addNodes(2, s, tags, xyz);
-    std::vector<std::size_t> connectivity;
-    connectivity.reserve(3 * surface.triangles.size());
-    for (const auto& t : surface.triangles)
-      for (int k : t) connectivity.push_back(static_cast<std::size_t>(k) + 1);
-    gmsh::model::mesh::addElementsByType(s, 2, {}, connectivity);
-    // forReparametrization splits the closed surface into patches that each have one map.
-    gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
-    gmsh::model::mesh::createGeometry();
-    gmsh::vectorpair surfaces;
-    gmsh::model::getEntities(surfaces, 2);
-    std::vector<int> loop;
-    for (const auto& [dim, tag] : surfaces) loop.push_back(tag);
-    const int l = gmsh::model::geo::addSurfaceLoop(loop);
-    gmsh::model::geo::addVolume({l});
-    gmsh::model::geo::synchronize();
-  });
+}  // namespace detail
+
+TetMesh tetrahedralize(const TriangleSurface& surface, const TetOptions& options, TetReport* report, GmshWorkers* workers) {
+  check_options(options);
+  detail::GmshRequest q;
+  q.surface = surface;
+  q.size_at = options.size_at;
+  return run(q, options, report, workers, {});
 }
 
 TetMesh mesh_ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& semi_axes, const Eigen::Quaterniond& rotation,
-                       const TetOptions& options, TetReport* report) {
+                       const TetOptions& options, TetReport* report, GmshWorkers* workers) {
+  check_options(options);
   if (!(semi_axes.minCoeff() > 0.0)) throw UsageError("mesh_ellipsoid: the semi-axes must be positive");
-  // Meshed as the unit-radius-scaled body so the size is in its own units, then scaled back.
+  // Meshed as the body scaled to unit largest semi-axis so the size is in its own units, then
+  // scaled back, rotated and placed (before any snapping, which works in place).
   const double scale = semi_axes.maxCoeff();
-  const Eigen::Vector3d unit = semi_axes / scale;
+  detail::GmshRequest q;
+  q.body = detail::GmshRequest::Body::ellipsoid;
+  q.semi_axes = semi_axes / scale;
   TetOptions o = options;
   o.size = options.size / scale;
-  TetMesh m = run_in_model(o, report, "the ellipsoid", [&] {
-    const int v = gmsh::model::occ::addSphere(0, 0, 0, 1);
-    if (unit != Eigen::Vector3d::Ones()) gmsh::model::occ::dilate({{3, v}}, 0, 0, 0, unit.x(), unit.y(), unit.z());
-    gmsh::model::occ::synchronize();
+  const Eigen::Matrix3d turn = rotation.normalized().toRotationMatrix();
+  if (options.size_at)
+    q.size_at = [&](const Eigen::Vector3d& p) { return options.size_at(centre + turn * (scale * p)) / scale; };
+  return run(q, o, report, workers, [&](TetMesh& m) {
+    for (Eigen::Vector3d& p : m.nodes) p = centre + turn * (scale * p);
   });
-  const Eigen::Matrix3d r = rotation.normalized().toRotationMatrix();
-  for (Eigen::Vector3d& p : m.nodes) p = centre + r * (scale * p);
-  return m;
 }
 
 }  // namespace graintwin::mesh

@@ -123,6 +123,30 @@ double surface_area(const TriangleSurface& m) {
   return a / 2.0;
 }
 
+double total_mean_curvature(const TriangleSurface& m) {
+  std::unordered_map<std::uint64_t, std::size_t> first;  // edge -> the first triangle seen with it
+  first.reserve(2 * m.triangles.size());
+  const auto v = [&](int k) -> const Vec& { return m.vertices[static_cast<std::size_t>(k)]; };
+  const auto normal = [&](const std::array<int, 3>& t) { return (v(t[1]) - v(t[0])).cross(v(t[2]) - v(t[0])).normalized().eval(); };
+  double sum = 0.0;
+  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+    const auto& t = m.triangles[i];
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[static_cast<std::size_t>(k)], b = t[static_cast<std::size_t>((k + 1) % 3)];
+      const auto [it, fresh] = first.try_emplace(edge_key(a, b), i);
+      if (fresh) continue;
+      const auto& s = m.triangles[it->second];
+      const Vec n1 = normal(s), n2 = normal(t);
+      const double angle = std::atan2(n1.cross(n2).norm(), n1.dot(n2));
+      // Convex where this triangle's far corner lies behind the other triangle's plane.
+      const int far = t[static_cast<std::size_t>((k + 2) % 3)];
+      const double sign = n1.dot(v(far) - v(a)) < 0.0 ? 1.0 : -1.0;
+      sum += sign * angle * (v(b) - v(a)).norm();
+    }
+  }
+  return 0.5 * sum;
+}
+
 std::string SurfaceCheck::problems() const {
   std::vector<std::string> p;
   if (open_edges) p.push_back(std::to_string(open_edges) + " open edges");

@@ -3,28 +3,20 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/element.hpp"
+#include "graintwin/fdem/primitives.hpp"
 
 namespace graintwin::mesh {
 namespace {
 
 using Vec = Eigen::Vector3d;
 
-/// Corners of every face, outward for a positively oriented element.
-constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-/// gmsh's 10-node edges: node 4 + k lies on the edge kEdges[k].
-constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
-
-int mid_node(int a, int b) {
-  for (int k = 0; k < 6; ++k)
-    if ((kEdges[k][0] == a && kEdges[k][1] == b) || (kEdges[k][0] == b && kEdges[k][1] == a)) return 4 + k;
-  return -1;
-}
+using fdem::kTet10Edges;
 
 std::array<Vec, 10> element_nodes(const TetMesh& m, std::size_t e) {
   std::array<Vec, 10> x;
@@ -33,7 +25,7 @@ std::array<Vec, 10> element_nodes(const TetMesh& m, std::size_t e) {
   for (int k = 0; k < 6; ++k)
     x[static_cast<std::size_t>(4 + k)] = m.nodes_per_element == 10
                                              ? m.nodes[n[4 + k]]
-                                             : 0.5 * (m.nodes[n[kEdges[k][0]]] + m.nodes[n[kEdges[k][1]]]);
+                                             : 0.5 * (m.nodes[n[kTet10Edges[k][0]]] + m.nodes[n[kTet10Edges[k][1]]]);
   return x;
 }
 
@@ -44,7 +36,7 @@ const std::array<Vec, 14>& jacobian_samples() {
     std::array<Vec, 14> p{Vec(0, 0, 0), Vec(1, 0, 0), Vec(0, 1, 0), Vec(0, 0, 1)};
     for (int k = 0; k < 6; ++k) {
       const auto corner = [&](int c) { return p[static_cast<std::size_t>(c)]; };
-      p[static_cast<std::size_t>(4 + k)] = 0.5 * (corner(kEdges[k][0]) + corner(kEdges[k][1]));
+      p[static_cast<std::size_t>(4 + k)] = 0.5 * (corner(kTet10Edges[k][0]) + corner(kTet10Edges[k][1]));
     }
     p[10] = Vec(b, b, b), p[11] = Vec(a, b, b), p[12] = Vec(b, a, b), p[13] = Vec(b, b, a);
     return p;
@@ -75,7 +67,7 @@ double tet10_det_jacobian(const std::array<Vec, 10>& x, double xi, double eta, d
     if (node < 4) {
       g[node] = 4.0 * l[node] - 1.0;
     } else {
-      const int p = kEdges[node - 4][0], q = kEdges[node - 4][1];
+      const int p = kTet10Edges[node - 4][0], q = kTet10Edges[node - 4][1];
       g[p] = 4.0 * l[q];
       g[q] = 4.0 * l[p];
     }
@@ -111,40 +103,7 @@ double mesh_volume(const TetMesh& m) {
 }
 
 std::vector<std::array<std::uint32_t, 3>> boundary_triangles(const TetMesh& m) {
-  struct FaceUse {
-    std::size_t element;
-    int face, count;
-  };
-  if (m.nodes.size() >= (1u << 21)) throw UsageError("boundary_triangles: a grain mesh of over 2 million nodes");
-  std::unordered_map<std::uint64_t, FaceUse> faces;  // key: sorted corner triple (21 bits each)
-  faces.reserve(2 * m.element_count());
-  const auto key = [](std::array<std::uint32_t, 3> c) {
-    std::sort(c.begin(), c.end());
-    return static_cast<std::uint64_t>(c[0]) << 42 | static_cast<std::uint64_t>(c[1]) << 21 | c[2];
-  };
-  for (std::size_t e = 0; e < m.element_count(); ++e) {
-    const std::uint32_t* n = m.element(e);
-    for (int f = 0; f < 4; ++f) {
-      auto [it, fresh] = faces.try_emplace(key({n[kFaces[f][0]], n[kFaces[f][1]], n[kFaces[f][2]]}), FaceUse{e, f, 0});
-      ++it->second.count;
-    }
-  }
-  std::vector<std::pair<std::size_t, int>> boundary;  // sorted, so the result is deterministic
-  for (const auto& [k, use] : faces)
-    if (use.count == 1) boundary.emplace_back(use.element, use.face);
-  std::sort(boundary.begin(), boundary.end());
-  std::vector<std::array<std::uint32_t, 3>> out;
-  for (const auto& [e, f] : boundary) {
-    const std::uint32_t* n = m.element(e);
-    const int a = kFaces[f][0], b = kFaces[f][1], c = kFaces[f][2];
-    if (m.nodes_per_element == 4) {
-      out.push_back({n[a], n[b], n[c]});
-      continue;
-    }
-    const std::uint32_t ab = n[mid_node(a, b)], bc = n[mid_node(b, c)], ca = n[mid_node(c, a)];
-    out.insert(out.end(), {{n[a], ab, ca}, {ab, n[b], bc}, {ca, bc, n[c]}, {ab, bc, ca}});
-  }
-  return out;
+  return fdem::boundary_triangles(m.nodes_per_element, m.elements);
 }
 
 TriangleSurface boundary_surface(const TetMesh& m) {
@@ -195,30 +154,7 @@ void append_grain(fdem::Model& model, const TetMesh& mesh, std::uint32_t label, 
   if (mesh.nodes_per_element != want || mesh.element_count() == 0)
     throw UsageError(fmt::format("append_grain: grain {} has {} elements of {} nodes, which do not fit its kind", label,
                                  mesh.element_count(), mesh.nodes_per_element));
-  const auto grain_index = static_cast<std::uint32_t>(model.grains.size());
-  fdem::Grain g;
-  g.label = label;
-  g.kind = kind;
-  g.material = material;
-  g.node_begin = static_cast<std::uint32_t>(model.nodes.size());
-  g.element_begin = static_cast<std::uint32_t>(model.element_grain.size());
-  g.triangle_begin = static_cast<std::uint32_t>(model.triangles.size());
-  model.nodes.insert(model.nodes.end(), mesh.nodes.begin(), mesh.nodes.end());
-  if (model.element_offset.empty()) model.element_offset.push_back(0);
-  for (std::size_t e = 0; e < mesh.element_count(); ++e) {
-    const std::uint32_t* n = mesh.element(e);
-    for (int k = 0; k < mesh.nodes_per_element; ++k) model.element_nodes.push_back(g.node_begin + n[k]);
-    model.element_offset.push_back(static_cast<std::uint32_t>(model.element_nodes.size()));
-    model.element_grain.push_back(grain_index);
-  }
-  for (const auto& t : boundary_triangles(mesh)) {
-    model.triangles.push_back({g.node_begin + t[0], g.node_begin + t[1], g.node_begin + t[2]});
-    model.triangle_grain.push_back(grain_index);
-  }
-  g.node_end = static_cast<std::uint32_t>(model.nodes.size());
-  g.element_end = static_cast<std::uint32_t>(model.element_grain.size());
-  g.triangle_end = static_cast<std::uint32_t>(model.triangles.size());
-  model.grains.push_back(g);
+  fdem::append_grain_elements(model, mesh.nodes, mesh.nodes_per_element, mesh.elements, kind, material, label);
 }
 
 fdem::SampleCylinder enclosing_cylinder(const fdem::Model& model, double membrane_thickness) {

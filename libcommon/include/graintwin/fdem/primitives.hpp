@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "graintwin/fdem/model.hpp"
@@ -23,10 +24,22 @@ TetMesh box_mesh(const Eigen::Vector3d& size, double element_size);
 
 /// Appends `mesh` (moved by `offset`, m) to `model` as one grain of `kind` with `material` and
 /// `label`, and returns its grain index. tet10 adds one mid-edge node per edge (straight edges);
-/// rigid grains keep the 4-node mesh. The surface is every tetrahedron face used once, outward and
-/// counter-clockwise seen from outside, each 10-node face split into 4 triangles. Throws DataError
-/// when a tetrahedron is flat or inverted.
+/// rigid grains keep the 4-node mesh. Joins through append_grain_elements.
 std::uint32_t add_grain(Model& model, const TetMesh& mesh, const Eigen::Vector3d& offset, GrainKind kind,
                         std::uint32_t material, std::uint32_t label);
+
+/// The outward boundary of a 4- or 10-node tetrahedral mesh (`elements` flat, `nodes_per_element`
+/// indices each, gmsh order, positively oriented): every face used by one element, counter-
+/// clockwise seen from outside, a 10-node face split into 4 through its mid-edge nodes; ordered by
+/// element and face (deterministic). Indices as in `elements`.
+std::vector<std::array<std::uint32_t, 3>> boundary_triangles(int nodes_per_element, std::span<const std::uint32_t> elements);
+
+/// Appends one grain given as nodes (m) and flat 4- or 10-node elements (gmsh order, indices into
+/// `nodes`) to `model` as a contiguous block with its boundary_triangles, and returns its grain
+/// index. Throws DataError when an element uses a missing node or its corners are flat or inverted,
+/// UsageError for an unknown material or a node count that is not 4 or 10.
+std::uint32_t append_grain_elements(Model& model, std::span<const Eigen::Vector3d> nodes, int nodes_per_element,
+                                    std::span<const std::uint32_t> elements, GrainKind kind, std::uint32_t material,
+                                    std::uint32_t label);
 
 }  // namespace graintwin::fdem

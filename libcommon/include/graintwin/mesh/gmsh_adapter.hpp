@@ -1,8 +1,13 @@
 #pragma once
 // The only code that touches gmsh (Debian's 4.8.4). gmsh keeps one global model and is not
-// thread-safe, so every call here holds one process-wide lock: callers may call from many threads,
-// but the gmsh part runs one at a time (parallel meshing needs worker processes).
+// thread-safe: in-process calls hold one process-wide lock (callers may call from many threads, the
+// gmsh part runs one at a time); parallel meshing goes through GmshWorkers, worker processes with
+// a gmsh each.
+#include <condition_variable>
 #include <functional>
+#include <mutex>
+#include <sys/types.h>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -17,12 +22,17 @@ struct TetOptions {
   int order = 1;      ///< 1: 4-node, 2: 10-node (curved onto the surface)
   /// After setOrder(2), run optimize("HighOrder") when any element's Jacobian is not positive.
   bool fix_inverted = true;
-  /// Order 2 with an exact surface: gmsh places the mid-edge nodes straight, then every boundary
-  /// node is moved onto the surface by `project` (point -> nearest surface point), instead of
-  /// gmsh curving onto its reparametrised triangulation (exact geometry, and no optimisation
-  /// pass: an element this leaves with min det J / max det J below 0.2 gets its mid-edge nodes
-  /// pulled back halfway, up to 4 times, then straight).
+  /// An exact surface: every boundary node gmsh placed (on the triangulated surface) is moved onto
+  /// it by `project` (point -> nearest surface point); an element whose corners that flattens or
+  /// inverts keeps gmsh's corners. Order 2: gmsh places the mid-edge nodes straight and they are
+  /// snapped too, instead of gmsh curving onto its reparametrised triangulation (exact geometry,
+  /// and no optimisation pass: an element this leaves with min det J / max det J below 0.2 gets its
+  /// mid-edge nodes pulled back halfway, up to 4 times, then straight).
   std::function<Eigen::Vector3d(const Eigen::Vector3d&)> project;
+  /// Optional graded sizing: the target element size (m) at a point given in the coordinates of
+  /// the returned mesh (gmsh's size callback), never above `size`; e.g. fine near the point where
+  /// a grain will touch another (fdem::graded_element_size).
+  std::function<double(const Eigen::Vector3d&)> size_at;
 };
 
 struct TetReport {
@@ -30,6 +40,7 @@ struct TetReport {
   bool optimized = false;                  ///< optimize("HighOrder") ran
   std::size_t inverted = 0;                ///< after the fix (0 unless the fix failed)
   std::size_t straightened = 0;            ///< mid-edge nodes pulled back towards straight edges to restore validity
+  std::size_t unsnapped = 0;               ///< boundary corners left off the exact surface (snapping flattened an element)
   double seconds = 0.0;                    ///< wall time inside gmsh (classification, meshing, curving)
 };
 
@@ -39,12 +50,51 @@ struct TetReport {
 /// the elements are curved onto the reparametrised surface; inverted ones (det J <= 0 at a node or
 /// Gauss point) trigger optimize("HighOrder"), and mid-edge nodes of any still inverted element
 /// are put back on the straight edge (always valid). DataError (one sentence) when gmsh fails.
-TetMesh tetrahedralize(const TriangleSurface& surface, const TetOptions& options, TetReport* report = nullptr);
+namespace detail {
+struct GmshRequest;
+}
+
+/// A pool of worker processes, each running its own gmsh, for meshing grains in parallel: a call
+/// from any thread takes a free worker (waiting for one), sends it the body and options through a
+/// socket and gets the mesh back. Results do not depend on which worker meshed (each request is a
+/// fresh gmsh model). A worker that dies is reported as a DataError for that call and forked again
+/// for the next; an interrupt (cli::interrupted) kills the worker being waited for and throws
+/// InterruptedError. Workers end and are reaped when the pool is destroyed, and die with the
+/// parent. Create it before starting threads and before reading large inputs: fork copies the
+/// process as it is.
+class GmshWorkers {
+ public:
+  explicit GmshWorkers(int count);
+  ~GmshWorkers();
+  GmshWorkers(const GmshWorkers&) = delete;
+  GmshWorkers& operator=(const GmshWorkers&) = delete;
+  int size() const { return static_cast<int>(workers_.size()); }
+  /// Process ids of the live workers (0 where one is gone and not yet forked again).
+  std::vector<pid_t> pids() const;
+  /// Runs one request in a worker (the adapter's functions call this).
+  TetMesh run(const detail::GmshRequest& request, TetReport& report);
+
+ private:
+  struct Worker {
+    pid_t pid = 0;
+    int socket = -1;
+    bool busy = false;
+  };
+  void start(std::size_t slot);
+  void stop(std::size_t slot, bool kill);
+  std::vector<Worker> workers_;
+  mutable std::mutex mutex_;
+  std::condition_variable freed_;
+};
+
+TetMesh tetrahedralize(const TriangleSurface& surface, const TetOptions& options, TetReport* report = nullptr,
+                       GmshWorkers* workers = nullptr);
 
 /// A solid ellipsoid x = centre + rotation * diag(semi_axes) * (unit ball), meshed from gmsh's
 /// exact OpenCASCADE sphere (the primitive grains of fdemrun scenes; a sphere when the three
 /// semi-axes are equal).
 TetMesh mesh_ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& semi_axes,
-                       const Eigen::Quaterniond& rotation, const TetOptions& options, TetReport* report = nullptr);
+                       const Eigen::Quaterniond& rotation, const TetOptions& options, TetReport* report = nullptr,
+                       GmshWorkers* workers = nullptr);
 
 }  // namespace graintwin::mesh

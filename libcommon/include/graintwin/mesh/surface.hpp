@@ -21,6 +21,10 @@ struct TriangleSurface {
 /// Enclosed volume by the divergence theorem (m^3; negative when the triangles face inwards).
 double enclosed_volume(const TriangleSurface& surface);
 double surface_area(const TriangleSurface& surface);
+/// Total mean curvature, the integral of H = (k1 + k2) / 2 over the surface (m): half the sum over
+/// edges of length x signed dihedral angle (positive where convex); 4 pi R for a sphere. Needs a
+/// closed, consistently oriented surface (edges of one triangle are skipped).
+double total_mean_curvature(const TriangleSurface& surface);
 
 struct SurfaceCheck {
   std::size_t open_edges = 0;           ///< edges used by one triangle
