@@ -28,7 +28,10 @@ std::string slurp(const fs::path& p) {
 }  // namespace
 
 ToolResult run_tool(const std::string& tool, const std::vector<std::string>& args) {
-  const fs::path exe = fs::path(GRAINTWIN_TOOL_DIR) / tool;
+  return run_program(fs::path(GRAINTWIN_TOOL_DIR) / tool, args);
+}
+
+ToolResult run_program(const fs::path& exe, const std::vector<std::string>& args) {
   TempDir io;
   const fs::path out = io / "stdout", err = io / "stderr";
   posix_spawn_file_actions_t fa;

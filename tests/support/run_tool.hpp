@@ -15,6 +15,8 @@ struct ToolResult {
 
 /// Runs build/bin/<tool> with `args` (no shell involved).
 ToolResult run_tool(const std::string& tool, const std::vector<std::string>& args);
+/// Runs the program `exe` (a path, not looked up in PATH) with `args` the same way.
+ToolResult run_program(const std::filesystem::path& exe, const std::vector<std::string>& args);
 
 /// A fresh empty directory under the system temp folder, removed when the object dies.
 class TempDir {

@@ -217,3 +217,16 @@ inline constexpr const char* rose_phi_edges = "phi_edges";           ///< rad
 inline constexpr const char* rose_count = "count";                   ///< uint64 (n_theta x n_phi)
 inline constexpr const char* rose_mean_force = "mean_force";         ///< (n_theta x n_phi) N, NaN in empty bins
 }  // namespace graintwin::schema::forces
+
+// kind=labels (ct2labels): the sample measurement the report reads (segment/labels_file.cpp writes it).
+namespace graintwin::schema::labels {
+inline constexpr const char* sample_void_ratio = "/sample/void_ratio";  ///< (1) e = V_void / V_solid
+}  // namespace graintwin::schema::labels
+
+// The triaxial measurements of fdemrun's time series (issue 10 item 3), read by report; one value
+// per series row, compression positive.
+namespace graintwin::schema::fdem_results {
+inline constexpr const char* series_axial_strain = "/series/axial_strain";            ///< (R) eps_1 = ln(H0 / H)
+inline constexpr const char* series_volumetric_strain = "/series/volumetric_strain";  ///< (R) eps_v = ln(V0 / V)
+inline constexpr const char* series_stress_ratio = "/series/stress_ratio";            ///< (R) sigma_1 / sigma_3
+}  // namespace graintwin::schema::fdem_results

@@ -1,0 +1,83 @@
+#pragma once
+// Chart specifications of the report page: what to draw (series of points, rose outlines), never
+// how. The report tool turns the run's files into these, writes them as JSON and has
+// pipelines/plots/report_charts.py draw each one as a PNG with matplotlib. Also the small
+// conversions from stored tables to series: log-binned PDFs, complementary CDFs, the fitted
+// curves of the force PDF and of the cluster statistics, rose profiles.
+#include <nlohmann/json_fwd.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "graintwin/micro/distributions.hpp"
+#include "graintwin/micro/forces.hpp"
+
+namespace graintwin::report {
+
+/// How a series is drawn: "line", "dashed", "points", "linepoints", or "vline" (one vertical
+/// line per x; y unused).
+struct Series {
+  std::string name;
+  std::string style = "line";
+  std::vector<double> x, y;
+};
+
+/// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
+/// kind "rose": each series is a rose profile, x = the polar-angle bin edges in degrees from the
+/// loading axis z (n + 1), y = the value per bin (n), drawn as a closed outline in the x-z plane,
+/// mirrored about both axes (the directions are axes, folded onto the upper hemisphere).
+struct Chart {
+  std::string file;   ///< PNG name inside the report's image folder
+  std::string panel;  ///< charts of one panel share their axis limits
+  std::string kind = "xy";
+  std::string title, x_label, y_label;
+  bool x_log = false, y_log = false;
+  std::vector<Series> series;
+
+  /// Adds a series, keeping only points with finite coordinates (and positive ones on log axes;
+  /// vertical lines keep every finite x). Returns false, adding nothing, when no point is left.
+  /// A rose series is kept whole (n + 1 edges, n values; a non-finite value becomes 0, an empty band).
+  bool add(Series s);
+};
+
+nlohmann::json to_json(const Chart& chart);
+
+/// Up to `max_count` indices of 0..count-1, evenly spread, always the first and the last.
+std::vector<std::size_t> pick_evenly(std::size_t count, std::size_t max_count);
+
+/// The PDF of a stored histogram: one point per non-empty bin at the bin's centre (geometric
+/// centre when `log_bins`), density as stored, x multiplied by `x_scale`.
+Series pdf_series(const micro::Histogram& h, bool log_bins, std::string name, double x_scale = 1.0);
+
+/// P(S >= s) of a sample of positive sizes: one point per distinct size, ascending.
+Series ccdf_series(const std::vector<double>& sizes, std::string name);
+
+/// The discrete power law P(s) ~ s^-alpha for s >= s_min as a complementary CDF over the sample:
+/// P(S >= s) = (tail / n) zeta(alpha, s) / zeta(alpha, s_min) for integer s in [s_min, s_max].
+Series power_law_ccdf(double alpha, double s_min, double s_max, std::size_t tail, std::size_t n, std::string name);
+
+/// The line log10 y = a + slope log10 x fitted by least squares to the points (x, y) with both
+/// positive (the fit passes through their mean in log space), drawn over their x range;
+/// `slope` is the fitted slope (1 / d_f for R_g against s). Empty when no point is positive.
+Series log_line_through_mean(const std::vector<double>& x, const std::vector<double>& y, double slope, std::string name);
+
+/// The force PDF's two fits on the density scale of the whole sample (f = f_n / <f_n>):
+/// strong_share x exp(-(f - 1) / scale) / scale for f in [1, f_max] and
+/// (1 - strong_share) x (theta + 1) f^theta for f in [f_min, 1].
+Series strong_force_fit(double scale, double strong_share, double f_max, std::string name);
+Series weak_force_fit(double theta, double strong_share, double f_min, std::string name);
+
+/// Share of the histogram's counted values in bins at or above `x` (exact when x is a bin edge,
+/// as f = 1 is for log bins aligned to decades).
+double share_at_or_above(const micro::Histogram& h, double x);
+
+/// Which per-bin value a rose profile shows.
+enum class RoseValue {
+  density,     ///< directions per steradian over the whole sphere (isotropic: 1 / (4 pi))
+  mean_force,  ///< mean normal force of the contacts in the polar band, N
+};
+/// The rose profile over the polar angle (azimuths summed): x = band edges in degrees, y = per band.
+Series rose_profile(const micro::ForceRose& rose, RoseValue value, std::string name);
+
+}  // namespace graintwin::report

@@ -1,0 +1,159 @@
+#pragma once
+// What the report reads from a pipeline run (Makefile.pipeline's layout under runs/<series>/):
+// the files of each scan, the series' tracks and micro-mechanics, the FDEM model, and the
+// simulation side (results, forces, micro-mechanics of the frames). Locating and checking them is
+// cheap (root attributes only) and happens before anything is read; the readers then load only
+// the tables the charts need, never label images or meshes.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "graintwin/micro/distributions.hpp"
+#include "graintwin/micro/forces.hpp"
+#include "graintwin/shape/grain_measure.hpp"
+
+namespace graintwin::report {
+
+namespace fs = std::filesystem;
+
+/// The run's files; an empty path is a file the run does not have.
+struct RunFiles {
+  std::vector<std::string> scan_names;  ///< e.g. scan_000, in order
+  std::vector<fs::path> labels, contacts, shapes;  ///< one entry per scan (empty = absent)
+  fs::path tracks, micro, model;
+  fs::path simulation, forces, simulation_micro;
+  fs::path scan_strains;  ///< JSON with the scans' applied axial strains (ctsynth's series.json)
+};
+
+/// The file names of Makefile.pipeline inside a run directory.
+namespace layout {
+inline constexpr const char* scan_prefix = "scan_";  ///< scan folders: scan_000, scan_001, ...
+inline constexpr const char* labels = "labels.h5";
+inline constexpr const char* contacts = "contacts.h5";
+inline constexpr const char* shapes = "shapes.h5";
+inline constexpr const char* tracks = "tracks.h5";
+inline constexpr const char* micro = "micro.h5";
+inline constexpr const char* model = "model.h5";
+inline constexpr const char* simulation = "simulation.h5";
+inline constexpr const char* forces = "forces.h5";
+inline constexpr const char* simulation_micro = "simulation_micro.h5";
+}  // namespace layout
+
+/// Fills what `given` leaves empty from `run_dir`'s layout: scans are the scan_* folders holding
+/// a labels file (unless `given.labels` lists them), the per-scan and series files those that
+/// exist. Files named in `given` must exist. UsageError in one sentence naming the path and the
+/// fix: no run directory, no scans, a named file missing, per-scan lists of the wrong length.
+RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given);
+
+/// Opens every file of `files` and checks its kind (UsageError naming the file and the stage that
+/// writes it). Returns each file's provenance history, keyed by path, in reading order.
+std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(const RunFiles& files);
+
+/// One scan: its void ratio (labels), size distribution (shapes), coordination numbers and roses
+/// (contacts). NaN / empty where its file is absent.
+struct ScanData {
+  std::string name;
+  double void_ratio = 0.0;
+  std::size_t grains = 0, contacts = 0;
+  shape::SizeDistribution psd;
+  std::vector<std::uint64_t> coordination;  ///< grains with Z = index
+  double coordination_mean = 0.0;
+  micro::ForceRose rose_normal, rose_branch;  ///< counts only (no mean_force)
+};
+
+/// The parts of a kind=micro file the charts show.
+struct MicroState {
+  std::vector<double> rdf_r, rdf_g;        ///< m, 1
+  std::vector<std::uint64_t> coordination;  ///< grains with Z = index
+  double coordination_mean = 0.0;
+  shape::SizeDistribution psd;              ///< empty when the file holds none
+};
+struct MicroIncrement {
+  std::size_t from = 0, to = 0;
+  double d50 = 0.0;  ///< m
+  micro::Histogram pdf_d2min, pdf_eps_q;
+  micro::Histogram displacement[4];  ///< x, y, z, magnitude, over d50
+  std::vector<double> cluster_size, cluster_rg;  ///< s, R_g (m)
+  std::size_t selected = 0;
+  bool size_fit_valid = false;
+  double size_alpha = 0.0, size_alpha_error = 0.0, size_s_min = 0.0;
+  std::size_t size_tail = 0;
+  double fractal_dimension = 0.0, fractal_dimension_error = 0.0;
+};
+struct MicroData {
+  std::string source;  ///< "tracks" or "fdem_results" (its /micro/parameters)
+  std::vector<double> state_d50;
+  std::vector<MicroState> states;
+  std::vector<MicroIncrement> increments;
+};
+MicroData read_micro_data(const fs::path& path);
+
+/// The parts of a kind=forces file the charts show.
+struct ForcesFrame {
+  std::size_t index = 0;  ///< frame of the results file
+  double time = 0.0;
+  std::size_t contacts = 0;
+  double strong_scale = 0.0, weak_theta = 0.0;
+  micro::Histogram pdf;
+  micro::ForceRose rose;
+};
+struct ForcesWindow {
+  std::size_t from = 0, to = 0;
+  double pearson_r = 0.0, p_value = 0.0;
+  std::size_t count = 0;
+  std::vector<double> volatility, d2min;  ///< per grain
+};
+struct ForcesData {
+  std::vector<ForcesFrame> frames;
+  std::vector<ForcesWindow> windows;
+};
+ForcesData read_forces_data(const fs::path& path);
+
+/// The triaxial time series of a kind=fdem_results file: log axial and volumetric strains and the
+/// stress ratio sigma_1 / sigma_3 (fdemrun's triaxial test, issue 10). `missing` names the columns
+/// the file lacks (then the vectors are empty).
+struct TriaxialSeries {
+  std::vector<double> axial_strain, volumetric_strain, stress_ratio;
+  std::vector<std::string> missing;
+};
+TriaxialSeries read_triaxial_series(const fs::path& results);
+
+/// Branch-vector roses (centroid to centroid of grain-grain contacts) of the frames `frames` of a
+/// results file, with `theta_bins` x `phi_bins` bins; counts only.
+std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, const std::vector<std::size_t>& frames,
+                                                      int theta_bins, int phi_bins);
+
+/// Everything of the experiment side.
+struct ExperimentData {
+  std::vector<ScanData> scans;
+  std::optional<MicroData> micro;
+  std::size_t tracks = 0;  ///< tracks in the tracks file (0 without one)
+  /// Per scan: eps_1 = -ln Lambda_zz of the affine map of the tracked centroids from scan 0 (NaN
+  /// where fewer than 4 grains are tracked), and eps_v = ln((1 + e_0) / (1 + e)) from the void
+  /// ratios; empty without tracks / labels.
+  std::vector<double> measured_axial_strain, volumetric_strain;
+  std::vector<double> applied_axial_strain;  ///< per scan, from RunFiles::scan_strains (else empty)
+};
+ExperimentData read_experiment(const RunFiles& files);
+
+/// Per scan eps_1 = -ln Lambda_zz of the least-squares affine map of the positions (N x T x 3,
+/// row-major, NaN = missing) about their mean, from scan 0 to each scan; NaN where fewer than 4
+/// grains are present in both or they span no volume.
+std::vector<double> tracked_axial_strain(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans);
+
+/// The simulation side; the branch roses of up to `frames_shown` frames (pick_evenly) with
+/// `theta_bins` polar bands.
+struct SimulationData {
+  bool present = false;  ///< a results file exists
+  std::size_t grains = 0, frames = 0;
+  TriaxialSeries series;
+  shape::SizeDistribution psd;  ///< of the simulated grains (volume-equivalent diameters)
+  std::optional<MicroData> micro;
+  std::optional<ForcesData> forces;
+  std::vector<std::size_t> rose_frames;            ///< frames of the branch roses
+  std::vector<micro::ForceRose> branch_roses;
+};
+SimulationData read_simulation(const RunFiles& files, std::size_t frames_shown, int theta_bins);
+
+}  // namespace graintwin::report

@@ -1,0 +1,380 @@
+#include "graintwin/report/run_data.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "graintwin/contacts/fabric.hpp"
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/results_file.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/micro/local_deformation.hpp"
+#include "graintwin/micro/simulation.hpp"
+#include "graintwin/report/charts.hpp"
+#include "graintwin/shape/shapes_file.hpp"
+
+namespace graintwin::report {
+
+namespace {
+
+bool is_file(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(p, ec);
+}
+
+/// `given` when set (it must exist), else `fallback` when that exists, else empty.
+fs::path given_or_found(const fs::path& given, const fs::path& fallback, const std::string& option) {
+  if (!given.empty()) {
+    if (!is_file(given)) throw UsageError(option + " " + given.string() + " does not exist; check the path");
+    return given;
+  }
+  return is_file(fallback) ? fallback : fs::path();
+}
+
+void require_files(const std::vector<fs::path>& given, const std::string& option) {
+  for (const fs::path& p : given)
+    if (!is_file(p)) throw UsageError(option + " " + p.string() + " does not exist; check the path");
+}
+
+/// One file per scan: `given` (one per scan, each must exist) or `name` in each scan folder.
+std::vector<fs::path> per_scan(const std::vector<fs::path>& given, const std::vector<fs::path>& scan_dirs, const char* name,
+                               const std::string& option) {
+  if (!given.empty()) {
+    if (given.size() != scan_dirs.size())
+      throw UsageError(option + " lists " + std::to_string(given.size()) + " files for " + std::to_string(scan_dirs.size()) +
+                       " scans; give one per scan, in scan order");
+    require_files(given, option);
+    return given;
+  }
+  std::vector<fs::path> out;
+  for (const fs::path& d : scan_dirs) out.push_back(is_file(d / name) ? d / name : fs::path());
+  return out;
+}
+
+micro::Histogram read_histogram(const io::H5File& f, const std::string& group) {
+  micro::Histogram h;
+  h.edges = f.read<double>(group + "/" + schema::micro::edges);
+  h.count = f.read<std::uint64_t>(group + "/" + schema::micro::count);
+  h.density = f.read<double>(group + "/" + schema::micro::density);
+  h.used = static_cast<std::uint64_t>(f.attr_int(group, "used").value_or(0));
+  h.outside = static_cast<std::uint64_t>(f.attr_int(group, "outside").value_or(0));
+  if (h.count.size() != h.density.size() || (!h.count.empty() && h.edges.size() != h.count.size() + 1))
+    throw DataError(f.path().string() + ": the histogram " + group + " has tables of uneven length; rewrite the file with its tool");
+  return h;
+}
+
+double attr_double(const io::H5File& f, const std::string& object, const std::string& name) {
+  const auto v = f.attr_doubles(object, name);
+  return v.size() == 1 ? v[0] : std::nan("");
+}
+
+/// A rose table: the edges and counts under `group` (kind=contacts or kind=forces spelling).
+micro::ForceRose read_rose(const io::H5File& f, const std::string& group, const std::string& counts_name) {
+  micro::ForceRose r;
+  r.theta_edges = f.read<double>(group + "/" + schema::contacts::theta_edges);
+  r.phi_edges = f.read<double>(group + "/" + schema::contacts::phi_edges);
+  r.counts = f.read<std::uint64_t>(group + "/" + counts_name);
+  if (r.theta_edges.size() < 2 || r.phi_edges.size() < 2 || r.counts.size() != (r.theta_edges.size() - 1) * (r.phi_edges.size() - 1))
+    throw DataError(f.path().string() + ": the rose " + group + " does not have one count per bin; rewrite the file with its tool");
+  return r;
+}
+
+ScanData read_scan(const RunFiles& files, std::size_t s) {
+  ScanData d;
+  d.name = files.scan_names[s];
+  d.void_ratio = std::nan("");
+  d.coordination_mean = std::nan("");
+  const io::H5File labels = io::H5File::open(files.labels[s]);
+  if (labels.exists(schema::labels::sample_void_ratio)) d.void_ratio = labels.read<double>(schema::labels::sample_void_ratio).at(0);
+  if (!files.shapes[s].empty()) {
+    const shape::ShapesFile sh = shape::read_shapes_file(files.shapes[s]);
+    d.psd = sh.psd;
+    d.grains = sh.grains.size();
+  }
+  if (!files.contacts[s].empty()) {
+    namespace sc = schema::contacts;
+    const io::H5File c = io::H5File::open(files.contacts[s]);
+    d.contacts = c.info(sc::pair).dims.at(0);
+    d.coordination = c.read<std::uint64_t>(sc::coordination_count);
+    d.coordination_mean = attr_double(c, "/coordination", "mean");
+    d.rose_normal = read_rose(c, sc::rose_normal, sc::counts);
+    d.rose_branch = read_rose(c, sc::rose_branch, sc::counts);
+  }
+  return d;
+}
+
+std::string check_hint(const std::string& kind) {
+  if (kind == schema::kind::labels) return "pass the output of ct2labels";
+  if (kind == schema::kind::contacts) return "pass the output of labels2contacts";
+  if (kind == schema::kind::shapes) return "pass the output of labels2shapes";
+  if (kind == schema::kind::tracks) return "pass the output of shapes2tracks";
+  if (kind == schema::kind::micro) return "pass the output of tracks2micro";
+  if (kind == schema::kind::fdem_model) return "pass the output of shapes2mesh";
+  if (kind == schema::kind::fdem_results) return "pass the output of fdemrun";
+  return "pass the output of fdem2forces";
+}
+
+}  // namespace
+
+RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given) {
+  std::error_code ec;
+  if (!fs::is_directory(run_dir, ec))
+    throw UsageError("the run directory " + run_dir.string() +
+                     " does not exist; run the pipeline first (make -f Makefile.pipeline) or check the path");
+  RunFiles f;
+  std::vector<fs::path> scan_dirs;
+  if (!given.labels.empty()) {
+    require_files(given.labels, "--labels");
+    f.labels = given.labels;
+    for (const fs::path& p : f.labels) {
+      scan_dirs.push_back(p.parent_path());
+      f.scan_names.push_back(p.parent_path().filename().string());
+    }
+  } else {
+    for (const auto& e : fs::directory_iterator(run_dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (e.is_directory() && name.rfind(layout::scan_prefix, 0) == 0 && is_file(e.path() / layout::labels)) scan_dirs.push_back(e.path());
+    }
+    std::sort(scan_dirs.begin(), scan_dirs.end());
+    if (scan_dirs.empty())
+      throw UsageError("the run directory " + run_dir.string() + " holds no scan_*/" + layout::labels +
+                       "; run the segment stage first (make -f Makefile.pipeline segment) or name the files with --labels");
+    for (const fs::path& d : scan_dirs) {
+      f.labels.push_back(d / layout::labels);
+      f.scan_names.push_back(d.filename().string());
+    }
+  }
+  f.contacts = per_scan(given.contacts, scan_dirs, layout::contacts, "--contacts");
+  f.shapes = per_scan(given.shapes, scan_dirs, layout::shapes, "--shapes");
+  f.tracks = given_or_found(given.tracks, run_dir / layout::tracks, "--tracks");
+  f.micro = given_or_found(given.micro, run_dir / layout::micro, "--micro");
+  f.model = given_or_found(given.model, run_dir / layout::model, "--model");
+  f.simulation = given_or_found(given.simulation, run_dir / layout::simulation, "--simulation");
+  f.forces = given_or_found(given.forces, run_dir / layout::forces, "--forces");
+  f.simulation_micro = given_or_found(given.simulation_micro, run_dir / layout::simulation_micro, "--simulation-micro");
+  f.scan_strains = given_or_found(given.scan_strains, fs::path(), "--scan-strains");
+  return f;
+}
+
+std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(const RunFiles& files) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> history;
+  const auto check = [&](const fs::path& p, const char* kind) {
+    if (p.empty()) return;
+    const io::H5File f = io::open_kind(p, kind, check_hint(kind));
+    history.emplace_back(p.string(), io::read_history(f));
+  };
+  for (std::size_t s = 0; s < files.labels.size(); ++s) {
+    check(files.labels[s], schema::kind::labels);
+    check(files.contacts[s], schema::kind::contacts);
+    check(files.shapes[s], schema::kind::shapes);
+  }
+  check(files.tracks, schema::kind::tracks);
+  check(files.micro, schema::kind::micro);
+  check(files.model, schema::kind::fdem_model);
+  check(files.simulation, schema::kind::fdem_results);
+  check(files.simulation_micro, schema::kind::micro);
+  check(files.forces, schema::kind::forces);
+  return history;
+}
+
+MicroData read_micro_data(const fs::path& path) {
+  namespace sm = schema::micro;
+  const io::H5File f = io::H5File::open(path);
+  MicroData m;
+  m.source = nlohmann::json::parse(f.read_strings(sm::parameters).at(0)).value("source", "");
+  m.state_d50 = f.read<double>(sm::state_d50);
+  for (std::size_t t = 0; t < m.state_d50.size(); ++t) {
+    const std::string g = std::string(sm::states) + "/" + std::to_string(t);
+    MicroState st;
+    st.rdf_r = f.read<double>(g + "/rdf/r");
+    st.rdf_g = f.read<double>(g + "/rdf/g");
+    st.coordination = f.read<std::uint64_t>(g + "/coordination/count");
+    st.coordination_mean = attr_double(f, g + "/coordination", "mean");
+    if (f.exists(g + "/psd")) {
+      st.psd.diameter = f.read<double>(g + "/psd/diameter");
+      st.psd.percent_passing = f.read<double>(g + "/psd/percent_passing");
+      st.psd.d50 = attr_double(f, g + "/psd", "d50");
+    }
+    m.states.push_back(std::move(st));
+  }
+  const auto from = f.read<std::uint64_t>(sm::increment_from), to = f.read<std::uint64_t>(sm::increment_to);
+  const auto d50 = f.read<double>(sm::increment_d50);
+  if (to.size() != from.size() || d50.size() != from.size())
+    throw DataError(path.string() + ": /increments/from, /to and /d50 differ in length; rewrite it with tracks2micro");
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    const std::string g = std::string(sm::increments) + "/" + std::to_string(k);
+    MicroIncrement inc;
+    inc.from = from[k], inc.to = to[k], inc.d50 = d50[k];
+    inc.pdf_d2min = read_histogram(f, g + "/pdf_d2min");
+    inc.pdf_eps_q = read_histogram(f, g + "/pdf_eps_q");
+    const char* axis[4] = {"x", "y", "z", "magnitude"};
+    for (int a = 0; a < 4; ++a) inc.displacement[a] = read_histogram(f, g + "/displacement/" + axis[a]);
+    const std::string c = g + "/clusters";
+    inc.cluster_size = f.read<double>(c + "/size");
+    inc.cluster_rg = f.read<double>(c + "/radius_of_gyration");
+    inc.selected = static_cast<std::size_t>(f.attr_int(c, "selected").value_or(0));
+    inc.size_fit_valid = f.attr_int(c, "size_fit_valid").value_or(0) != 0;
+    inc.size_alpha = attr_double(f, c, "size_alpha");
+    inc.size_alpha_error = attr_double(f, c, "size_alpha_error");
+    inc.size_s_min = attr_double(f, c, "size_s_min");
+    inc.size_tail = static_cast<std::size_t>(f.attr_int(c, "size_tail").value_or(0));
+    inc.fractal_dimension = attr_double(f, c, "fractal_dimension");
+    inc.fractal_dimension_error = attr_double(f, c, "fractal_dimension_error");
+    m.increments.push_back(std::move(inc));
+  }
+  return m;
+}
+
+ForcesData read_forces_data(const fs::path& path) {
+  namespace sf = schema::forces;
+  const io::H5File f = io::H5File::open(path);
+  ForcesData d;
+  const auto index = f.read<std::uint64_t>(sf::frame_index), contacts = f.read<std::uint64_t>(sf::frame_contacts);
+  const auto time = f.read<double>(sf::frame_time), scale = f.read<double>(sf::frame_strong_scale), theta = f.read<double>(sf::frame_weak_theta);
+  if (contacts.size() != index.size() || time.size() != index.size() || scale.size() != index.size() || theta.size() != index.size())
+    throw DataError(path.string() + ": the /frames tables differ in length; rewrite it with fdem2forces");
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    const std::string g = std::string(sf::frames) + "/" + std::to_string(k);
+    ForcesFrame fr;
+    fr.index = index[k], fr.time = time[k], fr.contacts = contacts[k], fr.strong_scale = scale[k], fr.weak_theta = theta[k];
+    fr.pdf = read_histogram(f, g + "/pdf");
+    fr.rose = read_rose(f, g + "/rose", sf::rose_count);
+    fr.rose.mean_force = f.read<double>(g + "/rose/" + sf::rose_mean_force);
+    d.frames.push_back(std::move(fr));
+  }
+  const auto from = f.read<std::uint64_t>(sf::window_from), to = f.read<std::uint64_t>(sf::window_to);
+  const auto r = f.read<double>(sf::window_r), p = f.read<double>(sf::window_p);
+  const auto count = f.read<std::uint64_t>(sf::window_count);
+  std::vector<hsize_t> dims;
+  const auto volatility = f.read<double>(sf::grain_volatility, &dims);
+  const auto d2min = f.read<double>(sf::grain_d2min);
+  const std::size_t w = from.size(), g = dims.empty() ? 0 : dims[0];
+  if (to.size() != w || r.size() != w || p.size() != w || count.size() != w || dims.size() != 2 || dims[1] != w ||
+      d2min.size() != volatility.size())
+    throw DataError(path.string() + ": the /windows tables and the grains' volatility and D2min disagree in size; rewrite it with fdem2forces");
+  for (std::size_t k = 0; k < w; ++k) {
+    ForcesWindow win{from[k], to[k], r[k], p[k], count[k], {}, {}};
+    for (std::size_t i = 0; i < g; ++i) win.volatility.push_back(volatility[i * w + k]), win.d2min.push_back(d2min[i * w + k]);
+    d.windows.push_back(std::move(win));
+  }
+  return d;
+}
+
+TriaxialSeries read_triaxial_series(const fs::path& results) {
+  namespace sr = schema::fdem_results;
+  const io::H5File f = io::H5File::open(results);
+  TriaxialSeries s;
+  for (const char* name : {sr::series_axial_strain, sr::series_volumetric_strain, sr::series_stress_ratio})
+    if (!f.exists(name)) s.missing.push_back(name);
+  if (!s.missing.empty()) return s;
+  s.axial_strain = f.read<double>(sr::series_axial_strain);
+  s.volumetric_strain = f.read<double>(sr::series_volumetric_strain);
+  s.stress_ratio = f.read<double>(sr::series_stress_ratio);
+  if (s.volumetric_strain.size() != s.axial_strain.size() || s.stress_ratio.size() != s.axial_strain.size())
+    throw DataError(results.string() + ": the series' strains and stress ratio differ in length; rerun fdemrun");
+  return s;
+}
+
+std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, const std::vector<std::size_t>& frames,
+                                                      int theta_bins, int phi_bins) {
+  const micro::SimulationGrains grains = micro::read_simulation_grains(results);
+  std::vector<micro::ForceRose> roses;
+  for (std::size_t k : frames) {
+    const fdem::ResultsFrame fr = fdem::read_results_frame(results, k);
+    const micro::FrameContacts fc = micro::frame_contacts(fr, grains, results, k);
+    const std::vector<Eigen::Vector3d> c = micro::frame_centroids(fr, grains, results, k);
+    std::vector<Vec3> branch;
+    for (const auto& [a, b] : fc.pair) {
+      const Eigen::Vector3d d = c[b] - c[a];
+      branch.push_back({d.x(), d.y(), d.z()});
+    }
+    const contacts::Rose r = contacts::rose(branch, theta_bins, phi_bins);
+    roses.push_back({r.theta_edges, r.phi_edges, r.counts, {}});
+  }
+  return roses;
+}
+
+std::vector<double> tracked_axial_strain(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans) {
+  if (centroid.size() != tracks * scans * 3) throw UsageError("tracked_axial_strain: the centroid table is not N x T x 3");
+  std::vector<double> eps(scans, std::nan(""));
+  const auto at = [&](std::size_t i, std::size_t t) {
+    const double* p = centroid.data() + 3 * (i * scans + t);
+    return Eigen::Vector3d(p[0], p[1], p[2]);
+  };
+  for (std::size_t t = 0; t < scans; ++t) {
+    std::vector<Eigen::Vector3d> before, after;
+    Eigen::Vector3d mean_before = Eigen::Vector3d::Zero(), mean_after = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < tracks; ++i)
+      if (at(i, 0).allFinite() && at(i, t).allFinite()) {
+        before.push_back(at(i, 0)), after.push_back(at(i, t));
+        mean_before += before.back(), mean_after += after.back();
+      }
+    if (before.size() < 4) continue;
+    mean_before /= double(before.size()), mean_after /= double(after.size());
+    for (std::size_t k = 0; k < before.size(); ++k) before[k] -= mean_before, after[k] -= mean_after;
+    Eigen::Matrix3d lambda;
+    double residual = 0.0;
+    if (micro::affine_fit(before, after, 1e-9, lambda, residual) && lambda(2, 2) > 0.0) eps[t] = -std::log(lambda(2, 2));
+  }
+  return eps;
+}
+
+ExperimentData read_experiment(const RunFiles& files) {
+  ExperimentData e;
+  for (std::size_t s = 0; s < files.labels.size(); ++s) e.scans.push_back(read_scan(files, s));
+  const std::size_t scans = e.scans.size();
+  if (std::isfinite(e.scans[0].void_ratio))
+    for (const ScanData& s : e.scans) e.volumetric_strain.push_back(std::log((1.0 + e.scans[0].void_ratio) / (1.0 + s.void_ratio)));
+  if (!files.tracks.empty()) {
+    const io::H5File t = io::H5File::open(files.tracks);
+    std::vector<hsize_t> dims;
+    const auto centroid = t.read<double>(schema::tracks::centroid, &dims);
+    if (dims.size() != 3 || dims[2] != 3) throw DataError(files.tracks.string() + ": /tracks/centroid is not N x T x 3; rewrite it with shapes2tracks");
+    if (dims[1] != scans)
+      throw UsageError(files.tracks.string() + " follows " + std::to_string(dims[1]) + " scans but the run has " + std::to_string(scans) +
+                       "; rerun the track stage or name the scans' files explicitly");
+    e.tracks = dims[0];
+    e.measured_axial_strain = tracked_axial_strain(centroid, dims[0], dims[1]);
+  }
+  if (!files.scan_strains.empty()) {
+    std::ifstream in(files.scan_strains);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded() || !j.contains("scans") || !j["scans"].is_array())
+      throw UsageError("--scan-strains " + files.scan_strains.string() +
+                       " is not a JSON object with a \"scans\" array; pass a series.json as ctsynth writes it");
+    for (const auto& s : j["scans"]) {
+      if (!s.contains("axial_strain") || !s["axial_strain"].is_number())
+        throw UsageError("--scan-strains " + files.scan_strains.string() + ": every entry of \"scans\" needs a number \"axial_strain\"");
+      e.applied_axial_strain.push_back(s["axial_strain"].get<double>());
+    }
+    if (e.applied_axial_strain.size() != scans)
+      throw UsageError("--scan-strains " + files.scan_strains.string() + " lists " + std::to_string(e.applied_axial_strain.size()) +
+                       " scans but the run has " + std::to_string(scans) + "; pass the series.json of the scans this run segmented");
+  }
+  if (!files.micro.empty()) e.micro = read_micro_data(files.micro);
+  return e;
+}
+
+SimulationData read_simulation(const RunFiles& files, std::size_t frames_shown, int theta_bins) {
+  SimulationData s;
+  if (!files.simulation.empty()) {
+    s.present = true;
+    const micro::SimulationGrains grains = micro::read_simulation_grains(files.simulation);
+    s.grains = grains.label.size();
+    s.psd = grains.psd;
+    s.frames = fdem::results_frame_count(files.simulation);
+    s.series = read_triaxial_series(files.simulation);
+    s.rose_frames = pick_evenly(s.frames, frames_shown);
+    s.branch_roses = simulation_branch_roses(files.simulation, s.rose_frames, theta_bins, 36);
+  }
+  if (!files.simulation_micro.empty()) s.micro = read_micro_data(files.simulation_micro);
+  if (!files.forces.empty()) s.forces = read_forces_data(files.forces);
+  return s;
+}
+
+}  // namespace graintwin::report

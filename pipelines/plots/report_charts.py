@@ -1,0 +1,123 @@
+#!/usr/bin/python3
+"""Draws the report's charts (tools/report.cpp writes their specification; docs/report.md).
+
+usage: report_charts.py CHARTS.json OUT_DIR
+
+CHARTS.json holds {"charts": [chart, ...]}; each chart has file (PNG name in OUT_DIR), panel,
+kind ("xy" or "rose"), title, x_label, y_label, x_log, y_log and series [{name, style, x, y}].
+xy styles: line, dashed, points, linepoints, vline (a vertical line at each x). A rose series has
+x = polar-angle bin edges in degrees from the loading axis z and y = one value per bin; it is
+drawn as a closed outline in the x-z plane, mirrored about both axes. Charts of one panel share
+their axis limits so experiment and simulation compare at a glance. The script computes nothing
+but limits: every number comes from the JSON.
+"""
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+STYLES = {
+    "line": dict(linestyle="-", marker=None),
+    "dashed": dict(linestyle="--", marker=None),
+    "points": dict(linestyle="none", marker="o", markersize=4),
+    "linepoints": dict(linestyle="-", marker="o", markersize=3),
+}
+
+
+def finite(values, log):
+    return [v for v in values if v is not None and math.isfinite(v) and (not log or v > 0)]
+
+
+def xy_limits(charts):
+    """Shared (x, y) limits of the xy charts of one panel: the union of their data ranges."""
+    xs, ys = [], []
+    for c in charts:
+        for s in c["series"]:
+            xs += finite(s["x"], c["x_log"])
+            if s["style"] != "vline":
+                ys += finite(s["y"], c["y_log"])
+    def pad(values, log):
+        if not values:
+            return None
+        lo, hi = min(values), max(values)
+        if log:
+            return (lo / 1.3, hi * 1.3)
+        span = (hi - lo) or abs(hi) or 1.0
+        return (lo - 0.05 * span, hi + 0.05 * span)
+    return pad(xs, charts[0]["x_log"]), pad(ys, charts[0]["y_log"])
+
+
+def draw_xy(ax, chart, limits):
+    for s in chart["series"]:
+        if s["style"] == "vline":
+            for k, x in enumerate(s["x"]):
+                ax.axvline(x, color="grey", linestyle=":", label=s["name"] if k == 0 else None)
+            continue
+        ax.plot(s["x"], s["y"], label=s["name"], **STYLES.get(s["style"], STYLES["line"]))
+    if chart["x_log"]:
+        ax.set_xscale("log")
+    if chart["y_log"]:
+        ax.set_yscale("log")
+    xlim, ylim = limits
+    if xlim:
+        ax.set_xlim(*xlim)
+    if ylim:
+        ax.set_ylim(*ylim)
+    ax.set_xlabel(chart["x_label"])
+    ax.set_ylabel(chart["y_label"])
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def draw_rose(ax, chart, radius):
+    for s in chart["series"]:
+        edges = [math.radians(e) for e in s["x"]]
+        # One quadrant as steps over the polar-angle bands (angle from +z), then mirrored.
+        theta, r = [], []
+        for k, v in enumerate(s["y"]):
+            theta += [edges[k], edges[k + 1]]
+            r += [v, v]
+        quadrants = [theta, [math.pi - t for t in reversed(theta)],
+                     [math.pi + t for t in theta], [2 * math.pi - t for t in reversed(theta)]]
+        radii = [r, list(reversed(r)), r, list(reversed(r))]
+        all_t = [t for q in quadrants for t in q]
+        all_r = [v for q in radii for v in q]
+        ax.plot(all_t + all_t[:1], all_r + all_r[:1], label=s["name"])
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)
+    if radius:
+        ax.set_ylim(0, radius)
+    ax.set_xlabel(chart["y_label"])
+
+
+def main():
+    spec_path, out_dir = sys.argv[1:3]
+    with open(spec_path) as f:
+        charts = json.load(f)["charts"]
+    panels = {}
+    for c in charts:
+        panels.setdefault(c["panel"], []).append(c)
+    for chart in charts:
+        group = panels[chart["panel"]]
+        if chart["kind"] == "rose":
+            values = [v for c in group for s in c["series"] for v in finite(s["y"], False)]
+            fig = plt.figure(figsize=(5.6, 5.0), dpi=100)
+            ax = fig.add_subplot(projection="polar")
+            draw_rose(ax, chart, 1.1 * max(values) if values and max(values) > 0 else None)
+        else:
+            fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+            draw_xy(ax, chart, xy_limits(group))
+        ax.set_title(chart["title"])
+        if any(s["name"] for s in chart["series"]):
+            ax.legend(fontsize=7, loc="best")
+        fig.tight_layout()
+        fig.savefig(os.path.join(out_dir, chart["file"]))
+        plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()

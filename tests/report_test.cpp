@@ -1,0 +1,415 @@
+// report: CLI contract; a tiny run made with the real tools (three labelled phantom scans under a
+// known axial strain through labels2contacts, labels2shapes, shapes2tracks and tracks2micro; a
+// simulation written by the real solver and ResultsWriter with chosen contacts, stresses and
+// triaxial series through tracks2micro and fdem2forces) rendered into one page that names every
+// panel, embeds every chart, keeps the PNGs and the exact numbers; the page rendered in headless
+// Chromium with every image decoded; a run without simulation saying so per panel; the chart
+// helpers against exact answers; bad inputs failing cleanly.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include "graintwin/contacts/fabric.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/report/charts.hpp"
+#include "graintwin/report/page.hpp"
+#include "graintwin/report/run_data.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "support/cli_contract.hpp"
+#include "support/phantoms.hpp"
+#include "support/simulation_results.hpp"
+
+using namespace graintwin;
+using test::run_tool;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kScans = 3;
+constexpr double kAxialStep = 0.02;    // each scan shortens z by 2 % of the first scan's length
+constexpr double kLateralStep = 0.004;  // and widens x and y by 0.4 %
+constexpr double kCentre = 7.0 + 1.5 * 11.0;
+constexpr std::size_t kRows = 30;       // series rows of the lattice simulation (3 frame steps x 10)
+
+double applied_axial_strain(int scan) { return -std::log(1.0 - kAxialStep * scan); }
+
+/// The balls of scan t: a jittered 4 x 4 x 4 lattice, compressed along z and widened in x, y
+/// about the lattice centre, each ball nudged a little off the affine map (non-affine motion).
+std::vector<test::Ball> scan_balls(int t) {
+  std::vector<test::Ball> balls = test::jittered_lattice(4, 5.6, 11.0, 7.0, 0.3, 0.05, 11);
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    test::Ball& b = balls[i];
+    b.z = kCentre + (b.z - kCentre) * (1.0 - kAxialStep * t) + 0.15 * t * std::sin(1.7 * double(i));
+    b.y = kCentre + (b.y - kCentre) * (1.0 + kLateralStep * t) + 0.15 * t * std::cos(2.3 * double(i));
+    b.x = kCentre + (b.x - kCentre) * (1.0 + kLateralStep * t);
+  }
+  return balls;
+}
+
+void write_labels(const fs::path& path, int t) {
+  segment::LabelsFile c;
+  c.labels = test::label_balls({48, 48, 48}, scan_balls(t));
+  c.grains = segment::grain_table(c.labels);
+  std::size_t solid = 0;
+  for (std::uint32_t v : c.labels.values()) solid += v != 0;
+  const double voxel = 1e-15;
+  c.sample.region.radius = std::nan("");
+  c.sample.void_ratio = {double(solid) * voxel, double(c.labels.size() - solid) * voxel,
+                         double(c.labels.size() - solid) / double(solid)};
+  c.parameters_json = "{}";
+  segment::write_labels_file(path, c, {"phantom labels of scan " + std::to_string(t)});
+}
+
+/// The simulation's triaxial series: eps_1 from 0 to 6 %, dilation, a hardening stress ratio.
+std::vector<double> sim_axial() {
+  std::vector<double> v;
+  for (std::size_t r = 0; r < kRows; ++r) v.push_back(0.06 * double(r) / double(kRows - 1));
+  return v;
+}
+double sim_ratio(double eps) { return 1.0 + 3.0 * eps / (0.01 + eps); }
+
+/// A 4^3 lattice of rigid boxes compressed along z, with x- and z-neighbour contacts carrying
+/// spread-out forces, grain stresses whose q varies from frame to frame, and the triaxial series.
+void write_simulation(const fs::path& path) {
+  test::LatticeRun run;
+  run.velocity_gradient = Eigen::Vector3d(20.0, 20.0, -100.0).asDiagonal();
+  run.extra_velocity = {{21, Eigen::Vector3d(2.0, -1.0, 1.0)}};
+  test::write_lattice_results(path, run);
+  const std::size_t n = 64;
+  for (std::size_t k = 0; k < run.frames; ++k) {
+    std::vector<test::KnownContact> contacts;
+    double f = 1.0;
+    for (std::size_t a = 0; a < n; ++a) {
+      if (a % 4 + 1 < 4) contacts.push_back({a, a + 1, -1, Eigen::Vector3d::UnitX(), (1.0 + k) * f * Eigen::Vector3d::UnitX()}), f *= 1.07;
+      if (a + 16 < n) contacts.push_back({a, a + 16, -1, Eigen::Vector3d::UnitZ(), (2.0 + k) * f * Eigen::Vector3d::UnitZ()}), f *= 1.05;
+      if (f > 40.0) f = 0.5;
+    }
+    test::set_frame_contacts(path, k, contacts);
+    std::vector<Eigen::Matrix3d> stress;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double q = 1e5 * double(1 + i) * std::exp(0.01 * double(i % 5 + 1) * double(k * k));
+      stress.push_back(2e5 * Eigen::Matrix3d::Identity() + Eigen::Vector3d(q, -q, 0.0).asDiagonal().toDenseMatrix());
+    }
+    test::set_frame_stress(path, k, stress);
+  }
+  std::vector<double> axial = sim_axial(), volumetric, ratio;
+  for (double e : axial) volumetric.push_back(0.3 * e - 8.0 * e * e), ratio.push_back(sim_ratio(e));
+  namespace sr = schema::fdem_results;
+  test::replace_dataset(path, sr::series_axial_strain, axial, {kRows});
+  test::replace_dataset(path, sr::series_volumetric_strain, volumetric, {kRows});
+  test::replace_dataset(path, sr::series_stress_ratio, ratio, {kRows});
+}
+
+void run_ok(const std::string& tool, const std::vector<std::string>& args) {
+  const auto r = run_tool(tool, args);
+  ASSERT_EQ(r.exit_code, 0) << tool << ": " << r.err;
+}
+
+/// The run every test reads: `full` has both sides, `experiment` the scans only.
+struct Runs {
+  test::TempDir dir;
+  fs::path full, experiment, series_json;
+  fs::path page;           ///< the report of `full` with --scan-strains
+  test::ToolResult made;   ///< how making it went
+};
+
+Runs* g_runs = nullptr;
+
+void make_runs() {
+  g_runs = new Runs;
+  Runs& r = *g_runs;
+  r.full = r.dir / "full", r.experiment = r.dir / "experiment";
+  std::vector<std::string> shapes, contacts;
+  nlohmann::json series = {{"scans", nlohmann::json::array()}};
+  for (int t = 0; t < kScans; ++t) {
+    const fs::path scan = r.full / ("scan_00" + std::to_string(t));
+    fs::create_directories(scan);
+    write_labels(scan / "labels.h5", t);
+    run_ok("labels2contacts", {(scan / "labels.h5").string(), (scan / "contacts.h5").string()});
+    // Low SH degree and principal-axis rotations: the report reads no shape detail, and it is faster.
+    run_ok("labels2shapes", {(scan / "labels.h5").string(), (scan / "shapes.h5").string(), "--degree", "6"});
+    shapes.push_back((scan / "shapes.h5").string());
+    contacts.push_back((scan / "contacts.h5").string());
+    series["scans"].push_back({{"axial_strain", applied_axial_strain(t)}});
+  }
+  std::vector<std::string> track_args = shapes;
+  track_args.insert(track_args.end(), {(r.full / "tracks.h5").string(), "--rotation", "axes"});
+  run_ok("shapes2tracks", track_args);
+  std::vector<std::string> micro_args{(r.full / "tracks.h5").string(), (r.full / "micro.h5").string(), "--contacts"};
+  micro_args.insert(micro_args.end(), contacts.begin(), contacts.end());
+  run_ok("tracks2micro", micro_args);
+  fs::copy(r.full, r.experiment, fs::copy_options::recursive);
+  write_simulation(r.full / "simulation.h5");
+  // The boxes sit 1.5 mm apart with equivalent radii of 0.62 mm: link neighbours into clusters.
+  run_ok("tracks2micro", {(r.full / "simulation.h5").string(), (r.full / "simulation_micro.h5").string(), "--contact-factor", "1.3"});
+  run_ok("fdem2forces", {(r.full / "simulation.h5").string(), (r.full / "forces.h5").string()});
+  r.series_json = r.dir / "series.json";
+  std::ofstream(r.series_json) << series.dump();
+}
+
+/// The report of the full run with --scan-strains, made on first use (ctest runs each test in its
+/// own process, so only the tests that read it pay for it).
+const test::ToolResult& full_report() {
+  Runs& r = *g_runs;
+  if (r.page.empty()) {
+    fs::create_directories(r.dir / "out");
+    r.page = r.dir / "out/report.html";
+    r.made = run_tool("report", {r.full.string(), r.page.string(), "--scan-strains", r.series_json.string()});
+  }
+  return r.made;
+}
+
+class Report : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (!g_runs) make_runs();
+  }
+  static void TearDownTestSuite() {
+    delete g_runs;
+    g_runs = nullptr;
+  }
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+const nlohmann::json* find_chart(const nlohmann::json& spec, const std::string& file) {
+  for (const auto& c : spec["charts"])
+    if (c["file"] == file) return &c;
+  return nullptr;
+}
+
+const nlohmann::json* find_series(const nlohmann::json& chart, const std::string& name) {
+  for (const auto& s : chart["series"])
+    if (s["name"] == name) return &s;
+  return nullptr;
+}
+
+const std::vector<std::string> kPanels{"stress_ratio", "volumetric_strain", "psd",  "coordination", "rose_normals",
+                                        "rose_branches", "rose_forces", "rdf", "displacement", "d2min_pdf",
+                                        "eps_q_pdf", "cluster_sizes", "cluster_rg", "force_pdf", "volatility"};
+
+}  // namespace
+
+TEST(ReportCli, StandardCli) { test::expect_standard_cli("report"); }
+
+TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
+  ASSERT_EQ(full_report().exit_code, 0) << full_report().err;
+  const fs::path out = g_runs->page.parent_path();
+  const std::string html = slurp(g_runs->page);
+  for (const std::string& id : kPanels) EXPECT_NE(html.find("<section class=\"panel\" id=\"" + id + "\">"), std::string::npos) << id;
+  EXPECT_NE(html.find("Accuracy against time per stage"), std::string::npos);
+  EXPECT_NE(html.find("<details id=\"provenance\">"), std::string::npos);
+  EXPECT_NE(html.find("phantom labels of scan 2"), std::string::npos) << "the files' histories belong in the provenance section";
+  // Every side with data has its chart; CT has no forces or stresses, so exactly those four
+  // experiment sides (stress ratio, force rose, force PDF, volatility) say so instead.
+  const nlohmann::json spec = nlohmann::json::parse(slurp(out / "report_img/charts.json"));
+  EXPECT_EQ(spec["charts"].size(), 2 * kPanels.size() - 4);
+  std::string sides_missing;
+  for (const std::string& id : kPanels) {
+    const std::size_t at = html.find("id=\"" + id + "\""), end = html.find("</section>", at);
+    const std::string section = html.substr(at, end - at);
+    if (count_of(section, "<p class=\"missing\">") > 0) sides_missing += " " + id + ":" + std::to_string(count_of(section, "<p class=\"missing\">"));
+  }
+  EXPECT_EQ(sides_missing, " stress_ratio:1 rose_forces:1 force_pdf:1 volatility:1");
+  const auto bench = report::find_bench_charts(fs::path(GRAINTWIN_SOURCE_DIR) / "docs/img");
+  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), spec["charts"].size() + bench.size());
+  EXPECT_NE(html.find("data-images-total=\"" + std::to_string(spec["charts"].size() + bench.size()) + "\""), std::string::npos);
+  for (const auto& c : spec["charts"]) {
+    const std::string png = slurp(out / "report_img" / c["file"].get<std::string>());
+    ASSERT_GT(png.size(), 1000u) << c["file"];
+    EXPECT_EQ(png.substr(1, 3), "PNG") << c["file"];
+  }
+  EXPECT_EQ(fs::exists(out / "report_img/bench"), !bench.empty());
+
+  // The experiment's axial strains: the applied ones as given, the tracked ones from the
+  // centroids' affine map, close to the applied ones (the balls' nudges are not affine).
+  const auto* vol = find_chart(spec, "volumetric_strain_experiment.png");
+  ASSERT_NE(vol, nullptr);
+  const auto* applied = find_series(*vol, "scans, applied axial strain");
+  const auto* tracked = find_series(*vol, "scans, axial strain from the tracks");
+  ASSERT_NE(applied, nullptr);
+  ASSERT_NE(tracked, nullptr);
+  for (int t = 0; t < kScans; ++t) {
+    EXPECT_NEAR((*applied)["x"][t].get<double>(), 100.0 * applied_axial_strain(t), 1e-9);
+    EXPECT_NEAR((*tracked)["x"][t].get<double>(), 100.0 * applied_axial_strain(t), 0.1) << "scan " << t;
+  }
+  // The simulation's series exactly as stored, the scans marked at their applied strains.
+  const auto* ratio = find_chart(spec, "stress_ratio_simulation.png");
+  ASSERT_NE(ratio, nullptr);
+  const auto* curve = find_series(*ratio, "simulation");
+  ASSERT_NE(curve, nullptr);
+  const auto axial = sim_axial();
+  ASSERT_EQ((*curve)["y"].size(), kRows);
+  for (std::size_t k = 0; k < kRows; k += 7) {
+    EXPECT_NEAR((*curve)["x"][k].get<double>(), 100.0 * axial[k], 1e-12);
+    EXPECT_NEAR((*curve)["y"][k].get<double>(), sim_ratio(axial[k]), 1e-12);
+  }
+  const auto* marks = find_series(*ratio, "scans (applied axial strain)");
+  ASSERT_NE(marks, nullptr);
+  EXPECT_EQ((*marks)["x"].size(), std::size_t(kScans));
+  // The volatility scatter holds every grain with a defined D2min and volatility.
+  const auto* vola = find_chart(spec, "volatility_simulation.png");
+  ASSERT_NE(vola, nullptr);
+  EXPECT_GT((*vola)["series"][0]["x"].size(), 10u);
+}
+
+TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
+  test::TempDir out;
+  const auto r = run_tool("report", {g_runs->experiment.string(), (out / "page.html").string(), "--bench-img", out.path().string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string html = slurp(out / "page.html");
+  for (const std::string& id : kPanels) EXPECT_NE(html.find("id=\"" + id + "\""), std::string::npos) << id;
+  // Every simulation side is missing and says which stage makes it; the experiment keeps its 11.
+  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size());
+  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4);
+  EXPECT_NE(html.find("No benchmark charts were found"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out / "page_img/bench"));
+}
+
+TEST_F(Report, HeadlessChromiumLoadsEveryImage) {
+  const fs::path chromium = "/usr/bin/chromium";
+  if (!fs::exists(chromium)) GTEST_SKIP() << "Debian's chromium is not installed (scripts/deps.sh installs it); the page was not rendered";
+  ASSERT_EQ(full_report().exit_code, 0) << full_report().err;
+  test::TempDir profile;
+  const auto dom = test::run_program(chromium, {"--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                                                "--user-data-dir=" + profile.path().string(), "--virtual-time-budget=10000",
+                                                "--dump-dom", "file://" + g_runs->page.string()});
+  ASSERT_EQ(dom.exit_code, 0) << dom.err;
+  std::smatch total, loaded;
+  ASSERT_TRUE(std::regex_search(dom.out, total, std::regex("data-images-total=\"([0-9]+)\""))) << dom.out.substr(0, 500);
+  ASSERT_TRUE(std::regex_search(dom.out, loaded, std::regex("data-images-loaded=\"([0-9a-z]+)\""))) << dom.out.substr(0, 500);
+  EXPECT_GT(std::stoi(total[1]), 20);
+  EXPECT_EQ(loaded[1].str(), total[1].str()) << "images that did not decode in Chromium";
+}
+
+TEST(ReportFailures, BadInputsFailCleanly) {
+  test::TempDir run, out;
+  fs::create_directories(run / "scan_000");
+  write_labels(run / "scan_000/labels.h5", 0);
+  const std::string labels = (run / "scan_000/labels.h5").string(), page = (out / "r.html").string();
+  test::expect_clean_failure("report", out, {(out / "no_such_run").string(), page}, 2, "no_such_run does not exist; run the pipeline");
+  test::expect_clean_failure("report", out, {out.path().string(), page}, 2, "holds no scan_*/labels.h5; run the segment stage");
+  test::expect_clean_failure("report", out, {run.path().string(), (out / "r.txt").string()}, 2, "must end in .html");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--tracks", labels}, 2, "pass the output of shapes2tracks");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--shapes", labels, labels}, 2, "give one per scan");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--scan-strains", labels}, 2, "pass a series.json");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--micro", (run / "none.h5").string()}, 2, "none.h5 does not exist");
+  const fs::path broken = run / "broken.py";
+  std::ofstream(broken) << "import sys\nsys.exit('matplotlib is missing here')\n";
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--chart-script", broken.string()}, 1, "matplotlib is missing here");
+  // A run of one labelled scan and nothing else is a page that says what each stage would add.
+  ASSERT_EQ(run_tool("report", {run.path().string(), page}).exit_code, 0);
+  test::expect_clean_failure("report", out, {run.path().string(), page}, 2, "--force");
+}
+
+// ---- the library's helpers against exact answers -------------------------------------------
+
+TEST(ReportCharts, Base64AndEscapingFollowTheStandards) {
+  EXPECT_EQ(report::base64(""), "");
+  EXPECT_EQ(report::base64("f"), "Zg==");
+  EXPECT_EQ(report::base64("fo"), "Zm8=");
+  EXPECT_EQ(report::base64("foo"), "Zm9v");
+  EXPECT_EQ(report::base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(report::base64(std::string("\xff\x00\x80", 3)), "/wCA");
+  EXPECT_EQ(report::html_escape("a<b & \"c\" 'd'>"), "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;");
+}
+
+TEST(ReportCharts, PickEvenlyKeepsTheEnds) {
+  EXPECT_EQ(report::pick_evenly(3, 4), (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(report::pick_evenly(10, 4), (std::vector<std::size_t>{0, 3, 6, 9}));
+  EXPECT_EQ(report::pick_evenly(10, 1), (std::vector<std::size_t>{9}));
+  EXPECT_TRUE(report::pick_evenly(0, 4).empty());
+}
+
+TEST(ReportCharts, RoseProfileOfIsotropicDirectionsIsOneOverFourPi) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  std::vector<Vec3> d;
+  for (int i = 0; i < 200000; ++i) d.push_back({g(rng), g(rng), g(rng)});
+  const contacts::Rose r = contacts::rose(d, 6, 12);
+  const report::Series s = report::rose_profile({r.theta_edges, r.phi_edges, r.counts, {}}, report::RoseValue::density, "iso");
+  ASSERT_EQ(s.x.size(), 7u);
+  EXPECT_DOUBLE_EQ(s.x.back(), 90.0);
+  for (double v : s.y) EXPECT_NEAR(v, 1.0 / (4.0 * std::numbers::pi), 0.03 / (4.0 * std::numbers::pi));
+  // Mean force per band weighs the bins by their counts.
+  micro::ForceRose f{{0.0, std::numbers::pi / 2}, {0.0, std::numbers::pi, 2 * std::numbers::pi}, {1, 3}, {10.0, 2.0}};
+  EXPECT_DOUBLE_EQ(report::rose_profile(f, report::RoseValue::mean_force, "f").y[0], (10.0 + 3 * 2.0) / 4.0);
+}
+
+TEST(ReportCharts, DistributionsAndFitCurves) {
+  const report::Series c = report::ccdf_series({3, 1, 1, 2, 8, std::nan("")}, "s");
+  EXPECT_EQ(c.x, (std::vector<double>{1, 2, 3, 8}));
+  EXPECT_EQ(c.y, (std::vector<double>{1.0, 0.6, 0.4, 0.2}));
+  // The fitted CCDF starts at the tail's share and falls as the Hurwitz zeta ratio (alpha 2: 1/s^2 sums).
+  const report::Series p = report::power_law_ccdf(2.0, 2.0, 4.0, 30, 100, "fit");
+  ASSERT_EQ(p.x.size(), 3u);
+  EXPECT_DOUBLE_EQ(p.y[0], 0.3);
+  EXPECT_NEAR(p.y[1], 0.3 * (std::pow(std::numbers::pi, 2) / 6 - 1.25) / (std::pow(std::numbers::pi, 2) / 6 - 1.0), 1e-12);
+  // A line through points on R = 2 s^0.5 comes back exactly.
+  const report::Series l = report::log_line_through_mean({2, 4, 8, 16}, {2 * std::sqrt(2.0), 4.0, 2 * std::sqrt(8.0), 8.0}, 0.5, "fit");
+  EXPECT_NEAR(l.y[0], 2 * std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(l.y[1], 8.0, 1e-12);
+  micro::Histogram h{{0.1, 1.0, 10.0}, {3, 1}, {1.0, 0.01}, 4, 0};
+  EXPECT_DOUBLE_EQ(report::share_at_or_above(h, 1.0), 0.25);
+  const report::Series pdf = report::pdf_series(h, true, "pdf");
+  EXPECT_NEAR(pdf.x[0], std::sqrt(0.1), 1e-15);
+  // The strong fit is the exponential tail scaled by its share: at f = 1 it is share / scale.
+  EXPECT_NEAR(report::strong_force_fit(0.5, 0.25, 10.0, "s").y[0], 0.5, 1e-12);
+  EXPECT_NEAR(report::weak_force_fit(0.5, 0.25, 0.01, "w").y.back(), 0.75 * 1.5, 1e-12);
+}
+
+TEST(ReportCharts, LogAxesDropWhatTheyCannotShow) {
+  report::Chart c;
+  c.x_log = true;
+  EXPECT_TRUE(c.add({"a", "line", {-1.0, 0.0, 2.0, std::nan("")}, {1.0, 2.0, 3.0, 4.0}}));
+  EXPECT_EQ(c.series[0].x, (std::vector<double>{2.0}));
+  EXPECT_FALSE(c.add({"b", "line", {0.0}, {1.0}}));
+  EXPECT_EQ(c.series.size(), 1u);
+}
+
+TEST(ReportData, TrackedAxialStrainOfAnAffineMapIsExact) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  const std::size_t n = 40, t = 3;
+  std::vector<double> c(n * t * 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    for (std::size_t s = 0; s < t; ++s) {
+      const Eigen::Vector3d q = Eigen::Vector3d(1.0 + 0.01 * s, 1.0, 1.0 - 0.03 * s).asDiagonal() * p + Eigen::Vector3d(1e-4 * s, 0, 0);
+      for (int k = 0; k < 3; ++k) c[3 * (i * t + s) + k] = (i == 7 && s == 2) ? std::nan("") : q[k];
+    }
+  }
+  const auto eps = report::tracked_axial_strain(c, n, t);
+  EXPECT_NEAR(eps[0], 0.0, 1e-12);
+  EXPECT_NEAR(eps[1], -std::log(0.97), 1e-12);
+  EXPECT_NEAR(eps[2], -std::log(0.94), 1e-12);
+}
+
+TEST(ReportPage, BenchChartsAreFoundWithTheirStage) {
+  test::TempDir d;
+  for (const char* name : {"ct2labels_accuracy.png", "ctsynth_supersample.png", "ctsynth_supersample.csv", "shapes2mesh_preview.png",
+                           "sand_small_sections.png", "fdem2forces_accuracy.png"})
+    std::ofstream(d / name) << "x";
+  const auto charts = report::find_bench_charts(d.path());
+  ASSERT_EQ(charts.size(), 3u);
+  EXPECT_EQ(charts[0].tool, "ctsynth");
+  EXPECT_EQ(charts[1].stage, "segment");
+  EXPECT_EQ(charts[2].stage, "forces");
+}
