@@ -4,6 +4,8 @@
 // error against elements per grain (docs/img/shapes2mesh_accuracy.png); and whole models of
 // sand_small's reference scan with 1 and 2 gmsh worker processes when runs/ has its shapes.
 //   shapes2mesh_bench [--quick]
+#include <sys/resource.h>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -57,6 +59,14 @@ double surface_error(const mesh::TetMesh& m, const shape::GrainShape& g, double 
     worst = std::max(worst, std::abs(c.norm() - shape::sh_radius(g.coeffs, degree, c.normalized())));
   }
   return worst / radius;
+}
+
+/// CPU seconds (user + system) of the finished child processes this process waited for, and of
+/// theirs (the tool's reaped gmsh workers).
+double children_cpu_seconds() {
+  rusage ru{};
+  getrusage(RUSAGE_CHILDREN, &ru);
+  return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 /// The 1-minute load average (the machine is shared: other jobs slow timed runs down).
@@ -147,12 +157,13 @@ int main(int argc, char** argv) {
     std::vector<fdem::Model> models;
     for (int processes : {1, 2}) {
       const std::string model = fmt::format("/tmp/shapes2mesh_bench_model_{}.h5", processes);
-      const double load = load_average();
+      const double load = load_average(), cpu_before = children_cpu_seconds();
       bench::Row row = bench::run_child(fmt::format("sand_small scan 0 ({} grains), 10-node, snap", grains),
                                         fmt::format("shapes2mesh -j {} ({} gmsh process{})", processes, processes, processes > 1 ? "es" : ""),
-                                        {tool, shapes.string(), model, "--force", "-q", "-j", std::to_string(processes)});
+                                        {tool, shapes.string(), model, "--force", "-q", "-j", std::to_string(processes)}, 2);
       models.push_back(fdem::read_model_file(model));
-      row.note = fmt::format("load average {:.2f} before the run{}", load, load > 1.0 ? " (shared machine)" : "");
+      row.note = fmt::format("best of 2; CPU {:.1f} s per run (tool and workers); load average {:.2f} before the runs{}",
+                             (children_cpu_seconds() - cpu_before) / 2, load, load > 1.0 ? " (shared machine)" : "");
       if (models.size() == 2)
         row.note += models[1].nodes == models[0].nodes && models[1].element_nodes == models[0].element_nodes
                         ? "; model identical to -j 1"

@@ -114,7 +114,8 @@ int main(int argc, char** argv) {
       "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Grains smaller than --rigid-below d50 get "
       "a coarse linear mesh and are marked rigid. LABELS also gives the sample cylinder (ct2labels' region) when it "
       "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel: -j threads, each "
-      "handing its gmsh work to its own gmsh worker process (gmsh is not thread-safe); the model does not depend on -j, "
+      "handing its gmsh work to its own gmsh worker process (gmsh is not thread-safe); with --curving snap the model does not depend on -j "
+      "(gmsh's optimize(HighOrder) is not reproducible run to run), "
       "and a worker that crashes is reported for its grain, which falls back as above. --packing equivalent builds a "
       "statistically equivalent sample instead of the twin: the grains of SHAPES (the shape library; each once, or "
       "--grains drawn with replacement) packed at random positions and orientations into a cylinder (height / diameter "
@@ -126,6 +127,7 @@ int main(int argc, char** argv) {
   double rigid_below_d50 = 0.3, platen_friction = 0.0;
   std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan";
   mesh::EquivalentPackingOptions po;
+  po.aspect = 0.0;  // the scan's unless given
   tool.add_input("SHAPES", shapes_path, "Shapes of the reference scan (.h5, kind=shapes)");
   tool.add_optional_input("LABELS", labels_path,
                           "Labels of the same scan (.h5, kind=labels): voxel surfaces for unreliable SH fits, the sample cylinder");
