@@ -2,17 +2,35 @@
 // Sphere and ellipsoid grains of fdemrun scenes, meshed by gmsh. Header-only on purpose: gmsh lives
 // in graintwin_mesh, so only programs that link it (fdemrun, its tests and benches) include this.
 #include "graintwin/fdem/scene.hpp"
+#include "graintwin/fdem/size_grading.hpp"
 #include "graintwin/mesh/gmsh_adapter.hpp"
 #include "graintwin/mesh/tet_mesh.hpp"
 
 namespace graintwin::fdem {
 
-/// Appends the ellipsoid of `spec` (semi-axes `size`, centre, orientation) meshed at its element
-/// size: 10-node elements curved onto the surface for tet10, 4-node ones for tet4 and rigid.
-inline void append_ellipsoid_grain(Model& model, const GrainSpec& spec) {
+/// The gmsh options of a primitive grain: its element size, order 2 (curved) for tet10.
+inline mesh::TetOptions ellipsoid_mesh_options(const GrainSpec& spec) {
   mesh::TetOptions options;
   options.size = spec.element_size;
   options.order = spec.kind == GrainKind::tet10 ? 2 : 1;
+  return options;
+}
+
+/// Appends the ellipsoid of `spec` (semi-axes `size`, centre, orientation) meshed at its element
+/// size: 10-node elements curved onto the surface for tet10, 4-node ones for tet4 and rigid.
+inline void append_ellipsoid_grain(Model& model, const GrainSpec& spec) {
+  mesh::append_grain(model, mesh::mesh_ellipsoid(spec.position, spec.size, spec.orientation, ellipsoid_mesh_options(spec)),
+                     spec.label, spec.kind, spec.material);
+}
+
+/// The same with the element size graded by `grading` (world coordinates; its coarse size replaces
+/// the spec's element size): a mesh fine only where the grain will touch. UsageError for a bad
+/// grading, before gmsh runs.
+inline void append_graded_ellipsoid_grain(Model& model, const GrainSpec& spec, const SizeGrading& grading) {
+  check_size_grading(grading);
+  mesh::TetOptions options = ellipsoid_mesh_options(spec);
+  options.size = grading.coarse;
+  options.size_at = [&grading](const Eigen::Vector3d& x) { return graded_element_size(grading, x); };
   mesh::append_grain(model, mesh::mesh_ellipsoid(spec.position, spec.size, spec.orientation, options), spec.label,
                      spec.kind, spec.material);
 }
