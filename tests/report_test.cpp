@@ -238,17 +238,19 @@ TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   }
   EXPECT_EQ(fs::exists(out / "report_img/bench"), !bench.empty());
 
-  // The experiment's axial strains: the applied ones as given, the tracked ones from the
-  // centroids' affine map, close to the applied ones (the balls' nudges are not affine).
+  // The experiment's strains: the applied axial strains as given, the tracked ones from the
+  // centroids' affine map, close to the applied map (the balls' nudges are not affine).
   const auto* vol = find_chart(spec, "volumetric_strain_experiment.png");
   ASSERT_NE(vol, nullptr);
-  const auto* applied = find_series(*vol, "scans, applied axial strain");
-  const auto* tracked = find_series(*vol, "scans, axial strain from the tracks");
+  const auto* applied = find_series(*vol, "scans, void ratio at the applied axial strain");
+  const auto* tracked = find_series(*vol, "scans, affine map of the tracked centroids");
   ASSERT_NE(applied, nullptr);
   ASSERT_NE(tracked, nullptr);
   for (int t = 0; t < kScans; ++t) {
     EXPECT_NEAR((*applied)["x"][t].get<double>(), 100.0 * applied_axial_strain(t), 1e-9);
     EXPECT_NEAR((*tracked)["x"][t].get<double>(), 100.0 * applied_axial_strain(t), 0.1) << "scan " << t;
+    const double volumetric = -std::log((1.0 - kAxialStep * t) * std::pow(1.0 + kLateralStep * t, 2));
+    EXPECT_NEAR((*tracked)["y"][t].get<double>(), 100.0 * volumetric, 0.1) << "scan " << t;
   }
   // The simulation's series exactly as stored, the scans marked at their applied strains.
   const auto* ratio = find_chart(spec, "stress_ratio_simulation.png");
@@ -384,22 +386,24 @@ TEST(ReportCharts, LogAxesDropWhatTheyCannotShow) {
   EXPECT_EQ(c.series.size(), 1u);
 }
 
-TEST(ReportData, TrackedAxialStrainOfAnAffineMapIsExact) {
+TEST(ReportData, TrackedStrainsOfAnAffineMapAreExact) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1e-3, 1e-3);
   const std::size_t n = 40, t = 3;
   std::vector<double> c(n * t * 3);
+  const auto stretch = [](std::size_t s) { return Eigen::Vector3d(1.0 + 0.01 * double(s), 1.0, 1.0 - 0.03 * double(s)); };
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d p(u(rng), u(rng), u(rng));
     for (std::size_t s = 0; s < t; ++s) {
-      const Eigen::Vector3d q = Eigen::Vector3d(1.0 + 0.01 * s, 1.0, 1.0 - 0.03 * s).asDiagonal() * p + Eigen::Vector3d(1e-4 * s, 0, 0);
+      const Eigen::Vector3d q = stretch(s).asDiagonal() * p + Eigen::Vector3d(1e-4 * double(s), 0, 0);
       for (int k = 0; k < 3; ++k) c[3 * (i * t + s) + k] = (i == 7 && s == 2) ? std::nan("") : q[k];
     }
   }
-  const auto eps = report::tracked_axial_strain(c, n, t);
-  EXPECT_NEAR(eps[0], 0.0, 1e-12);
-  EXPECT_NEAR(eps[1], -std::log(0.97), 1e-12);
-  EXPECT_NEAR(eps[2], -std::log(0.94), 1e-12);
+  const auto eps = report::tracked_strains(c, n, t);
+  for (std::size_t s = 0; s < t; ++s) {
+    EXPECT_NEAR(eps.axial[s], -std::log(stretch(s).z()), 1e-12);
+    EXPECT_NEAR(eps.volumetric[s], -std::log(stretch(s).prod()), 1e-12);
+  }
 }
 
 TEST(ReportPage, BenchChartsAreFoundWithTheirStage) {

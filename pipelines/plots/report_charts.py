@@ -4,7 +4,8 @@
 usage: report_charts.py CHARTS.json OUT_DIR
 
 CHARTS.json holds {"charts": [chart, ...]}; each chart has file (PNG name in OUT_DIR), panel,
-kind ("xy" or "rose"), title, x_label, y_label, x_log, y_log and series [{name, style, x, y}].
+kind ("xy" or "rose"), title, x_label, y_label, x_log, y_log and series [{name, style, x, y,
+group}]; series of one non-empty group share a colour (a fit and its data).
 xy styles: line, dashed, points, linepoints, vline (a vertical line at each x). A rose series has
 x = polar-angle bin edges in degrees from the loading axis z and y = one value per bin; it is
 drawn as a closed outline in the x-z plane, mirrored about both axes. Charts of one panel share
@@ -53,12 +54,16 @@ def xy_limits(charts):
 
 
 def draw_xy(ax, chart, limits):
+    colours = {}  # group -> colour: a fit is drawn in its data's colour
     for s in chart["series"]:
         if s["style"] == "vline":
             for k, x in enumerate(s["x"]):
                 ax.axvline(x, color="grey", linestyle=":", label=s["name"] if k == 0 else None)
             continue
-        ax.plot(s["x"], s["y"], label=s["name"], **STYLES.get(s["style"], STYLES["line"]))
+        extra = {"color": colours[s["group"]]} if s["group"] in colours else {}
+        (line,) = ax.plot(s["x"], s["y"], label=s["name"], **STYLES.get(s["style"], STYLES["line"]), **extra)
+        if s["group"]:
+            colours.setdefault(s["group"], line.get_color())
     if chart["x_log"]:
         ax.set_xscale("log")
     if chart["y_log"]:

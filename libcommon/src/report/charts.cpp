@@ -24,7 +24,7 @@ bool Chart::add(Series s) {
   if (!vline && s.x.size() != s.y.size()) throw UsageError("Chart::add: series " + s.name + " has x and y of different lengths");
   const auto keep_x = [&](double v) { return std::isfinite(v) && (!x_log || v > 0.0); };
   const auto keep_y = [&](double v) { return std::isfinite(v) && (!y_log || v > 0.0); };
-  Series kept{s.name, s.style, {}, {}};
+  Series kept{s.name, s.style, {}, {}, s.group};
   for (std::size_t i = 0; i < s.x.size(); ++i) {
     if (!keep_x(s.x[i]) || (!vline && !keep_y(s.y[i]))) continue;
     kept.x.push_back(s.x[i]);
@@ -37,7 +37,8 @@ bool Chart::add(Series s) {
 
 nlohmann::json to_json(const Chart& c) {
   nlohmann::json series = nlohmann::json::array();
-  for (const Series& s : c.series) series.push_back({{"name", s.name}, {"style", s.style}, {"x", s.x}, {"y", s.y}});
+  for (const Series& s : c.series)
+    series.push_back({{"name", s.name}, {"style", s.style}, {"x", s.x}, {"y", s.y}, {"group", s.group}});
   return {{"file", c.file},       {"panel", c.panel},     {"kind", c.kind},   {"title", c.title}, {"x_label", c.x_label},
           {"y_label", c.y_label}, {"x_log", c.x_log},     {"y_log", c.y_log}, {"series", series}};
 }

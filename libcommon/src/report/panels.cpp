@@ -78,10 +78,28 @@ std::string increment_name(const MicroIncrement& inc, const std::vector<std::str
   return state_name(names, inc.from) + " -> " + state_name(names, inc.to);
 }
 
-/// The scans' axial strains (%) to mark on simulation charts: applied where known, else measured.
+/// The scans' axial strains (%) to mark on simulation charts: applied where known, else tracked.
 std::pair<std::vector<double>, std::string> scan_strain_marks(const ExperimentData& e) {
   if (!e.applied_axial_strain.empty()) return {scaled(e.applied_axial_strain, 100.0), "scans (applied axial strain)"};
-  return {scaled(e.measured_axial_strain, 100.0), "scans (axial strain from the tracks)"};
+  return {scaled(e.tracked_axial_strain, 100.0), "scans (axial strain from the tracks)"};
+}
+
+/// The scans' (eps_1, eps_v) points in %: from the tracked centroids' affine map, and from the void
+/// ratios at the applied axial strain (else at the tracked one).
+std::vector<Series> scan_strain_points(const ExperimentData& e) {
+  std::vector<Series> points;
+  if (!e.tracked_axial_strain.empty())
+    points.push_back({"scans, affine map of the tracked centroids", "points", scaled(e.tracked_axial_strain, 100.0),
+                      scaled(e.tracked_volumetric_strain, 100.0)});
+  if (!e.void_ratio_volumetric_strain.empty()) {
+    if (!e.applied_axial_strain.empty())
+      points.push_back({"scans, void ratio at the applied axial strain", "points", scaled(e.applied_axial_strain, 100.0),
+                        scaled(e.void_ratio_volumetric_strain, 100.0)});
+    else if (!e.tracked_axial_strain.empty())
+      points.push_back({"scans, void ratio at the tracked axial strain", "points", scaled(e.tracked_axial_strain, 100.0),
+                        scaled(e.void_ratio_volumetric_strain, 100.0)});
+  }
+  return points;
 }
 
 // ---- the panels ---------------------------------------------------------------------------
@@ -111,23 +129,18 @@ Panel stress_ratio_panel(const ExperimentData& e, const SimulationData& s) {
 
 Panel volumetric_strain_panel(const ExperimentData& e, const SimulationData& s) {
   Panel p{"volumetric_strain", "Volumetric strain against axial strain",
-          "Log volumetric strain eps_v = ln(V0/V) (compression positive) against eps_1. Experiment: eps_v = ln((1 + e_0) / (1 + e)) "
-          "from each scan's void ratio (labels.h5, /sample/void_ratio), at the applied axial strain (--scan-strains) and at the "
-          "axial strain of the least-squares affine map of the tracked centroids from the first scan (tracks.h5). Simulation: "
-          "/series/volumetric_strain against /series/axial_strain.",
+          "Log volumetric strain eps_v = ln(V0/V) against eps_1 (compression positive). Experiment, one point per scan: the "
+          "least-squares affine map Lambda of the tracked centroids from the first scan (tracks.h5; eps_1 = -ln Lambda_zz, "
+          "eps_v = -ln det Lambda), and eps_v = ln((1 + e_0) / (1 + e)) from the void ratios the labels files measured "
+          "(/sample/void_ratio) at the applied axial strain (--scan-strains). Simulation: /series/volumetric_strain against "
+          "/series/axial_strain, the scans' points on top.",
           {}, {}};
-  const std::vector<double> eps_v = scaled(e.volumetric_strain, 100.0);
+  const std::vector<Series> points = scan_strain_points(e);
   Chart c = chart(p.id, SideName::experiment, "Experiment (CT scans)", "axial strain eps_1 (%)", "volumetric strain eps_v (%)");
-  if (eps_v.empty()) {
-    p.experiment = missing("The scans' labels files hold no void ratio, so their volumetric strain is unknown; rerun ct2labels.");
-  } else if (e.measured_axial_strain.empty() && e.applied_axial_strain.empty()) {
-    p.experiment = missing("The scans' axial strains are unknown: this run has no tracks (track stage, two scans or more) and no --scan-strains file.");
-  } else {
-    if (!e.applied_axial_strain.empty()) c.add({"scans, applied axial strain", "points", scaled(e.applied_axial_strain, 100.0), eps_v});
-    if (!e.measured_axial_strain.empty())
-      c.add({"scans, axial strain from the tracks", "points", scaled(e.measured_axial_strain, 100.0), eps_v});
-    p.experiment = shown(std::move(c));
-  }
+  for (const Series& pt : points) c.add(pt);
+  p.experiment = points.empty() ? missing("The scans' strains are unknown: this run has no tracks (track stage, two scans or more) and no "
+                                          "--scan-strains file with the void ratios of the labels files.")
+                                : shown(std::move(c));
   if (!s.present) {
     p.simulation = missing(kNoSimulation);
   } else if (!s.series.missing.empty()) {
@@ -136,10 +149,7 @@ Panel volumetric_strain_panel(const ExperimentData& e, const SimulationData& s) 
   } else {
     Chart sc = chart(p.id, SideName::simulation, "Simulation", "axial strain eps_1 (%)", "volumetric strain eps_v (%)");
     sc.add({"simulation", "line", scaled(s.series.axial_strain, 100.0), scaled(s.series.volumetric_strain, 100.0)});
-    if (!eps_v.empty()) {
-      auto [marks, name] = scan_strain_marks(e);
-      sc.add({name, "points", marks, eps_v});
-    }
+    for (const Series& pt : points) sc.add(pt);
     p.simulation = shown(std::move(sc));
   }
   return p;
@@ -302,9 +312,11 @@ std::vector<Panel> micro_panels(const ExperimentData& e, const SimulationData& s
         Chart c = chart(id, side, side_title(side), "displacement / d50", "probability density");
         for (std::size_t k : pick_evenly(m.increments.size(), o.max_series)) {
           const MicroIncrement& inc = m.increments[k];
-          c.add(pdf_series(inc.displacement[3], false, "|u| " + increment_name(inc, names)));
+          Series magnitude = pdf_series(inc.displacement[3], false, "|u| " + increment_name(inc, names));
           Series z = pdf_series(inc.displacement[2], false, "u_z " + increment_name(inc, names));
+          magnitude.group = z.group = increment_name(inc, names);
           z.style = "dashed";
+          c.add(std::move(magnitude));
           c.add(std::move(z));
         }
         return shown(std::move(c));
@@ -340,12 +352,16 @@ std::vector<Panel> micro_panels(const ExperimentData& e, const SimulationData& s
         for (std::size_t k : pick_evenly(m.increments.size(), o.max_series)) {
           const MicroIncrement& inc = m.increments[k];
           const std::string name = increment_name(inc, names);
-          c.add(ccdf_series(inc.cluster_size, name));
+          Series sizes = ccdf_series(inc.cluster_size, name);
+          sizes.group = name;
+          c.add(std::move(sizes));
           double s_max = 0.0;
           for (double v : inc.cluster_size) s_max = std::max(s_max, v);
           if (inc.size_fit_valid) {
-            c.add(power_law_ccdf(inc.size_alpha, inc.size_s_min, s_max, inc.size_tail, inc.cluster_size.size(),
-                                 fmt::format("fit {}: alpha {:.2f}", name, inc.size_alpha)));
+            Series fit = power_law_ccdf(inc.size_alpha, inc.size_s_min, s_max, inc.size_tail, inc.cluster_size.size(),
+                                        fmt::format("fit {}: alpha {:.2f}", name, inc.size_alpha));
+            fit.group = name;
+            c.add(std::move(fit));
             note += fmt::format("{}: {} clusters of {} grains, alpha = {:.2f} +- {:.2f} above s_min = {:g} ({} clusters in the tail). ", name,
                                 inc.cluster_size.size(), inc.selected, inc.size_alpha, inc.size_alpha_error, inc.size_s_min, inc.size_tail);
           } else {
@@ -368,9 +384,11 @@ std::vector<Panel> micro_panels(const ExperimentData& e, const SimulationData& s
           std::vector<double> size, rg;
           for (std::size_t q = 0; q < inc.cluster_size.size() && q < inc.cluster_rg.size(); ++q)
             if (inc.cluster_size[q] >= 2 && inc.cluster_rg[q] > 0) size.push_back(inc.cluster_size[q]), rg.push_back(inc.cluster_rg[q] / inc.d50);
-          c.add({name, "points", size, rg});
+          c.add({name, "points", size, rg, name});
           if (std::isfinite(inc.fractal_dimension) && inc.fractal_dimension > 0) {
-            c.add(log_line_through_mean(size, rg, 1.0 / inc.fractal_dimension, fmt::format("fit {}: d_f {:.2f}", name, inc.fractal_dimension)));
+            Series fit = log_line_through_mean(size, rg, 1.0 / inc.fractal_dimension, fmt::format("fit {}: d_f {:.2f}", name, inc.fractal_dimension));
+            fit.group = name;
+            c.add(std::move(fit));
             note += fmt::format("{}: d_f = {:.2f} +- {:.2f} over {} clusters. ", name, inc.fractal_dimension, inc.fractal_dimension_error, size.size());
           } else {
             note += fmt::format("{}: d_f not fitted ({} clusters of two grains or more). ", name, size.size());
@@ -397,6 +415,7 @@ Panel force_pdf_panel(const SimulationData& s, const PanelOptions& o) {
   for (std::size_t k : frames) {
     Series pts = pdf_series(s.forces->frames[k].pdf, true, fmt::format("frame {}", s.forces->frames[k].index));
     pts.style = "points";
+    pts.group = pts.name;
     c.add(std::move(pts));
   }
   std::string note;
@@ -404,8 +423,12 @@ Panel force_pdf_panel(const SimulationData& s, const PanelOptions& o) {
     const ForcesFrame& last = s.forces->frames[frames.back()];
     const double share = share_at_or_above(last.pdf, 1.0);
     const double lo = last.pdf.edges.empty() ? 0.0 : last.pdf.edges.front(), hi = last.pdf.edges.empty() ? 0.0 : last.pdf.edges.back();
-    c.add(strong_force_fit(last.strong_scale, share, hi, fmt::format("strong fit, scale {:.2f}", last.strong_scale)));
-    c.add(weak_force_fit(last.weak_theta, share, lo, fmt::format("weak fit, theta {:.2f}", last.weak_theta)));
+    Series strong = strong_force_fit(last.strong_scale, share, hi, fmt::format("strong fit, scale {:.2f}", last.strong_scale));
+    Series weak = weak_force_fit(last.weak_theta, share, lo, fmt::format("weak fit, theta {:.2f}", last.weak_theta));
+    strong.group = weak.group = fmt::format("frame {}", last.index);
+    weak.style = "line";
+    c.add(std::move(strong));
+    c.add(std::move(weak));
     note = fmt::format("Frame {} ({} contacts): strong scale {:.3g}, weak theta {:.3g}, {:.0f} % of the contacts carry f >= 1.", last.index,
                        last.contacts, last.strong_scale, last.weak_theta, 100.0 * share);
   }

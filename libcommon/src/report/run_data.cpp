@@ -299,9 +299,9 @@ std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, c
   return roses;
 }
 
-std::vector<double> tracked_axial_strain(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans) {
-  if (centroid.size() != tracks * scans * 3) throw UsageError("tracked_axial_strain: the centroid table is not N x T x 3");
-  std::vector<double> eps(scans, std::nan(""));
+TrackedStrains tracked_strains(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans) {
+  if (centroid.size() != tracks * scans * 3) throw UsageError("tracked_strains: the centroid table is not N x T x 3");
+  TrackedStrains eps{std::vector<double>(scans, std::nan("")), std::vector<double>(scans, std::nan(""))};
   const auto at = [&](std::size_t i, std::size_t t) {
     const double* p = centroid.data() + 3 * (i * scans + t);
     return Eigen::Vector3d(p[0], p[1], p[2]);
@@ -319,7 +319,9 @@ std::vector<double> tracked_axial_strain(const std::vector<double>& centroid, st
     for (std::size_t k = 0; k < before.size(); ++k) before[k] -= mean_before, after[k] -= mean_after;
     Eigen::Matrix3d lambda;
     double residual = 0.0;
-    if (micro::affine_fit(before, after, 1e-9, lambda, residual) && lambda(2, 2) > 0.0) eps[t] = -std::log(lambda(2, 2));
+    if (!micro::affine_fit(before, after, 1e-9, lambda, residual)) continue;
+    if (lambda(2, 2) > 0.0) eps.axial[t] = -std::log(lambda(2, 2));
+    if (lambda.determinant() > 0.0) eps.volumetric[t] = -std::log(lambda.determinant());
   }
   return eps;
 }
@@ -329,7 +331,8 @@ ExperimentData read_experiment(const RunFiles& files) {
   for (std::size_t s = 0; s < files.labels.size(); ++s) e.scans.push_back(read_scan(files, s));
   const std::size_t scans = e.scans.size();
   if (std::isfinite(e.scans[0].void_ratio))
-    for (const ScanData& s : e.scans) e.volumetric_strain.push_back(std::log((1.0 + e.scans[0].void_ratio) / (1.0 + s.void_ratio)));
+    for (const ScanData& s : e.scans)
+      e.void_ratio_volumetric_strain.push_back(std::log((1.0 + e.scans[0].void_ratio) / (1.0 + s.void_ratio)));
   if (!files.tracks.empty()) {
     const io::H5File t = io::H5File::open(files.tracks);
     std::vector<hsize_t> dims;
@@ -339,7 +342,8 @@ ExperimentData read_experiment(const RunFiles& files) {
       throw UsageError(files.tracks.string() + " follows " + std::to_string(dims[1]) + " scans but the run has " + std::to_string(scans) +
                        "; rerun the track stage or name the scans' files explicitly");
     e.tracks = dims[0];
-    e.measured_axial_strain = tracked_axial_strain(centroid, dims[0], dims[1]);
+    const TrackedStrains tracked = tracked_strains(centroid, dims[0], dims[1]);
+    e.tracked_axial_strain = tracked.axial, e.tracked_volumetric_strain = tracked.volumetric;
   }
   if (!files.scan_strains.empty()) {
     std::ifstream in(files.scan_strains);
