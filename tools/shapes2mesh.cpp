@@ -250,7 +250,14 @@ int main(int argc, char** argv) {
                                       po.solid_fraction, labels_path.string()));
       }
       if (po.aspect == 0.0) po.aspect = bounded ? height / (2.0 * region.radius) : 1.0;
-      sample = mesh::pack_equivalent_sample(grains, shapes.degree, po, ctx.progress_callback("packing"));
+      try {
+        sample = mesh::pack_equivalent_sample(grains, shapes.degree, po, ctx.progress_callback("packing"));
+      } catch (const DataError& e) {
+        throw DataError(fmt::format("the equivalent sample did not pack at solid fraction {:.3f} ({}); lower --solid-fraction, or "
+                                    "draw more grains with --grains for a wider cylinder (rough grains jam near 0.58 in "
+                                    "cylinders a few d50 across)",
+                                    po.solid_fraction, e.message()));
+      }
       cli::throw_if_interrupted();
       for (std::size_t i = 0; i < sample->source.size(); ++i) {
         members.push_back(*grains[sample->source[i]]);
