@@ -409,11 +409,13 @@ TEST(ReportData, TrackedStrainsOfAnAffineMapAreExact) {
 TEST(ReportPage, BenchChartsAreFoundWithTheirStage) {
   test::TempDir d;
   for (const char* name : {"ct2labels_accuracy.png", "ctsynth_supersample.png", "ctsynth_supersample.csv", "shapes2mesh_preview.png",
-                           "sand_small_sections.png", "fdem2forces_accuracy.png"})
+                           "sand_small_sections.png", "fdem2forces_accuracy.png", "fdem_membrane_accuracy.png"})
     std::ofstream(d / name) << "x";
   const auto charts = report::find_bench_charts(d.path());
-  ASSERT_EQ(charts.size(), 3u);
+  ASSERT_EQ(charts.size(), 4u);
   EXPECT_EQ(charts[0].tool, "ctsynth");
   EXPECT_EQ(charts[1].stage, "segment");
-  EXPECT_EQ(charts[2].stage, "forces");
+  EXPECT_EQ(charts[2].stage, "simulate");
+  EXPECT_EQ(charts[3].tool, "fdem2forces");
+  EXPECT_EQ(charts[3].stage, "forces");
 }

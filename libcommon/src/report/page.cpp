@@ -56,8 +56,9 @@ std::string html_escape(std::string_view text) {
 
 namespace {
 
-/// Tools in the order their stages run, with the stage (Makefile.pipeline target) of each.
-constexpr std::array<std::pair<const char*, const char*>, 12> kToolStages{{
+/// Tools in the order their stages run, with the stage (Makefile.pipeline target) of each; "fdem"
+/// names the benches of fdemrun's library parts (contact, membrane).
+constexpr std::array<std::pair<const char*, const char*>, 13> kToolStages{{
     {"ctsynth", "synthetic scans (no pipeline stage)"},
     {"volconvert", "import (no pipeline stage)"},
     {"volinfo", "inspect"},
@@ -67,6 +68,7 @@ constexpr std::array<std::pair<const char*, const char*>, 12> kToolStages{{
     {"shapes2tracks", "track"},
     {"shapes2mesh", "mesh"},
     {"fdemrun", "simulate"},
+    {"fdem", "simulate"},
     {"tracks2micro", "micro"},
     {"fdem2forces", "forces"},
     {"report", "report"},

@@ -23,8 +23,9 @@ std::string read_binary_file(const fs::path& path);
 /// `text` with &, <, >, " and ' replaced by entities.
 std::string html_escape(std::string_view text);
 
-/// A benchmark chart: `<tool>_<measure>.png` drawn by one of bench/ (a CSV of the same stem
-/// beside it, or "accuracy" in the name), and the pipeline stage its tool runs.
+/// A benchmark chart: `<tool>_<measure>.png` (or `fdem_<measure>.png` for fdemrun's library parts)
+/// drawn by one of bench/ (a CSV of the same stem beside it, or "accuracy" in the name), and the
+/// pipeline stage its tool runs.
 struct BenchChart {
   fs::path file;
   std::string tool;
