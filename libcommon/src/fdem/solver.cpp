@@ -15,6 +15,9 @@ namespace graintwin::fdem {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+/// Squared strain below which energy is round-off: a run with almost no energy put in (a grain at
+/// rest) must not count 1e-29 J of noise as a runaway. E V eps^2 summed over the grains.
+constexpr double kRunawayStrain2 = 1e-12;
 
 /// Critical step factors k in dt = k h_min / c for a regular tetrahedron with lumped mass
 /// (element eigenvalue bound; docs/fdemrun.md): 4-node row sum and 10-node HRZ.
@@ -54,6 +57,8 @@ Solver::Solver(const Model& model, const SolverOptions& options)
     bodies_.push_back(body_properties(model, g));
     state_.bodies[g].position = bodies_[g].centroid;
     if (model.grains[g].kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
+    const Material& material = model.materials[model.grains[g].material];
+    runaway_floor_ += kRunawayStrain2 * material.young * bodies_[g].volume;
   }
   state_.x = model.nodes;
   state_.v.assign(model.nodes.size(), Eigen::Vector3d::Zero());
@@ -77,6 +82,11 @@ void Solver::set_grain_velocity(std::size_t g, const Eigen::Vector3d& velocity, 
   }
 }
 
+void Solver::set_boundary(Boundary* boundary) {
+  if (boundary && !contact_) throw UsageError("a sample boundary (wall or membrane) needs contact; enable contact in the scene");
+  boundary_ = boundary;
+}
+
 void Solver::set_platen_velocity(std::size_t p, const Eigen::Vector3d& velocity) { state_.platens.at(p).velocity = velocity; }
 
 StepLimits Solver::time_step_limits() const {
@@ -91,6 +101,7 @@ StepLimits Solver::time_step_limits() const {
   }
   s.element_stable = s.element_critical * options_.element_safety;
   s.contact_stable = contact_ ? contact_->stable_time_step() : kInfinity;
+  s.boundary_stable = boundary_ ? boundary_->stable_time_step(*contact_) : kInfinity;
   return s;
 }
 
@@ -100,8 +111,9 @@ void Solver::check_time_step(double dt) const {
   if (dt > s.stable())
     throw UsageError(fmt::format(
         "the time step {:.4g} s is above the stable limit {:.4g} s (elements: {:.4g} s = {} x the critical {:.4g} s of "
-        "element {}; contact: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
-        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical, s.element, s.contact_stable, s.stable()));
+        "element {}; contact: {:.4g} s; boundary: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
+        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical, s.element, s.contact_stable,
+        s.boundary_stable, s.stable()));
 }
 
 Eigen::Vector3d Solver::angular_velocity(std::size_t g, const Eigen::Quaterniond& q, const Eigen::Vector3d& L) const {
@@ -148,6 +160,8 @@ StepReport Solver::step(double dt) {
   for (auto& f : platen_force_) f.setZero();
   for (const ContactRecord& r : records)
     if (r.b >= grains) platen_force_[r.b - grains] += r.force;
+  BoundaryStep boundary;
+  if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, first, force_);
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
@@ -208,8 +222,11 @@ StepReport Solver::step(double dt) {
     state_.energy_input += std::max(gravity_work[g], 0.0);
     if (bad[g]) e.kinetic = std::nan("");
   }
-  e.contact_elastic = report.contact.elastic_energy;
-  state_.dissipated += report.contact.dissipated;
+  e.contact_elastic = report.contact.elastic_energy + boundary.elastic;
+  e.kinetic += boundary.kinetic;
+  state_.dissipated += report.contact.dissipated + boundary.dissipated;
+  state_.external_work += boundary.work;
+  state_.energy_input += std::max(boundary.work, 0.0);
   for (std::size_t p = 0; p < state_.platens.size(); ++p) {
     const double work = -dt * platen_force_[p].dot(state_.platens[p].velocity);  // the platen pushes the grains
     state_.external_work += work;
@@ -236,7 +253,7 @@ void Solver::check_health(const Energies& e) const {
                                 "the stable limit ({}) or a penalty too stiff for the time step; restart from the last "
                                 "checkpoint with a smaller time step",
                                 state_.step, state_.time, limits()));
-  if (e.mechanical() > options_.runaway_factor * state_.energy_input + 1e-300)
+  if (e.mechanical() > options_.runaway_factor * state_.energy_input + runaway_floor_)
     throw DataError(fmt::format("step {} (t = {:.6g} s): the mechanical energy {:.4g} J ran away to more than {} x the "
                                 "energy put in ({:.4g} J); likely cause: a time step too close to the stable limit ({}) or "
                                 "a penalty too stiff; restart from the last checkpoint with a smaller time step",

@@ -44,6 +44,31 @@ struct ContactRecord {
   double overlap = 0;                                ///< m, deepest node penetration of the pair
 };
 
+/// A rigid vertical cylindrical wall around the sample (the servo wall of the forming procedure,
+/// SPEC section 8): grain surface nodes farther than `radius` from the axis are pushed back with
+/// the platen law (the grain's penalty and dashpot), frictionless.
+struct CylinderWallState {
+  Eigen::Vector2d axis_xy = Eigen::Vector2d::Zero();  ///< m
+  double radius = 0;                                  ///< m
+  double radial_velocity = 0;                         ///< m/s, > 0 opening
+};
+
+/// What the wall or the membrane balls did in one step.
+struct BoundaryContactStats {
+  std::size_t contacts = 0;     ///< node-wall or ball-grain contacts
+  double radial_force = 0;      ///< N: wall only, the grains' total outward push on the wall
+  double elastic_energy = 0;    ///< J stored in the contact springs now
+  double dissipated = 0;        ///< J lost by dashpots and slip in this step
+  double max_overlap = 0;       ///< m
+};
+
+/// The membrane balls as contact partners of the grains.
+struct BallContactOptions {
+  double radius = 0;    ///< m
+  double mass = 0;      ///< kg, of one ball (dashpot)
+  double friction = 0;  ///< Coulomb coefficient between ball and grain
+};
+
 struct ContactStepStats {
   std::size_t pairs = 0;          ///< candidate grain pairs of the broad phase
   std::size_t node_contacts = 0;  ///< active node contacts after this step
@@ -71,6 +96,24 @@ class ContactModel {
   ContactStepStats add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                               std::span<const PlatenState> platens, double dt,
                               std::span<Eigen::Vector3d> f);
+  /// Adds the cylinder wall's forces on the grains' surface nodes to f (call after add_forces of
+  /// the same step). Deterministic for a given thread count.
+  BoundaryContactStats add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                       const CylinderWallState& wall, double dt, std::span<Eigen::Vector3d> f);
+  /// Balls (centres, velocities, spins at the half step) against the grains' surfaces (call after
+  /// add_forces of the same step, which refits the trees): penetration = radius minus the distance
+  /// from the centre to the surface (plus it, for a centre inside), pushed along the surface
+  /// normal; k_n = p_n pi r^2 and k_t = p_t pi r^2 of the grain's material, its damping ratio, the
+  /// ball's mass in the dashpot, Coulomb friction with a tangential spring per (ball, grain). The
+  /// ball gets the force and the friction moment, the grain's triangle the reaction (barycentric).
+  BoundaryContactStats add_ball_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                       std::span<const Eigen::Vector3d> centres,
+                                       std::span<const Eigen::Vector3d> ball_velocity,
+                                       std::span<const Eigen::Vector3d> ball_spin, const BallContactOptions& balls,
+                                       double dt, std::span<Eigen::Vector3d> f, std::span<Eigen::Vector3d> ball_force,
+                                       std::span<Eigen::Vector3d> ball_moment);
+  /// Ball contact limit on the time step, s, like stable_time_step() for the stiffest grain material.
+  double ball_stable_time_step(const BallContactOptions& balls) const;
   /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
   std::vector<ContactRecord> contacts() const;
   /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).

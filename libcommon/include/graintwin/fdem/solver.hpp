@@ -7,7 +7,9 @@
 // run with the step number and the likely cause.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -51,7 +53,8 @@ struct SolverOptions {
   double damping = 0;            ///< alpha of C = alpha M, 1/s
   double element_safety = 0.8;   ///< fraction of the element critical step used as the stable limit
   ContactOptions contact;
-  /// A run stops when the mechanical energy exceeds this multiple of the energy put in.
+  /// A run stops when the mechanical energy exceeds this multiple of the energy put in (plus a floor
+  /// of 1e-12 E V summed over the grains, below which energy is round-off).
   double runaway_factor = 10;
 };
 
@@ -68,12 +71,35 @@ struct StepLimits {
   std::size_t element = 0;       ///< the element that sets it
   double element_stable = 0;     ///< element_critical x element_safety
   double contact_stable = 0;     ///< ContactModel::stable_time_step(), or infinity without contact
-  double stable() const { return std::min(element_stable, contact_stable); }
+  double boundary_stable = std::numeric_limits<double>::infinity();  ///< Boundary::stable_time_step()
+  double stable() const { return std::min({element_stable, contact_stable, boundary_stable}); }
 };
 
 struct StepReport {
   Energies energies;              ///< at t_n
   ContactStepStats contact;
+};
+
+/// What a boundary did in one step (energies in J).
+struct BoundaryStep {
+  double kinetic = 0;     ///< of the boundary's own bodies (membrane balls) at the half step
+  double elastic = 0;     ///< stored in its springs and contacts now
+  double dissipated = 0;  ///< in this step
+  double work = 0;        ///< done on the system from outside in this step (confining pressure, moving walls)
+};
+
+/// A boundary of the sample beyond the platens, stepped with the grains: the triaxial test's servo
+/// wall and membrane (fdem/triaxial.hpp). The solver calls apply() once per step after the grain
+/// contacts, with the grain nodes at t_n; it adds its forces on the grain nodes and advances its own
+/// state over dt.
+class Boundary {
+ public:
+  virtual ~Boundary() = default;
+  virtual BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
+                             std::span<const Eigen::Vector3d> v, double dt, bool first,
+                             std::span<Eigen::Vector3d> f) = 0;
+  /// The boundary's own stable time step, s (infinity if it sets none).
+  virtual double stable_time_step(const ContactModel& contact) const = 0;
 };
 
 class Solver {
@@ -95,6 +121,11 @@ class Solver {
   void set_platen_velocity(std::size_t platen, const Eigen::Vector3d& velocity);
   /// Sets the mass-proportional damping alpha, 1/s (loading stages change it between steps).
   void set_damping(double alpha) { options_.damping = alpha; }
+  /// Steps `boundary` with the grains from the next step on (not owned; nullptr removes it).
+  /// UsageError without contact (a boundary acts through it).
+  void set_boundary(Boundary* boundary);
+  /// Contact between the grains, platens and boundaries (nullptr when disabled).
+  ContactModel* contact_model() { return contact_.get(); }
 
   StepLimits time_step_limits() const;
   /// UsageError with both limits when dt is not below the stable step (or not positive).
@@ -139,6 +170,8 @@ class Solver {
   std::vector<BodyProperties> bodies_;         ///< per grain, in the reference configuration
   std::vector<Eigen::Matrix3d> inverse_inertia_;  ///< per grain, reference axes
   std::unique_ptr<ContactModel> contact_;
+  Boundary* boundary_ = nullptr;
+  double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
   std::vector<Eigen::Vector3d> force_;         ///< per node, scratch
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   SolverState state_;

@@ -1,0 +1,106 @@
+#pragma once
+// The triaxial test's lateral boundary and its control (SPEC.md sections 7-8): a rigid servo-
+// controlled cylindrical wall, then the bonded-ball membrane (fdem/membrane.hpp) carrying the
+// confining pressure, with its ends clamped to the platens; servo laws for the wall and the
+// platens, and the measurements of the time series (axial and lateral stress, sample volume by
+// eq. 27 and eq. 28, log strains). The model must have platens named "bottom" and "top" (normals
+// +z and -z) and a sample cylinder (shapes2mesh writes both).
+#include <Eigen/Core>
+#include <optional>
+
+#include "graintwin/fdem/membrane.hpp"
+#include "graintwin/fdem/solver.hpp"
+
+namespace graintwin::fdem {
+
+struct TriaxialOptions {
+  double confining_pressure = 300e3;  ///< sigma_3, Pa (SPEC section 0)
+  MembraneMaterial membrane;          ///< latex, SPEC section 8
+  double ball_radius = 0;             ///< m; 0 = choose_ball_radius(sample radius, grains' d50)
+  double membrane_friction = 0.0;     ///< Coulomb coefficient between membrane balls and grains
+  /// Fastest servo motion, as an inertial number I = strain rate x d50 sqrt(rho / sigma_3) of the
+  /// sample (quasi-static below 1e-3).
+  double servo_inertial_number = 1e-3;
+  double stress_tolerance = 0.01;  ///< consolidation: stresses within this share of sigma_3
+};
+
+/// The platen pair of a model: indices of "bottom" and "top". UsageError naming what is missing.
+struct PlatenPair {
+  std::size_t bottom = 0, top = 0;
+};
+PlatenPair find_platens(const Model& model);
+
+/// Median diameter by volume of the model's grains (equivalent spheres), m.
+double grains_d50(const Solver& solver);
+
+/// The lateral boundary: first the rigid wall at the sample radius, then (install_membrane) the
+/// membrane. Stepped by the solver (Solver::set_boundary).
+class TriaxialBoundary final : public Boundary {
+ public:
+  TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50);
+
+  bool has_membrane() const { return membrane_.has_value(); }
+  const CylinderWallState& wall() const { return wall_; }
+  void set_wall_velocity(double radial_velocity) { wall_.radial_velocity = radial_velocity; }
+  /// The platens' heights and vertical velocities for this step: the wall's height, the membrane's
+  /// clamped rings move with them.
+  void set_platens(double z_bottom, double z_top, double v_bottom, double v_top);
+  /// Mean radial stress of the grains on the wall in the last step, Pa.
+  double wall_stress() const;
+  /// Replaces the wall by the membrane: ball centres on the wall's radius plus a ball radius, rings
+  /// from two below the bottom platen to two above the top one; the rings beyond the platens are
+  /// clamped (radially fixed, moving with their platen). The confining pressure starts at 0.
+  void install_membrane();
+  void set_pressure(double pressure) { pressure_ = pressure; }
+  double pressure() const { return pressure_; }
+  const Membrane* membrane() const { return membrane_ ? &*membrane_ : nullptr; }
+  const MembraneState* membrane_state() const { return membrane_ ? &membrane_state_ : nullptr; }
+  /// Sample volume between the platens now, m^3: pi R^2 H inside the wall; eq. 27 inside the membrane.
+  double volume() const;
+  /// Eq. 28 inside the membrane (the same as volume() inside the wall).
+  double volume_radial() const;
+  double ball_radius() const { return ball_radius_; }
+  /// The wall's or the balls' contacts with the grains in the last step.
+  const BoundaryContactStats& last_contact() const { return last_contact_; }
+
+  BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                     double dt, bool first, std::span<Eigen::Vector3d> f) override;
+  double stable_time_step(const ContactModel& contact) const override;
+
+ private:
+  TriaxialOptions options_;
+  CylinderWallState wall_;
+  double wall_force_ = 0;  ///< N, last step
+  BoundaryContactStats last_contact_;
+  double z_bottom_ = 0, z_top_ = 0, v_bottom_ = 0, v_top_ = 0;
+  double ball_radius_ = 0;
+  double pressure_ = 0;
+  std::optional<Membrane> membrane_;
+  MembraneState membrane_state_;
+  std::vector<BallMotion> motion_;
+  std::vector<std::uint8_t> clamp_group_;  ///< 0 bottom, 1 top
+  std::vector<Eigen::Vector3d> ball_force_, ball_moment_;
+  bool membrane_started_ = false;
+};
+
+/// One row of the triaxial time series.
+struct TriaxialMeasure {
+  double axial_stress = 0;    ///< sigma_1, Pa: mean platen force / (V / H), compression positive
+  double lateral_stress = 0;  ///< sigma_3, Pa: the wall's, or the membrane pressure
+  double height = 0;          ///< m, platen gap
+  double volume = 0;          ///< m^3 (eq. 27 with the membrane)
+  double volume_radial = 0;   ///< m^3 (eq. 28)
+};
+TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens);
+
+/// Servo velocity for a stress error: the fastest speed while the error is above 10 % of the
+/// target, proportional below (m/s, positive = the boundary should open).
+double servo_velocity(double stress, double target, double fastest);
+
+/// Isotropic consolidation inside the wall: the wall and both platens servo to sigma_3 until all
+/// three stresses are within options.stress_tolerance of it and the kinetic energy is below 5 % of
+/// the contact elastic energy for 100 consecutive steps, or `max_steps`. Returns the steps taken.
+std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
+                                double dt, std::size_t max_steps);
+
+}  // namespace graintwin::fdem

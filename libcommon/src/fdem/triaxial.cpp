@@ -1,0 +1,198 @@
+#include "graintwin/fdem/triaxial.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::fdem {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+/// Rings of membrane beyond each platen (clamped to it).
+constexpr int kClampedRings = 2;
+/// Consolidation is over when the stresses and the kinetic energy stay settled this many steps.
+constexpr std::size_t kSettledSteps = 100;
+/// Kinetic energy below this share of the elastic energy counts as at rest (SPEC section 7).
+constexpr double kQuasiStaticRatio = 0.05;
+
+}  // namespace
+
+PlatenPair find_platens(const Model& model) {
+  std::optional<std::size_t> bottom, top;
+  for (std::size_t p = 0; p < model.platens.size(); ++p) {
+    const Platen& platen = model.platens[p];
+    if (platen.name == "bottom" && platen.normal.normalized().z() > 0.999) bottom = p;
+    if (platen.name == "top" && platen.normal.normalized().z() < -0.999) top = p;
+  }
+  if (!bottom || !top)
+    throw UsageError("a triaxial test needs a platen named 'bottom' with normal +z and one named 'top' with normal -z; "
+                     "build the model with shapes2mesh or add them to the scene's [[platens]]");
+  return {*bottom, *top};
+}
+
+double grains_d50(const Solver& solver) {
+  const std::size_t n = solver.model().grains.size();
+  std::vector<double> volume(n);
+  for (std::size_t g = 0; g < n; ++g) volume[g] = solver.body(g).volume;
+  std::sort(volume.begin(), volume.end());
+  double total = 0;
+  for (double v : volume) total += v;
+  double below = 0;
+  for (double v : volume) {
+    below += v;
+    if (below >= 0.5 * total) return std::cbrt(6 * v / kPi);
+  }
+  return 0;
+}
+
+TriaxialBoundary::TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50) : options_(options) {
+  if (!model.sample)
+    throw UsageError("a triaxial test needs the model's sample cylinder; build the model with shapes2mesh or give [sample]");
+  if (!(options.confining_pressure > 0) || !std::isfinite(options.confining_pressure))
+    throw UsageError("the confining pressure must be positive; the reference test uses 300 kPa");
+  bond_stiffness(options.membrane);  // refuses nu > 1/3 before any work
+  const SampleCylinder& s = *model.sample;
+  wall_ = {s.axis_xy, s.radius, 0.0};
+  z_bottom_ = s.z_min;
+  z_top_ = s.z_max;
+  ball_radius_ = options.ball_radius > 0 ? options.ball_radius : choose_ball_radius(s.radius, d50);
+}
+
+void TriaxialBoundary::set_platens(double z_bottom, double z_top, double v_bottom, double v_top) {
+  z_bottom_ = z_bottom;
+  z_top_ = z_top;
+  v_bottom_ = v_bottom;
+  v_top_ = v_top;
+}
+
+double TriaxialBoundary::wall_stress() const { return wall_force_ / (2 * kPi * wall_.radius * (z_top_ - z_bottom_)); }
+
+void TriaxialBoundary::install_membrane() {
+  if (membrane_) return;
+  const double r = ball_radius_;
+  const double ring_step = std::sqrt(3.0) * r;  // about: the lattice fixes it from the circumference
+  membrane_ = build_membrane(options_.membrane, wall_.axis_xy, wall_.radius + r, z_bottom_ - (kClampedRings + 0.5) * ring_step,
+                             z_top_ + (kClampedRings + 0.5) * ring_step, r);
+  membrane_state_ = rest_state(*membrane_);
+  const std::size_t n = membrane_->balls();
+  motion_.assign(n, BallMotion::free);
+  clamp_group_.assign(n, 0);
+  for (std::size_t b = 0; b < n; ++b) {
+    const double z = membrane_->reference[b].z();
+    if (z < z_bottom_) motion_[b] = BallMotion::clamped, clamp_group_[b] = 0;
+    if (z > z_top_) motion_[b] = BallMotion::clamped, clamp_group_[b] = 1;
+  }
+  ball_force_.assign(n, Eigen::Vector3d::Zero());
+  ball_moment_.assign(n, Eigen::Vector3d::Zero());
+  wall_force_ = 0;
+  membrane_started_ = false;
+}
+
+double TriaxialBoundary::volume() const {
+  if (!membrane_) return kPi * wall_.radius * wall_.radius * (z_top_ - z_bottom_);
+  return enclosed_volume(*membrane_, membrane_state_.x, z_bottom_, z_top_);
+}
+
+double TriaxialBoundary::volume_radial() const {
+  if (!membrane_) return volume();
+  return enclosed_volume_radial(*membrane_, membrane_state_.x, z_bottom_, z_top_);
+}
+
+BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
+                                     std::span<const Eigen::Vector3d> v, double dt, bool first,
+                                     std::span<Eigen::Vector3d> f) {
+  BoundaryStep out;
+  if (!membrane_) {
+    const BoundaryContactStats s = contact.add_wall_forces(x, v, wall_, dt, f);
+    last_contact_ = s;
+    wall_force_ = s.radial_force;
+    out.elastic = s.elastic_energy;
+    out.dissipated = s.dissipated;
+    out.work = -s.radial_force * wall_.radial_velocity * dt;  // the wall pushes inwards
+    wall_.radius += dt * wall_.radial_velocity;
+    return out;
+  }
+  const Membrane& m = *membrane_;
+  MembraneState& s = membrane_state_;
+  std::fill(ball_force_.begin(), ball_force_.end(), Eigen::Vector3d::Zero());
+  std::fill(ball_moment_.begin(), ball_moment_.end(), Eigen::Vector3d::Zero());
+  const BoundaryContactStats c = contact.add_ball_forces(x, v, s.x, s.v, s.spin, {m.ball_radius, m.ball_mass, options_.membrane_friction},
+                                                         dt, f, ball_force_, ball_moment_);
+  out.elastic = c.elastic_energy + add_bond_forces(m, s, dt, ball_force_, ball_moment_);
+  out.dissipated = c.dissipated;
+  last_contact_ = c;
+  std::vector<Eigen::Vector3d> pressure_force(m.balls(), Eigen::Vector3d::Zero());
+  add_pressure_forces(m, s.x, pressure_, pressure_force);
+  for (std::size_t b = 0; b < m.balls(); ++b) ball_force_[b] += pressure_force[b];
+  const std::vector<Eigen::Vector3d> before = s.x;
+  const Eigen::Vector3d clamp[2] = {Eigen::Vector3d(0, 0, v_bottom_), Eigen::Vector3d(0, 0, v_top_)};
+  out.kinetic = integrate_balls(m, s, ball_force_, ball_moment_, dt, 0.0, motion_, clamp_group_, clamp,
+                                first || !membrane_started_);
+  membrane_started_ = true;
+  for (std::size_t b = 0; b < m.balls(); ++b)
+    if (motion_[b] == BallMotion::free) out.work += pressure_force[b].dot(s.x[b] - before[b]);
+  return out;
+}
+
+double TriaxialBoundary::stable_time_step(const ContactModel& contact) const {
+  if (!membrane_) return std::numeric_limits<double>::infinity();
+  return std::min(membrane_stable_time_step(*membrane_),
+                  contact.ball_stable_time_step({membrane_->ball_radius, membrane_->ball_mass, options_.membrane_friction}));
+}
+
+TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens) {
+  TriaxialMeasure m;
+  const auto& state = solver.state().platens;
+  m.height = state[platens.top].point.z() - state[platens.bottom].point.z();
+  m.volume = boundary.volume();
+  m.volume_radial = boundary.volume_radial();
+  // The grains push the bottom platen down and the top one up; their mean over the mean section.
+  const double force = 0.5 * (solver.platen_force(platens.top).z() - solver.platen_force(platens.bottom).z());
+  m.axial_stress = force / (m.volume / m.height);
+  m.lateral_stress = boundary.has_membrane() ? boundary.pressure() : boundary.wall_stress();
+  return m;
+}
+
+double servo_velocity(double stress, double target, double fastest) {
+  return fastest * std::clamp((stress - target) / (0.1 * target), -1.0, 1.0);
+}
+
+std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options, double dt,
+                                std::size_t max_steps) {
+  if (boundary.has_membrane()) throw UsageError("consolidation in the wall must come before the membrane is installed");
+  const PlatenPair platens = find_platens(solver.model());
+  const double sigma = options.confining_pressure;
+  const double density = solver.model().materials.front().density;
+  // Strain rate of the inertial-number limit: I = rate d50 sqrt(rho / sigma_3).
+  const double rate = options.servo_inertial_number / (grains_d50(solver) * std::sqrt(density / sigma));
+  std::size_t settled = 0, step = 0;
+  for (; step < max_steps && settled < kSettledSteps; ++step) {
+    const TriaxialMeasure m = measure(solver, boundary, platens);
+    const auto& state = solver.state().platens;
+    const double axial = servo_velocity(m.axial_stress, sigma, rate * m.height);
+    const double radial = servo_velocity(boundary.wall_stress(), sigma, rate * boundary.wall().radius);
+    solver.set_platen_velocity(platens.bottom, Eigen::Vector3d(0, 0, -0.5 * axial));
+    solver.set_platen_velocity(platens.top, Eigen::Vector3d(0, 0, 0.5 * axial));
+    boundary.set_platens(state[platens.bottom].point.z(), state[platens.top].point.z(), -0.5 * axial, 0.5 * axial);
+    boundary.set_wall_velocity(radial);
+    const StepReport r = solver.step(dt);
+    const bool stresses = std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance &&
+                          std::abs(boundary.wall_stress() / sigma - 1) < options.stress_tolerance;
+    const bool at_rest = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);
+    settled = stresses && at_rest ? settled + 1 : 0;
+  }
+  for (std::size_t p : {platens.bottom, platens.top}) solver.set_platen_velocity(p, Eigen::Vector3d::Zero());
+  boundary.set_wall_velocity(0);
+  if (settled < kSettledSteps)
+    throw DataError(fmt::format("isotropic consolidation to {:.4g} kPa did not settle in {} steps (axial {:.4g} kPa, "
+                                "lateral {:.4g} kPa); allow more steps or a larger servo inertial number",
+                                1e-3 * sigma, max_steps, 1e-3 * measure(solver, boundary, platens).axial_stress,
+                                1e-3 * boundary.wall_stress()));
+  return step;
+}
+
+}  // namespace graintwin::fdem
