@@ -38,6 +38,7 @@ struct Options {
   std::string diameter = "3.0mm", height = "3.6mm", box = "";
   double solid_fraction = 0.55;
   double contact_tolerance = 0.02;
+  std::string pack_degrees = "7,11";
   std::string voxel_size = "27.5um";
   double margin_vox = 4.0;
   std::string membrane_thickness = "0.3mm";
@@ -59,6 +60,28 @@ std::string scan_name(const char* stem, std::size_t k) {
   return buf;
 }
 
+// "7,11" -> {7, 11}: increasing SH degrees >= 2, those >= sh_degree dropped; "none" -> {}.
+std::vector<int> parse_pack_degrees(const std::string& text, int sh_degree) {
+  if (text == "none") return {};
+  std::vector<int> out;
+  for (const auto& part : split(text, ',')) {
+    int d = -1;
+    try {
+      std::size_t used = 0;
+      d = std::stoi(part, &used);
+      if (used != part.size()) d = -1;
+    } catch (const std::exception&) {
+      d = -1;
+    }
+    if (d < 2 || (!out.empty() && d <= out.back()))
+      throw UsageError("--pack-degrees '" + text + "' must be increasing SH degrees of at least 2, e.g. 7,11, or none");
+    out.push_back(d);
+  }
+  // Stages at or above the grains' own degree would be the true shapes again.
+  std::erase_if(out, [&](int d) { return d >= sh_degree; });
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -69,10 +92,10 @@ int main(int argc, char** argv) {
                  "(axial compression, bulging, shear band with nonaffine motion and grain rotations, overlaps "
                  "relaxed), partial-volume rendering with blur, noise, rings and cupping, and per scan a "
                  "kind=volume scan_NNN.h5 plus a kind=ground_truth truth_NNN.h5. Every scene key is an option "
-                 "of the same name; options given on the command line override the scene file. Limit: the packer "
-                 "jams near 0.58 solid fraction for sand grains in a cylinder 5-7 d50 wide (the bundled series packs "
-                 "0.578; the loose layer at the wall costs the most, wider samples pack denser); states are prescribed "
-                 "kinematics, not mechanics.");
+                 "of the same name; options given on the command line override the scene file. Sand grains pack with "
+                 "the roughness off, then on (--pack-degrees). Limit: in a cylinder 6.5 d50 wide they jam near 0.58 "
+                 "solid fraction (the bundled series packs 0.5804; 0.582 jammed with another draw): the loose layer at "
+                 "the walls costs the most, wider samples pack denser; states are prescribed kinematics, not mechanics.");
   Options o;
   fs::path outdir, scene;
   auto& app = tool.cli();
@@ -95,6 +118,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--contact-tolerance", o.contact_tolerance,
                  "Largest interpenetration, as a fraction of the smallest grain radius; pairs within it touch")
+      ->capture_default_str();
+  app.add_option("--pack-degrees", o.pack_degrees,
+                 "Sand grains: pack with the roughness off, then on: grow the grains low-passed to the first SH "
+                 "degree, then relax at each next degree and at the true shapes (increasing; degrees from --sh-degree "
+                 "up are skipped; none: grow the true shapes)")
       ->capture_default_str();
   app.add_option("--voxel-size", o.voxel_size, "Voxel size of the scans")->capture_default_str();
   app.add_option("--margin-vox", o.margin_vox, "Air around the sample and membrane (voxels)")->capture_default_str();
@@ -162,6 +190,8 @@ int main(int argc, char** argv) {
                        " cannot be packed: 0.74 is the densest arrangement of equal spheres and random packings of "
                        "sand stop near 0.64; lower it or enlarge the container");
     if (o.strains.empty()) throw UsageError("--strains needs at least one value (0 for an unloaded scan)");
+    const std::vector<int> pack_degrees =
+        shape_kind == GrainShape::sand ? parse_pack_degrees(o.pack_degrees, o.sh_degree) : std::vector<int>{};
     const double membrane_t = container.kind == Container::Kind::cylinder && o.membrane_thickness != "0"
                                   ? parse_length_m(o.membrane_thickness, "--membrane-thickness")
                                   : 0.0;
@@ -190,17 +220,33 @@ int main(int argc, char** argv) {
     const GrainSet grains = make_grains(gp, diameters, ctx.progress_callback("grain shapes"));
     cli::throw_if_interrupted();
     const auto tables = grains.table_pointers();
+    double grain_volume = 0.0;
+    for (const auto& t : grains.tables) grain_volume += t.volume();
+    spdlog::info("the grains' exact volume fills {:.4f} of the {}", grain_volume / container.volume(), o.container);
 
     // --- packing (state 0) ---
     PackingParams pp;
     pp.seed = o.seed;
     pp.contact_tolerance = o.contact_tolerance;
     PackingReport report;
-    const std::vector<PackedGrain> packed = pack_grains(tables, container, pp, &report, ctx.progress_callback("packing"));
-    spdlog::info("packed: solid fraction {:.4f} (core {:.4f}, farther than d50 from the walls), max overlap {:.3g} um "
-                 "(tolerance {:.3g} um), {} touching pairs, {} sweeps, {:.1f} s",
-                 report.solid_fraction, report.core_solid_fraction, report.max_overlap * 1e6, report.tolerance * 1e6,
-                 report.touching_pairs, report.sweeps, report.seconds);
+    std::vector<std::vector<shape::RadialTable>> smooth(pack_degrees.size());
+    std::vector<std::vector<const shape::RadialTable*>> stages;
+    for (std::size_t k = 0; k < pack_degrees.size(); ++k) {
+      smooth[k] = smoothed_tables(grains, pack_degrees[k], voxel);
+      stages.emplace_back();
+      for (const auto& t : smooth[k]) stages.back().push_back(&t);
+    }
+    stages.push_back(tables);
+    const std::vector<PackedGrain> packed =
+        pack_in_stages(stages, container, pp, &report, ctx.progress_callback("packing"));
+    smooth.clear();
+    const std::vector<double> shell_edges{0.0, 0.25 * psd.d50, 0.5 * psd.d50, psd.d50, HUGE_VAL};
+    const std::vector<double> shells = solid_fraction_by_wall_distance(tables, packed, container, shell_edges);
+    spdlog::info("packed: solid fraction {:.4f} (by distance from the walls: {:.3f} within d50/4, {:.3f} d50/4-d50/2, "
+                 "{:.3f} d50/2-d50, {:.3f} beyond d50), max overlap {:.3g} um (tolerance {:.3g} um), {} touching "
+                 "pairs, {} stages, {} sweeps, {:.1f} s",
+                 report.solid_fraction, shells[0], shells[1], shells[2], shells[3], report.max_overlap * 1e6,
+                 report.tolerance * 1e6, report.touching_pairs, stages.size(), report.sweeps, report.seconds);
     cli::throw_if_interrupted();
 
     // --- loading states ---
@@ -245,8 +291,6 @@ int main(int argc, char** argv) {
     const ShRotator rotator(grains.sh_degree);
     nlohmann::json series;
     series["scans"] = nlohmann::json::array();
-    double grain_volume = 0.0;
-    for (const auto& t : grains.tables) grain_volume += t.volume();
     for (std::size_t k = 0; k < states.size(); ++k) {
       const double eps = o.strains[k];
       std::vector<PackedGrain> poses = states[k];
@@ -354,6 +398,12 @@ int main(int argc, char** argv) {
                                  {"max_overlap_m", relax_report.max_overlap}});
       cli::throw_if_interrupted();
     }
+    series["packing"] = {{"solid_fraction", report.solid_fraction},
+                         {"shell_edges_m", std::vector<double>(shell_edges.begin(), shell_edges.end() - 1)},
+                         {"shell_solid_fractions", shells},
+                         {"max_overlap_m", report.max_overlap},
+                         {"sweeps", report.sweeps},
+                         {"seconds", report.seconds}};
     series["grains"] = grains.tables.size();
     series["voxels_per_d50"] = psd.d50 / voxel;
     series["shape_zyx"] = shape;

@@ -29,6 +29,23 @@ namespace {
 int table_nodes(double radius_vox) {
   return std::clamp(static_cast<int>(std::ceil(std::sqrt(27.0 * radius_vox / 0.02))), 32, 160);
 }
+
+// Runs make(i) for every grain in parallel; the first exception is rethrown after the loop (an
+// exception must not leave an OpenMP region).
+template <class F>
+void for_each_grain(std::size_t n, F&& make) {
+  std::exception_ptr failure;
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t i = 0; i < n; ++i) {
+    try {
+      make(i);
+    } catch (...) {
+#pragma omp critical(grain_failure)
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
 }  // namespace
 
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,
@@ -52,40 +69,45 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
             }, degree, 2 * shape::sh_count(degree))
           : Eigen::VectorXd();
   std::atomic<std::size_t> done{0};
-  std::exception_ptr failure;
-#pragma omp parallel for schedule(dynamic)
-  for (std::size_t i = 0; i < n; ++i) {
-    try {
-      const double r = 0.5 * diameters[i];
-      const int nodes = table_nodes(r / p.voxel_size);
-      Eigen::VectorXd c;
-      shape::RadialTable t;
-      if (p.shape == GrainShape::sand) {
-        std::mt19937_64 rng(p.seed * 0x9E3779B97F4A7C15ull + i);
-        c = shape::random_sand_coeffs(p.sand, rng) * r;
-        t = shape::radial_table_from_sh(c, degree, nodes);
-      } else if (p.shape == GrainShape::ellipsoid) {
-        t = shape::ellipsoid_table(r * ell_a, r * ell_b, r * ell_b, nodes);
-        c = r * unit_ellipsoid;
-      } else {
-        c = shape::sphere_coeffs(r, degree);
-        t = shape::RadialTable::from_function([r](const Eigen::Vector3d&) { return r; }, 8);
-      }
-      set.coeffs_body.row(static_cast<Eigen::Index>(i)) = c.transpose();
-      set.stats[i] = shape::shape_stats(t);
-      set.tables[i] = std::move(t);
-    } catch (...) {
-#pragma omp critical(grain_failure)
-      if (!failure) failure = std::current_exception();
+  for_each_grain(n, [&](std::size_t i) {
+    const double r = 0.5 * diameters[i];
+    const int nodes = table_nodes(r / p.voxel_size);
+    Eigen::VectorXd c;
+    shape::RadialTable t;
+    if (p.shape == GrainShape::sand) {
+      std::mt19937_64 rng(p.seed * 0x9E3779B97F4A7C15ull + i);
+      c = shape::random_sand_coeffs(p.sand, rng) * r;
+      t = shape::radial_table_from_sh(c, degree, nodes);
+    } else if (p.shape == GrainShape::ellipsoid) {
+      t = shape::ellipsoid_table(r * ell_a, r * ell_b, r * ell_b, nodes);
+      c = r * unit_ellipsoid;
+    } else {
+      c = shape::sphere_coeffs(r, degree);
+      t = shape::RadialTable::from_function([r](const Eigen::Vector3d&) { return r; }, 8);
     }
+    set.coeffs_body.row(static_cast<Eigen::Index>(i)) = c.transpose();
+    set.stats[i] = shape::shape_stats(t);
+    set.tables[i] = std::move(t);
     const std::size_t d = ++done;
     if (progress) {
 #pragma omp critical(grain_progress)
       progress(static_cast<double>(d) / static_cast<double>(n));
     }
-  }
-  if (failure) std::rethrow_exception(failure);
+  });
   return set;
+}
+
+std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size) {
+  if (degree < 0 || degree > set.sh_degree)
+    throw UsageError("smoothed_tables: degree " + std::to_string(degree) + " is outside 0.." +
+                     std::to_string(set.sh_degree) + ", the grains' SH degree");
+  std::vector<shape::RadialTable> out(set.tables.size());
+  const Eigen::Index kept = shape::sh_count(degree);
+  for_each_grain(out.size(), [&](std::size_t i) {
+    const Eigen::VectorXd c = set.coeffs_body.row(static_cast<Eigen::Index>(i)).head(kept).transpose();
+    out[i] = shape::radial_table_from_sh(c, degree, table_nodes(0.5 * set.diameters[i] / voxel_size));
+  });
+  return out;
 }
 
 ShRotator::ShRotator(int degree) : degree_(degree), dirs_(shape::fibonacci_directions(2 * shape::sh_count(degree))) {

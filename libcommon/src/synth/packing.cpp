@@ -32,6 +32,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -82,7 +83,8 @@ struct Tune {
   int rsa_attempts = 2000;          // random placements per grain before shrinking the start
   int stall_sweeps = 2000;          // sweeps without 0.1 % growth: jammed before full size
   int settle_sweeps = 3000;         // sweeps at full size without 1 % less overlap: jammed
-  double core_points_per_grain = 64.0;  // point density of core_solid_fraction()
+  double stage_regrow_scale = 0.98;  // pack_in_stages(): later stages regrow from this scale
+  double wall_band_points_per_grain = 512.0;  // point density of solid_fraction_by_wall_distance()
 };
 constexpr Tune kTune{};
 
@@ -247,7 +249,8 @@ class Packer {
       q_[i] = poses[i].orientation.normalized();
       R_[i] = q_[i].toRotationMatrix();
     }
-    s_ = s0_ = 1.0;
+    // Grains shrunk about their centres first (initial_scale > 0) regrow quasi-statically.
+    s_ = s0_ = p_.initial_scale > 0.0 ? p_.initial_scale : 1.0;
     relax(progress);
     return finish_run(report, progress, t0);
   }
@@ -963,35 +966,100 @@ double wall_penetration(const shape::RadialTable& a, const PackedGrain& ga, cons
   return worst;
 }
 
-double core_solid_fraction(const std::vector<const shape::RadialTable*>& shapes,
-                           const std::vector<PackedGrain>& grains, const Container& c,
-                           double margin) {
+std::vector<PackedGrain> pack_in_stages(
+    const std::vector<std::vector<const shape::RadialTable*>>& stages, const Container& c,
+    const PackingParams& p, PackingReport* report, const std::function<void(double)>& progress) {
+  if (stages.empty()) {
+    throw UsageError("pack_in_stages: no stages; pass at least the grains' true shapes");
+  }
+  for (std::size_t k = 1; k < stages.size(); ++k) {
+    if (stages[k].size() != stages[0].size()) {
+      throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " +
+                       std::to_string(stages[k].size()) + " shapes but stage 0 has " +
+                       std::to_string(stages[0].size()) + "; pass one shape per grain in every stage");
+    }
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  // Progress: the growth takes most of the time, the relaxations share the rest evenly.
+  const double growth_share = stages.size() == 1 ? 1.0 : 0.7;
+  auto part = [&](double lo, double hi) -> std::function<void(double)> {
+    if (!progress) return {};
+    return [&progress, lo, hi](double f) { progress(lo + (hi - lo) * f); };
+  };
+  auto in_stage = [&](std::size_t k, auto&& run) {
+    try {
+      return run();
+    } catch (const DataError& e) {
+      if (stages.size() == 1) throw;
+      throw DataError("packing stage " + std::to_string(k + 1) + " of " +
+                      std::to_string(stages.size()) + ": " + e.message());
+    }
+  };
+  PackingReport r;
+  std::vector<PackedGrain> poses =
+      in_stage(0, [&] { return pack_grains(stages[0], c, p, &r, part(0.0, growth_share)); });
+  int sweeps = r.sweeps;
+  const double initial_scale = r.initial_scale;
+  const double relax_share = (1.0 - growth_share) / std::max<double>(1.0, stages.size() - 1.0);
+  // Each later stage starts shrunk a little and regrows: at full size the new bumps would have to
+  // be pushed out of a jammed packing; shrunk, they find room and the grains re-jam slowly.
+  PackingParams regrow = p;
+  regrow.initial_scale = kTune.stage_regrow_scale;
+  for (std::size_t k = 1; k < stages.size(); ++k) {
+    const double lo = growth_share + (k - 1) * relax_share;
+    r = in_stage(k, [&] { return relax_grains(stages[k], poses, c, regrow, part(lo, lo + relax_share)); });
+    sweeps += r.sweeps;
+  }
+  r.sweeps = sweeps;
+  r.initial_scale = initial_scale;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (report) *report = r;
+  if (progress) progress(1.0);
+  return poses;
+}
+
+std::vector<double> solid_fraction_by_wall_distance(
+    const std::vector<const shape::RadialTable*>& shapes, const std::vector<PackedGrain>& grains,
+    const Container& c, const std::vector<double>& edges) {
   if (shapes.size() != grains.size()) {
-    throw UsageError("core_solid_fraction: " + std::to_string(shapes.size()) + " shapes but " +
-                     std::to_string(grains.size()) + " grains; pass one shape per grain");
+    throw UsageError("solid_fraction_by_wall_distance: " + std::to_string(shapes.size()) +
+                     " shapes but " + std::to_string(grains.size()) +
+                     " grains; pass one shape per grain");
   }
   for (std::size_t i = 0; i < shapes.size(); ++i) {
     if (shapes[i] == nullptr || shapes[i]->empty()) {
-      throw UsageError("core_solid_fraction: shape " + std::to_string(i) + " is null or empty");
+      throw UsageError("solid_fraction_by_wall_distance: shape " + std::to_string(i) +
+                       " is null or empty");
     }
   }
+  if (edges.size() < 2 || !(edges.front() >= 0.0) ||
+      std::adjacent_find(edges.begin(), edges.end(), std::greater_equal<double>()) != edges.end()) {
+    throw UsageError("solid_fraction_by_wall_distance: the band edges must be at least two "
+                     "increasing distances >= 0 (metres)");
+  }
+  const std::size_t bands = edges.size() - 1;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Points only where they can count: farther than the first edge from every wall.
   const bool cyl = c.kind == Container::Kind::cylinder;
+  const double skip = edges.front();
   Eigen::Vector3d lo, hi;
   if (cyl) {
-    const double r = c.radius - margin;
-    lo = {-r, -r, margin};
-    hi = {r, r, c.height - margin};
+    const double r = c.radius - skip;
+    lo = {-r, -r, skip};
+    hi = {r, r, c.height - skip};
   } else {
-    lo = Eigen::Vector3d::Constant(margin);
-    hi = c.box_size - Eigen::Vector3d::Constant(margin);
+    lo = Eigen::Vector3d::Constant(skip);
+    hi = c.box_size - Eigen::Vector3d::Constant(skip);
   }
-  if (grains.empty() || !(margin >= 0.0) || (hi - lo).minCoeff() <= 0.0) {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
+  if (grains.empty() || (hi - lo).minCoeff() <= 0.0) return std::vector<double>(bands, nan);
+  auto wall_distance = [&](const Eigen::Vector3d& p) {
+    if (cyl) return std::min({c.radius - std::hypot(p.x(), p.y()), p.z(), c.height - p.z()});
+    return std::min(p.minCoeff(), (c.box_size - p).minCoeff());
+  };
   // Quasi-random points (the R3 low-discrepancy sequence of Roberts, 2018: x_k = frac(0.5 + k a),
-  // a = (1/g, 1/g^2, 1/g^3), g^4 = g + 1) in the core's bounding box, about
-  // kTune.core_points_per_grain per mean grain volume and 4 million at most. Unlike a lattice
-  // they cannot alias with a regular arrangement of grains.
+  // a = (1/g, 1/g^2, 1/g^3), g^4 = g + 1) in the sampled box, kTune.wall_band_points_per_grain
+  // per mean grain volume and 4 million at most. Unlike a lattice they cannot alias with a
+  // regular arrangement of grains.
   double vmean = 0.0, rmax = 0.0;
   for (const shape::RadialTable* s : shapes) {
     vmean += s->volume();
@@ -1000,7 +1068,7 @@ double core_solid_fraction(const std::vector<const shape::RadialTable*>& shapes,
   vmean /= static_cast<double>(shapes.size());
   const double box_volume = (hi - lo).prod();
   const long long count = static_cast<long long>(
-      std::clamp(box_volume / vmean * kTune.core_points_per_grain, 1e4, 4e6));
+      std::clamp(box_volume / vmean * kTune.wall_band_points_per_grain, 1e5, 4e6));
   const double g3 = 1.2207440846057594;
   const Eigen::Vector3d step(1.0 / g3, 1.0 / (g3 * g3), 1.0 / (g3 * g3 * g3));
   // Cell grid of the grain origins (cell >= twice the largest bounding radius).
@@ -1023,43 +1091,65 @@ double core_solid_fraction(const std::vector<const shape::RadialTable*>& shapes,
       grid[(ci.z() * dims.y() + ci.y()) * dims.x() + ci.x()].push_back(static_cast<int>(i));
     }
   }
+  auto solid_at = [&](const Eigen::Vector3d& p) {
+    Eigen::Vector3i ci;
+    if (!cell_index(p, ci)) return false;
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
+          if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
+          for (int i : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
+            const double r = shapes[i]->max_radius();
+            if ((p - grains[i].position).squaredNorm() >= r * r) continue;
+            if (inside_grain(*shapes[i], grains[i], rt[i], p)) return true;
+          }
+        }
+      }
+    }
+    return false;
+  };
   const long long chunk = 4096;
   const long long chunks = (count + chunk - 1) / chunk;
-  std::vector<long long> solid(chunks, 0), total(chunks, 0);
+  // Per chunk and band: points inside a grain, points in all (summed in chunk order).
+  std::vector<long long> solid(chunks * bands, 0), total(chunks * bands, 0);
 #pragma omp parallel for schedule(dynamic, 4)
   for (long long ch = 0; ch < chunks; ++ch) {
     for (long long k = ch * chunk; k < std::min(count, (ch + 1) * chunk); ++k) {
       Eigen::Vector3d f = Eigen::Vector3d::Constant(0.5) + static_cast<double>(k) * step;
       f = f.array() - f.array().floor();
       const Eigen::Vector3d p = lo.array() + f.array() * (hi - lo).array();
-      if (cyl && p.x() * p.x() + p.y() * p.y() > hi.x() * hi.x()) continue;
-      ++total[ch];
-      Eigen::Vector3i ci;
-      if (!cell_index(p, ci)) continue;
-      bool in = false;
-      for (int dz = -1; dz <= 1 && !in; ++dz) {
-        for (int dy = -1; dy <= 1 && !in; ++dy) {
-          for (int dx = -1; dx <= 1 && !in; ++dx) {
-            const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
-            if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
-            for (int i : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
-              const double r = shapes[i]->max_radius();
-              if ((p - grains[i].position).squaredNorm() >= r * r) continue;
-              if (inside_grain(*shapes[i], grains[i], rt[i], p)) {
-                in = true;
-                break;
-              }
-            }
-          }
-        }
-      }
-      if (in) ++solid[ch];
+      const double d = wall_distance(p);
+      if (!(d >= edges.front() && d < edges.back())) continue;  // also outside the cylinder
+      const std::size_t b =
+          static_cast<std::size_t>(std::upper_bound(edges.begin(), edges.end(), d) - edges.begin()) - 1;
+      ++total[ch * bands + b];
+      if (solid_at(p)) ++solid[ch * bands + b];
     }
   }
-  const long long s = std::accumulate(solid.begin(), solid.end(), 0LL);
-  const long long t = std::accumulate(total.begin(), total.end(), 0LL);
-  return t > 0 ? static_cast<double>(s) / static_cast<double>(t)
-               : std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> out(bands, nan);
+  for (std::size_t b = 0; b < bands; ++b) {
+    long long sb = 0, tb = 0;
+    for (long long ch = 0; ch < chunks; ++ch) {
+      sb += solid[ch * bands + b];
+      tb += total[ch * bands + b];
+    }
+    if (tb > 0) out[b] = static_cast<double>(sb) / static_cast<double>(tb);
+  }
+  return out;
+}
+
+double core_solid_fraction(const std::vector<const shape::RadialTable*>& shapes,
+                           const std::vector<PackedGrain>& grains, const Container& c,
+                           double margin) {
+  if (!(margin >= 0.0)) {
+    if (shapes.size() != grains.size()) {
+      throw UsageError("core_solid_fraction: " + std::to_string(shapes.size()) + " shapes but " +
+                       std::to_string(grains.size()) + " grains; pass one shape per grain");
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return solid_fraction_by_wall_distance(shapes, grains, c, {margin, HUGE_VAL})[0];
 }
 
 }  // namespace graintwin::synth

@@ -37,6 +37,11 @@ struct GrainSet {
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,
                      const std::function<void(double)>& progress = {});
 
+/// The grains' surfaces low-passed to SH degree `degree` (coefficients above it dropped; same body
+/// frame and origin), tabulated like make_grains() does at `voxel_size`: smooth stand-ins for
+/// packing with the roughness off (pack_in_stages()). UsageError unless 0 <= degree <= sh_degree.
+std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size);
+
 /// SH coefficients of the grain rotated by `body_to_world` (same degree), exact up to rounding:
 /// the rotated surface is re-expanded by least squares on a fixed well-conditioned direction set.
 class ShRotator {
