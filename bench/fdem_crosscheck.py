@@ -1,12 +1,12 @@
 #!/usr/bin/python3
 """fdemrun against an independent code: the Chung & Ooi (2011) sphere impacts (tests 1, 2, 6, 7) in
 LIGGGHTS 3.8 (Debian's `liggghts`, Hertz normal force with Mindlin tangential history, rigid
-spheres) and in GrainTwin (fdemrun_verify_bench --part chung-ooi: elastic tet4 spheres meshed fine at
-the contact, node-to-surface penalty contact), side by side with the analytic answers. Prints the
+spheres) and in GrainTwin (fdemrun_verify_bench --part chung-ooi: elastic spheres meshed fine at the
+contact, node-to-surface penalty contact), side by side with the analytic answers. Prints the
 table and rewrites the `fdem_crosscheck` section of docs/benchmarks.md.
 
 LIGGGHTS' wall has the particle's material, so a rigid wall is modelled by doubling E (the same
-E* = E / (1 - nu^2) as a rigid plane; Chung & Ooi's LIGGGHTS inputs do the same). Restitution 1
+E* = E / (1 - nu^2) as a rigid plane; LIGGGHTS-PFM's Chung & Ooi test inputs do the same). Restitution 1
 (no damping) on both sides, so the runs are elastic like ours.
 
 usage: bench/fdem_crosscheck.py [--build DIR] [--work DIR] [--reuse]
@@ -207,8 +207,10 @@ def main():
     text = ("## fdemrun against LIGGGHTS: Chung & Ooi (2011) sphere impacts\n\n"
             "Tests 1 (two glass spheres R = 10 mm at +-10 m/s), 2 (Al-alloy sphere R = 0.1 m at 0.2 m/s on a rigid wall), "
             "6 (the same with spin about y, mu = 0.4) and 7 (two such spheres spinning so their contact points move "
-            "together). GrainTwin: elastic tet4 spheres graded to a/4 (tests 1, 2) or a/3 (6, 7) at the contact, "
-            "p_n = p_t = 10 E/h, no damping (fdemrun_verify_bench). LIGGGHTS 3.8.0 (Debian): rigid spheres, Hertz normal "
+            "together). GrainTwin (fdemrun_verify_bench --part chung-ooi): elastic spheres meshed fine at the contact, "
+            "10-node elements of the Hertz contact radius a growing by 0.15 (tests 1, 2; the 4-node row of test 1 is in "
+            "fdemrun_verify_bench_chung_ooi) and 4-node ones of a/2 growing by 0.15 (tests 6, 7), p_n = p_t = 10 E/h, no "
+            "damping. LIGGGHTS 3.8.0 (Debian): rigid spheres, Hertz normal "
             "force with Mindlin tangential history, restitution 1, 2000 steps per Hertz contact time, rigid wall as E x 2. "
             "beta = -v'_ct / v_ct of the contact point; restitution = rebound / impact normal speed. Overlap: approach "
             "of the centres since touching.\n\n"

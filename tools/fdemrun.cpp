@@ -47,8 +47,11 @@ int main(int argc, char** argv) {
       "deformed meshes with a .pvd index for ParaView. Grains come from a kind=fdem_model file (shapes2mesh) and/or "
       "primitives: boxes (structured mesh), spheres and ellipsoids (gmsh). Contact (penalty, dashpot, friction, "
       "platens) comes from the fdem contact module and is switched off with [run] contact = false; it is verified "
-      "against a spring-dashpot bounce (restitution, contact time) and a block on an incline, not yet against Hertz or "
-      "Chung & Ooi (2011) impacts (docs/fdemrun.md). Not yet: the membrane, servo control. "
+      "against a spring-dashpot bounce (restitution, contact time), a block on an incline, and on spheres meshed fine "
+      "at the contact against Hertz and Chung & Ooi (2011) tests 1, 2, 6, 7 and LIGGGHTS (docs/fdemrun.md). Scene "
+      "files cannot ask for such graded meshes yet, and the SPEC's default penalty (100 E per metre) is far too soft "
+      "for mm grains: about 10 E / h (h: element size at the contact) reproduces Hertz. Not yet: the membrane, servo "
+      "control. "
       "The scene format is in docs/fdemrun.md.");
   fs::path scene_path, output, checkpoint, restart;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
