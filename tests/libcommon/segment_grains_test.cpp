@@ -201,6 +201,8 @@ TEST(LabelsFile, RoundTripsEveryField) {
   const Volume<float> grey = test::scan_balls(kShape, kBalls, 9, 0.03);
   SegmentResult r = segment_grains(grey, SegmentOptions{});
   LabelsFile c{r.labels, r.grains, {r.region, r.void_ratio}, R"({"h_vox": 0.7})"};
+  c.sample.region.z_min = -1.5e-3;                                  // a bounded end
+  c.sample.region.z_max = std::numeric_limits<double>::infinity();  // and an open one
   write_labels_file(dir / "l.h5", c, {"line one"});
   const LabelsFile back = read_labels_file(dir / "l.h5");
   EXPECT_EQ(back.labels.values(), c.labels.values());
@@ -215,6 +217,7 @@ TEST(LabelsFile, RoundTripsEveryField) {
   }
   EXPECT_DOUBLE_EQ(back.sample.void_ratio.e, c.sample.void_ratio.e);
   EXPECT_DOUBLE_EQ(back.sample.region.radius, c.sample.region.radius);
+  EXPECT_DOUBLE_EQ(back.sample.region.z_min, -1.5e-3);
   EXPECT_TRUE(std::isinf(back.sample.region.z_max));  // an unbounded extent survives the NaN encoding
   EXPECT_EQ(back.parameters_json, c.parameters_json);
 }

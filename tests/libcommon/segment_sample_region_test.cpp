@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "graintwin/core/error.hpp"
@@ -94,6 +95,26 @@ TEST(FitCylinder, FindsTheSampleAndIgnoresASolidMembrane) {
   const Cylinder with_band = fit_sample_cylinder(m, grey, GreyBand{0.35, 0.45});
   EXPECT_NEAR(with_band.radius, fit.radius, 1.0 * kVoxel);
   EXPECT_NEAR(with_band.centre_x, fit.centre_x, 0.5 * kVoxel);
+}
+
+TEST(FitCylinder, EndsWhereTheSampleEndsNotAtTheVolumesTop) {
+  // A compressed sample leaves empty space under the top platen: grains fill slices 0-30 of 48.
+  const Shape3 shape{48, 72, 72}, filled{31, 72, 72};
+  const auto balls = fill_cylinder(filled, 4.5, 6000, 3);
+  const auto m = paint(shape, balls);
+  const Cylinder fit = fit_sample_cylinder(m);
+  double top = 0;
+  for (const Ball& b : balls) top = std::max(top, b.z + b.r);
+  const double top_m = m.position_xyz(top, 0, 0)[2];
+  EXPECT_NEAR(fit.z_max, top_m, 4.5 * kVoxel);
+  // The void ratio of the sample, not of the sample plus the empty space above it (same circle).
+  Cylinder sample = fit, whole = fit;
+  sample.z_max = top_m;
+  whole.z_min = -std::numeric_limits<double>::infinity();
+  whole.z_max = std::numeric_limits<double>::infinity();
+  const double e_sample = void_ratio(m, sample).e;
+  EXPECT_NEAR(void_ratio(m, fit).e, e_sample, 0.05 * e_sample);
+  EXPECT_GT(void_ratio(m, whole).e, 1.3 * e_sample);
 }
 
 TEST(FitCylinder, RefusesAnEmptyMaskAndBadInput) {

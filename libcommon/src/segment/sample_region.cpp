@@ -75,10 +75,45 @@ Cylinder fit_from_counts(const Volume<std::uint8_t>& solid, const std::vector<st
   return c;
 }
 
+/// The sample's axial extent inside the fitted circle: the slices' solid fractions have an interior
+/// level L (median over the middle half of the slices); going up and down from the middle, the
+/// sample ends at the last slice before the fraction leaves [L / 10, (1 + L) / 2] (below: the space
+/// a compressed sample leaves under the top platen, which rests on the highest grains' tips, hence
+/// L / 10 and not L / 2, which would cut the rough top layer in half; above: a solid platen). A
+/// sample that reaches the volume's end keeps an open end (a crop from inside a sample).
+void fit_axial_extent(const Volume<std::uint8_t>& solid, Cylinder& c) {
+  const Shape3& s = solid.shape();
+  std::vector<double> fraction(s[0], 0.0);
+#pragma omp parallel for schedule(static)
+  for (std::size_t z = 0; z < s[0]; ++z) {
+    std::size_t inside = 0, filled = 0;
+    for (std::size_t y = 0; y < s[1]; ++y) {
+      const auto [first, last] = c.row_span(solid, z, y);
+      inside += last - first;
+      for (std::size_t x = first; x < last; ++x) filled += solid(z, y, x) != 0;
+    }
+    fraction[z] = inside ? static_cast<double>(filled) / static_cast<double>(inside) : 0.0;
+  }
+  std::vector<double> middle(fraction.begin() + static_cast<std::ptrdiff_t>(s[0] / 4),
+                             fraction.begin() + static_cast<std::ptrdiff_t>(std::max(s[0] / 4 + 1, 3 * s[0] / 4)));
+  std::nth_element(middle.begin(), middle.begin() + static_cast<std::ptrdiff_t>(middle.size() / 2), middle.end());
+  const double level = middle[middle.size() / 2];
+  const auto in_sample = [&](std::size_t z) { return fraction[z] >= 0.1 * level && fraction[z] <= 0.5 * (1.0 + level); };
+  const std::size_t mid = s[0] / 2;
+  std::size_t top = mid, bottom = mid;
+  while (top + 1 < s[0] && in_sample(top + 1)) ++top;
+  while (bottom > 0 && in_sample(bottom - 1)) --bottom;
+  const double dz = solid.voxel_size()[0];
+  if (bottom > 0) c.z_min = solid.position_xyz(static_cast<double>(bottom), 0.0, 0.0)[2] - 0.5 * dz;
+  if (top + 1 < s[0]) c.z_max = solid.position_xyz(static_cast<double>(top), 0.0, 0.0)[2] + 0.5 * dz;
+}
+
 }  // namespace
 
 Cylinder fit_sample_cylinder(const Volume<std::uint8_t>& solid) {
-  return fit_from_counts(solid, column_counts(solid, [](std::size_t) { return true; }));
+  Cylinder c = fit_from_counts(solid, column_counts(solid, [](std::size_t) { return true; }));
+  fit_axial_extent(solid, c);
+  return c;
 }
 
 template <class T>
@@ -88,10 +123,12 @@ Cylinder fit_sample_cylinder(const Volume<std::uint8_t>& solid, const Volume<T>&
   if (!(membrane.lo <= membrane.hi))
     throw UsageError("the membrane grey band needs lo <= hi");
   const T* g = grey.data();
-  return fit_from_counts(solid, column_counts(solid, [&](std::size_t i) {
-                           const double v = static_cast<double>(g[i]);
-                           return v < membrane.lo || v > membrane.hi;
-                         }));
+  Cylinder c = fit_from_counts(solid, column_counts(solid, [&](std::size_t i) {
+                                 const double v = static_cast<double>(g[i]);
+                                 return v < membrane.lo || v > membrane.hi;
+                               }));
+  fit_axial_extent(solid, c);
+  return c;
 }
 
 VoidRatio void_ratio(const Volume<std::uint8_t>& solid, const Cylinder& region) {

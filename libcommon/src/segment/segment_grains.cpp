@@ -1,6 +1,7 @@
 #include "graintwin/segment/segment_grains.hpp"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -44,9 +45,15 @@ Volume<T> denoised(Volume<T> grey, const SegmentOptions& o) {
 template <class T>
 double sample_otsu_threshold(const Volume<T>& grey, const SegmentOptions& o) {
   if (o.region_mode == RegionMode::whole_volume) return otsu_threshold(grey);
-  const Cylinder region = o.region_mode == RegionMode::given_cylinder
-                              ? o.region
-                              : fit_sample_cylinder(binarise(grey, otsu_threshold(grey)));
+  Cylinder region = o.region_mode == RegionMode::given_cylinder
+                        ? o.region
+                        : fit_sample_cylinder(binarise(grey, otsu_threshold(grey)));
+  // Over the circle's whole height: limited to the sample's axial extent the histogram loses the
+  // void above a compressed sample and the threshold rises (measured: solid fraction 0.233 against
+  // 0.239 true at 16 voxels per d50, void ratio +6 % instead of -0.3 %); the extent bounds only
+  // the void ratio.
+  region.z_min = -std::numeric_limits<double>::infinity();
+  region.z_max = std::numeric_limits<double>::infinity();
   return otsu_threshold(grey, region);
 }
 

@@ -45,7 +45,7 @@ struct GreyBand {
   double lo = 0.0, hi = 0.0;
 };
 
-/// Finds the sample cylinder from the solid mask (nz, ny, nx), over the whole height.
+/// Finds the sample cylinder from the solid mask (nz, ny, nx): its axis, radius and axial extent.
 ///
 /// Rule: the xy occupancy O(y, x) is the fraction of z slices in which the column is solid. The
 /// centre is the occupancy-weighted centroid of the columns. The radial profile of O (mean over
@@ -54,6 +54,11 @@ struct GreyBand {
 /// outer edge of the last ring before the profile first leaves [L / 2, (1 + L) / 2]: below, the air
 /// around the sample; above, a membrane classified as solid (a vertical shell is solid in every
 /// slice, O ~ 1).
+/// The axial extent follows a similar rule along z: the solid fraction of each slice inside the
+/// circle has an interior level L (median of the middle half of the slices); from the middle
+/// slice up and down, the sample ends before the first slice whose fraction leaves
+/// [L / 10, (1 + L) / 2] (the empty space a compressed sample leaves under its top platen, which
+/// rests on the highest grains' tips; or a solid platen), at that slice's outer face. An end that reaches the volume's face stays open (infinite).
 /// Grains touch a confining wall only at points, so the fitted radius lies a little inside it
 /// (about 2 voxels for 9-voxel spheres against a rigid wall); give the cylinder when the membrane's
 /// position is known. Throws DataError if the mask holds no solid.
