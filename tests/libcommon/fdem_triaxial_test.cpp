@@ -1,6 +1,8 @@
-// The triaxial boundary (fdem/triaxial.hpp): isotropic consolidation of rigid grains inside the servo
-// wall reaches sigma_3 within 1 % on the wall and on both platens; the membrane that replaces the
-// wall holds the sample under the confining pressure; a membrane Poisson ratio above 1/3 is refused.
+// The triaxial boundary (fdem/triaxial.hpp) on 27 rigid cubes: isotropic consolidation inside the
+// servo wall reaches sigma_3 within 1 % on the wall and both platens; the membrane that replaces the
+// wall (forming procedure) carries sigma_3 while the platens servo to it within 1 %, without
+// entering the grains, and eq. 27 = eq. 28; strain-controlled shearing reaches its log strain at
+// the set rate with sigma_1 > sigma_3; bad input is refused.
 #include "graintwin/fdem/triaxial.hpp"
 
 #include <gtest/gtest.h>
@@ -42,13 +44,14 @@ Model cube_sample() {
 
 }  // namespace
 
-TEST(Triaxial, ConsolidationInTheWallReachesSigma3WithinOnePercent) {
+TEST(Triaxial, ConsolidatesInTheWallThenInTheMembraneAndShears) {
   omp_set_num_threads(1);  // 27 grains: threads would only wait on each other (ctest runs suites side by side)
   const Model model = cube_sample();
   SolverOptions so;
   so.damping = 2e3;  // 1/s: quasi-static settling
   Solver solver(model, so);
   TriaxialOptions o;
+  o.ball_radius = model.sample->radius / 15;  // a coarse membrane (ratio 15) keeps the test fast
   TriaxialBoundary boundary(model, o, grains_d50(solver));
   solver.set_boundary(&boundary);
   const double dt = 0.9 * solver.time_step_limits().stable();
@@ -62,21 +65,43 @@ TEST(Triaxial, ConsolidationInTheWallReachesSigma3WithinOnePercent) {
   // The cubes are packed: the wall came in to the corners of the outer columns.
   EXPECT_LT(boundary.wall().radius, model.sample->radius);
 
-  // The membrane replaces the wall and carries the pressure: it wraps the square block of cubes
-  // (less volume than the wall's cylinder) without entering it.
-  boundary.install_membrane();
-  ASSERT_TRUE(boundary.has_membrane());
-  boundary.set_pressure(o.confining_pressure);
+  // The forming procedure goes on: the membrane replaces the wall (fixed while the grains settle,
+  // then released under the ramped pressure) and the platens servo to sigma_3 again. It wraps
+  // the square block of cubes (less volume than the wall's cylinder) without entering it.
   const double dt_membrane = 0.9 * solver.time_step_limits().stable();
-  for (int n = 0; n < 1000; ++n) solver.step(dt_membrane);
+  const std::size_t membrane_steps = consolidate_in_membrane(solver, boundary, o, dt_membrane, 500, 100000);
+  ASSERT_TRUE(boundary.has_membrane());
   const TriaxialMeasure after = measure(solver, boundary, platens);
-  const double block = std::pow(3 * kEdge, 2) * after.height;
+  EXPECT_NEAR(after.axial_stress, o.confining_pressure, 0.01 * o.confining_pressure) << membrane_steps << " steps";
+  EXPECT_DOUBLE_EQ(after.lateral_stress, o.confining_pressure);
   EXPECT_LT(after.volume, m.volume);
-  EXPECT_GT(after.volume, 0.98 * block);
+  EXPECT_GT(after.volume, 0.98 * std::pow(3 * kEdge, 2) * after.height);
   EXPECT_NEAR(after.volume_radial, after.volume, 1e-9 * after.volume);
   // The balls press on the grains without entering them: overlaps far below a ball radius.
   EXPECT_GT(boundary.last_contact().contacts, 0u);
   EXPECT_LT(boundary.last_contact().max_overlap, 0.1 * boundary.ball_radius());
+
+  // Shearing: the platens close at the strain rate until eps_1 = ln(H0 / H) reaches the target;
+  // the columns of rigid cubes carry the load, so sigma_1 climbs far above sigma_3.
+  ShearOptions shearing;
+  shearing.strain_rate = 5.0;
+  shearing.target_axial_strain = 1e-3;
+  std::size_t rows = 0;
+  double last_strain = 0, largest_gap = 0;
+  const double h0 = after.height;
+  shear(solver, boundary, shearing, dt_membrane, [&](const TriaxialMeasure& row, const StepReport&) {
+    ++rows;
+    const double strain = std::log(h0 / row.height);
+    EXPECT_GE(strain, last_strain);
+    last_strain = strain;
+    largest_gap = std::max(largest_gap, std::abs(row.volume_radial / row.volume - 1));
+  });
+  const TriaxialMeasure end = measure(solver, boundary, platens);
+  EXPECT_NEAR(std::log(h0 / end.height), shearing.target_axial_strain, 1e-4);
+  // The gap closes linearly: H0 - H = H0 (1 - exp(-eps_1)) at strain_rate x H0 per second.
+  EXPECT_NEAR(double(rows), -std::expm1(-shearing.target_axial_strain) / (shearing.strain_rate * dt_membrane), 1.5);
+  EXPECT_GT(end.axial_stress / end.lateral_stress, 2.0);
+  EXPECT_LT(largest_gap, 1e-9);
 }
 
 TEST(Triaxial, RefusesAMembranePoissonRatioAboveOneThirdAndAModelWithoutPlatens) {

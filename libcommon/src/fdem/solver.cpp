@@ -82,6 +82,14 @@ void Solver::set_grain_velocity(std::size_t g, const Eigen::Vector3d& velocity, 
   }
 }
 
+void Solver::stop_grains() {
+  for (auto& v : state_.v) v.setZero();
+  for (RigidBodyState& b : state_.bodies) {
+    b.velocity.setZero();
+    b.angular_momentum.setZero();
+  }
+}
+
 void Solver::set_boundary(Boundary* boundary) {
   if (boundary && !contact_) throw UsageError("a sample boundary (wall or membrane) needs contact; enable contact in the scene");
   boundary_ = boundary;
@@ -161,7 +169,7 @@ StepReport Solver::step(double dt) {
   for (const ContactRecord& r : records)
     if (r.b >= grains) platen_force_[r.b - grains] += r.force;
   BoundaryStep boundary;
-  if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, first, force_);
+  if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {

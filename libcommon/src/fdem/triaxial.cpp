@@ -92,6 +92,16 @@ void TriaxialBoundary::install_membrane() {
   membrane_started_ = false;
 }
 
+void TriaxialBoundary::set_membrane_fixed(bool fixed) {
+  if (!membrane_) throw UsageError("install the membrane before fixing or releasing it");
+  for (std::size_t b = 0; b < membrane_->balls(); ++b) {
+    const double z = membrane_state_.x[b].z();
+    const bool beyond = z < z_bottom_ || z > z_top_;
+    motion_[b] = fixed || beyond ? BallMotion::clamped : BallMotion::free;
+    clamp_group_[b] = fixed && !beyond ? 2 : z < z_bottom_ ? 0 : 1;
+  }
+}
+
 double TriaxialBoundary::volume() const {
   if (!membrane_) return kPi * wall_.radius * wall_.radius * (z_top_ - z_bottom_);
   return enclosed_volume(*membrane_, membrane_state_.x, z_bottom_, z_top_);
@@ -103,7 +113,7 @@ double TriaxialBoundary::volume_radial() const {
 }
 
 BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
-                                     std::span<const Eigen::Vector3d> v, double dt, bool first,
+                                     std::span<const Eigen::Vector3d> v, double dt, double damping, bool first,
                                      std::span<Eigen::Vector3d> f) {
   BoundaryStep out;
   if (!membrane_) {
@@ -129,8 +139,9 @@ BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eige
   add_pressure_forces(m, s.x, pressure_, pressure_force);
   for (std::size_t b = 0; b < m.balls(); ++b) ball_force_[b] += pressure_force[b];
   const std::vector<Eigen::Vector3d> before = s.x;
-  const Eigen::Vector3d clamp[2] = {Eigen::Vector3d(0, 0, v_bottom_), Eigen::Vector3d(0, 0, v_top_)};
-  out.kinetic = integrate_balls(m, s, ball_force_, ball_moment_, dt, 0.0, motion_, clamp_group_, clamp,
+  // Clamp groups: 0 with the bottom platen, 1 with the top one, 2 held still (a fixed membrane).
+  const Eigen::Vector3d clamp[3] = {Eigen::Vector3d(0, 0, v_bottom_), Eigen::Vector3d(0, 0, v_top_), Eigen::Vector3d::Zero()};
+  out.kinetic = integrate_balls(m, s, ball_force_, ball_moment_, dt, damping, motion_, clamp_group_, clamp,
                                 first || !membrane_started_);
   membrane_started_ = true;
   for (std::size_t b = 0; b < m.balls(); ++b)
@@ -161,23 +172,33 @@ double servo_velocity(double stress, double target, double fastest) {
   return fastest * std::clamp((stress - target) / (0.1 * target), -1.0, 1.0);
 }
 
+namespace {
+
+/// Moves both platens apart at +-velocity / 2 (positive: opening) and tells the boundary.
+void drive_platens(Solver& solver, TriaxialBoundary& boundary, const PlatenPair& platens, double velocity) {
+  const auto& state = solver.state().platens;
+  solver.set_platen_velocity(platens.bottom, Eigen::Vector3d(0, 0, -0.5 * velocity));
+  solver.set_platen_velocity(platens.top, Eigen::Vector3d(0, 0, 0.5 * velocity));
+  boundary.set_platens(state[platens.bottom].point.z(), state[platens.top].point.z(), -0.5 * velocity, 0.5 * velocity);
+}
+
+double servo_rate(const Solver& solver, const TriaxialOptions& options) {
+  const double density = solver.model().materials.front().density;
+  return options.servo_inertial_number / (grains_d50(solver) * std::sqrt(density / options.confining_pressure));
+}
+
+}  // namespace
+
 std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options, double dt,
                                 std::size_t max_steps) {
   if (boundary.has_membrane()) throw UsageError("consolidation in the wall must come before the membrane is installed");
   const PlatenPair platens = find_platens(solver.model());
-  const double sigma = options.confining_pressure;
-  const double density = solver.model().materials.front().density;
-  // Strain rate of the inertial-number limit: I = rate d50 sqrt(rho / sigma_3).
-  const double rate = options.servo_inertial_number / (grains_d50(solver) * std::sqrt(density / sigma));
+  const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
   std::size_t settled = 0, step = 0;
   for (; step < max_steps && settled < kSettledSteps; ++step) {
     const TriaxialMeasure m = measure(solver, boundary, platens);
-    const auto& state = solver.state().platens;
-    const double axial = servo_velocity(m.axial_stress, sigma, rate * m.height);
     const double radial = servo_velocity(boundary.wall_stress(), sigma, rate * boundary.wall().radius);
-    solver.set_platen_velocity(platens.bottom, Eigen::Vector3d(0, 0, -0.5 * axial));
-    solver.set_platen_velocity(platens.top, Eigen::Vector3d(0, 0, 0.5 * axial));
-    boundary.set_platens(state[platens.bottom].point.z(), state[platens.top].point.z(), -0.5 * axial, 0.5 * axial);
+    drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
     boundary.set_wall_velocity(radial);
     const StepReport r = solver.step(dt);
     const bool stresses = std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance &&
@@ -185,13 +206,68 @@ std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, cons
     const bool at_rest = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);
     settled = stresses && at_rest ? settled + 1 : 0;
   }
-  for (std::size_t p : {platens.bottom, platens.top}) solver.set_platen_velocity(p, Eigen::Vector3d::Zero());
+  drive_platens(solver, boundary, platens, 0.0);
   boundary.set_wall_velocity(0);
   if (settled < kSettledSteps)
     throw DataError(fmt::format("isotropic consolidation to {:.4g} kPa did not settle in {} steps (axial {:.4g} kPa, "
                                 "lateral {:.4g} kPa); allow more steps or a larger servo inertial number",
                                 1e-3 * sigma, max_steps, 1e-3 * measure(solver, boundary, platens).axial_stress,
                                 1e-3 * boundary.wall_stress()));
+  return step;
+}
+
+
+std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
+                                    double dt, std::size_t ramp_steps, std::size_t max_steps) {
+  const PlatenPair platens = find_platens(solver.model());
+  const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
+  solver.stop_grains();
+  drive_platens(solver, boundary, platens, 0.0);
+  boundary.install_membrane();
+  boundary.set_membrane_fixed(true);
+  boundary.set_pressure(0);
+  std::size_t step = 0, settled = 0;
+  // The grains settle against the fixed membrane (the wall's load is gone: they relax a little).
+  for (; step < max_steps && settled < kSettledSteps; ++step) {
+    const StepReport r = solver.step(dt);
+    settled = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain) ? settled + 1 : 0;
+  }
+  boundary.set_membrane_fixed(false);
+  settled = 0;
+  const std::size_t released = step;
+  for (; step < max_steps && settled < kSettledSteps; ++step) {
+    const double ramp = ramp_steps ? std::min(1.0, static_cast<double>(step - released + 1) / static_cast<double>(ramp_steps)) : 1.0;
+    boundary.set_pressure(ramp * sigma);
+    const TriaxialMeasure m = measure(solver, boundary, platens);
+    drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
+    const StepReport r = solver.step(dt);
+    const bool stress = ramp == 1.0 && std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance;
+    const bool at_rest = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);
+    settled = stress && at_rest ? settled + 1 : 0;
+  }
+  drive_platens(solver, boundary, platens, 0.0);
+  if (settled < kSettledSteps)
+    throw DataError(fmt::format("consolidation in the membrane to {:.4g} kPa did not settle in {} steps (axial {:.4g} kPa); "
+                                "allow more steps or a larger servo inertial number",
+                                1e-3 * sigma, max_steps, 1e-3 * measure(solver, boundary, platens).axial_stress));
+  return step;
+}
+
+std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const ShearOptions& options, double dt,
+                  const std::function<void(const TriaxialMeasure&, const StepReport&)>& on_step) {
+  if (!(options.strain_rate > 0) || !(options.target_axial_strain > 0))
+    throw UsageError("shearing needs a positive strain rate and target axial strain");
+  const PlatenPair platens = find_platens(solver.model());
+  const double h0 = measure(solver, boundary, platens).height;
+  std::size_t step = 0;
+  for (;; ++step) {
+    const TriaxialMeasure m = measure(solver, boundary, platens);
+    if (std::log(h0 / m.height) >= options.target_axial_strain) break;
+    drive_platens(solver, boundary, platens, -options.strain_rate * h0);
+    const StepReport r = solver.step(dt);
+    if (on_step) on_step(measure(solver, boundary, platens), r);
+  }
+  drive_platens(solver, boundary, platens, 0.0);
   return step;
 }
 

@@ -95,8 +95,9 @@ struct BoundaryStep {
 class Boundary {
  public:
   virtual ~Boundary() = default;
+  /// `damping`: the run's mass-proportional alpha (1/s), for the boundary's own bodies too.
   virtual BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
-                             std::span<const Eigen::Vector3d> v, double dt, bool first,
+                             std::span<const Eigen::Vector3d> v, double dt, double damping, bool first,
                              std::span<Eigen::Vector3d> f) = 0;
   /// The boundary's own stable time step, s (infinity if it sets none).
   virtual double stable_time_step(const ContactModel& contact) const = 0;
@@ -121,6 +122,9 @@ class Solver {
   void set_platen_velocity(std::size_t platen, const Eigen::Vector3d& velocity);
   /// Sets the mass-proportional damping alpha, 1/s (loading stages change it between steps).
   void set_damping(double alpha) { options_.damping = alpha; }
+  /// Stops every grain: node velocities and rigid bodies' momenta to zero (the forming procedure
+  /// stops the grains before the membrane replaces the wall).
+  void stop_grains();
   /// Steps `boundary` with the grains from the next step on (not owned; nullptr removes it).
   /// UsageError without contact (a boundary acts through it).
   void set_boundary(Boundary* boundary);

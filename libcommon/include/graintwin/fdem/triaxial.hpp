@@ -6,6 +6,7 @@
 // eq. 27 and eq. 28, log strains). The model must have platens named "bottom" and "top" (normals
 // +z and -z) and a sample cylinder (shapes2mesh writes both).
 #include <Eigen/Core>
+#include <functional>
 #include <optional>
 
 #include "graintwin/fdem/membrane.hpp"
@@ -52,6 +53,9 @@ class TriaxialBoundary final : public Boundary {
   /// clamped (radially fixed, moving with their platen). The confining pressure starts at 0.
   void install_membrane();
   void set_pressure(double pressure) { pressure_ = pressure; }
+  /// Holds every membrane ball where it is (the forming procedure's fixed membrane) or releases
+  /// the balls between the platens again.
+  void set_membrane_fixed(bool fixed);
   double pressure() const { return pressure_; }
   const Membrane* membrane() const { return membrane_ ? &*membrane_ : nullptr; }
   const MembraneState* membrane_state() const { return membrane_ ? &membrane_state_ : nullptr; }
@@ -64,7 +68,7 @@ class TriaxialBoundary final : public Boundary {
   const BoundaryContactStats& last_contact() const { return last_contact_; }
 
   BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                     double dt, bool first, std::span<Eigen::Vector3d> f) override;
+                     double dt, double damping, bool first, std::span<Eigen::Vector3d> f) override;
   double stable_time_step(const ContactModel& contact) const override;
 
  private:
@@ -96,6 +100,25 @@ TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, 
 /// Servo velocity for a stress error: the fastest speed while the error is above 10 % of the
 /// target, proportional below (m/s, positive = the boundary should open).
 double servo_velocity(double stress, double target, double fastest);
+
+/// The forming procedure's second half (SPEC section 8): the grains are stopped, the membrane
+/// replaces the wall and is held fixed while the grains settle against it, then it is released
+/// between the platens under the confining pressure (ramped up over `ramp_steps`), while the
+/// platens servo to sigma_3, until the axial stress is within options.stress_tolerance of
+/// sigma_3 and the kinetic energy below 5 % of the elastic energy for 100 steps, or `max_steps`
+/// (DataError). Returns the steps taken.
+std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
+                                    double dt, std::size_t ramp_steps, std::size_t max_steps);
+
+/// Strain-controlled shearing (SPEC section 8): both platens move towards each other at
+/// strain_rate x H0 / 2 each, under the membrane pressure, until the axial strain ln(H0 / H)
+/// reaches target_axial_strain. `on_step` gets every step's measurement and report.
+struct ShearOptions {
+  double strain_rate = 0;          ///< 1/s, of the platen gap
+  double target_axial_strain = 0;  ///< log strain, compression positive
+};
+std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const ShearOptions& options, double dt,
+                  const std::function<void(const TriaxialMeasure&, const StepReport&)>& on_step);
 
 /// Isotropic consolidation inside the wall: the wall and both platens servo to sigma_3 until all
 /// three stresses are within options.stress_tolerance of it and the kinetic energy is below 5 % of
