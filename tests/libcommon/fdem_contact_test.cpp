@@ -192,6 +192,43 @@ TEST(SurfaceTrees, NearestTriangleMatchesBruteForceAfterRefit) {
   EXPECT_GT(found, 100);
 }
 
+TEST(SurfaceTrees, PlacedByARigidMotionTheTreeStillFindsTheNearestTriangle) {
+  // A rigid grain's tree is placed by its motion instead of refitted: its boxes must contain the
+  // moved triangles (or the search would miss them) and equal the refit at no rotation.
+  Model m;
+  add_grain(m, box_mesh({1 * kMm, 0.7 * kMm, 0.5 * kMm}, 0.1 * kMm), Eigen::Vector3d::Zero(), GrainKind::rigid, 0, 1);
+  SurfaceTrees placed(m), refitted(m);
+  const Eigen::Vector3d t(1e-3, -2e-4, 3e-4);
+  std::vector<Eigen::Vector3d> x;
+  for (const auto& p : m.nodes) x.push_back(p + t);
+  placed.place(0, Eigen::Matrix3d::Identity(), t);
+  refitted.refit(0, x);
+  EXPECT_TRUE(placed.bounds(0).lo.isApprox(refitted.bounds(0).lo, 1e-12));
+  EXPECT_TRUE(placed.bounds(0).hi.isApprox(refitted.bounds(0).hi, 1e-12));
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  x.clear();
+  for (const auto& p : m.nodes) x.push_back(R * p + t);
+  placed.place(0, R, t);
+  refitted.refit(0, x);
+  EXPECT_TRUE((placed.bounds(0).lo.array() <= refitted.bounds(0).lo.array() + 1e-15).all());
+  EXPECT_TRUE((placed.bounds(0).hi.array() >= refitted.bounds(0).hi.array() - 1e-15).all());
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> u(-0.8 * kMm, 0.8 * kMm);
+  int found = 0;
+  for (int i = 0; i < 500; ++i) {
+    const Eigen::Vector3d p = t + Eigen::Vector3d(u(rng), u(rng), u(rng));
+    SurfaceTrees::Nearest a, b;
+    const double radius = 0.2 * kMm;
+    const bool hit = placed.nearest(0, p, radius, x, a);
+    ASSERT_EQ(hit, refitted.nearest(0, p, radius, x, b)) << i;
+    if (hit) {
+      ++found;
+      EXPECT_EQ(a.distance2, b.distance2) << i;
+    }
+  }
+  EXPECT_GT(found, 100);
+}
+
 TEST(ContactModel, PressedFaceCarriesPenaltyTimesAreaTimesOverlap) {
   const double overlap = 1e-6;
   const Model m = pressed_cubes(overlap);

@@ -332,7 +332,7 @@ ContactModel& ContactModel::operator=(ContactModel&&) noexcept = default;
 
 ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                                           std::span<const PlatenState> platens, double dt,
-                                          std::span<Eigen::Vector3d> f) {
+                                          std::span<Eigen::Vector3d> f, std::span<const RigidPose> poses) {
   State& s = *state_;
   if (x.size() != s.node_count || v.size() != s.node_count || f.size() != s.node_count)
     throw DataError(fmt::format("fdem contact: positions, velocities and forces have {}, {} and {} entries for {} "
@@ -346,8 +346,15 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   }
   const auto grain_count = static_cast<std::uint32_t>(s.grains.size());
 
+  if (!poses.empty() && poses.size() != grain_count)
+    throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
+                                grain_count));
 #pragma omp parallel for schedule(dynamic, 16) if (grain_count >= kParallelGrains)
-  for (std::int64_t g = 0; g < grain_count; ++g) s.trees.refit(static_cast<std::size_t>(g), x);
+  for (std::int64_t g = 0; g < grain_count; ++g) {
+    const auto k = static_cast<std::size_t>(g);
+    if (!poses.empty() && poses[k].rigid) s.trees.place(k, poses[k].rotation, poses[k].translation);
+    else s.trees.refit(k, x);
+  }
 
   // Verlet criterion: the pairs stay complete until a node has moved skin / 2 since the build.
   if (!s.need_rebuild) {

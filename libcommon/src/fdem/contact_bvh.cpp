@@ -51,6 +51,18 @@ SurfaceTrees::SurfaceTrees(const Model& model) : triangles_(model.triangles) {
   }
   tree_begin_.push_back(static_cast<std::uint32_t>(nodes_.size()));
   for (std::size_t g = 0; g < model.grains.size(); ++g) refit(g, model.nodes);
+  reference_boxes_.reserve(nodes_.size());
+  for (const Node& node : nodes_) reference_boxes_.push_back(node.box);
+}
+
+void SurfaceTrees::place(std::size_t grain, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+  const Eigen::Matrix3d spread = rotation.cwiseAbs();
+  for (std::uint32_t i = tree_begin_[grain]; i < tree_begin_[grain + 1]; ++i) {
+    const Aabb& ref = reference_boxes_[i];
+    const Eigen::Vector3d centre = rotation * (0.5 * (ref.lo + ref.hi)) + translation;
+    const Eigen::Vector3d half = spread * (0.5 * (ref.hi - ref.lo));
+    nodes_[i].box = Aabb{centre - half, centre + half};
+  }
 }
 
 void SurfaceTrees::refit(std::size_t grain, std::span<const Eigen::Vector3d> x) {

@@ -162,7 +162,16 @@ StepReport Solver::step(double dt) {
   }
 
   StepReport report;
-  if (contact_) report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_);
+  if (contact_) {
+    // Rigid grains' surface trees follow their body motion: x = R (X - c0) + c.
+    std::vector<RigidPose> poses(grains);
+    for (std::size_t g = 0; g < grains; ++g)
+      if (m.grains[g].kind == GrainKind::rigid) {
+        const Eigen::Matrix3d R = state_.bodies[g].orientation.toRotationMatrix();
+        poses[g] = {true, R, state_.bodies[g].position - R * bodies_[g].centroid};
+      }
+    report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses);
+  }
   std::vector<ContactRecord> records;
   if (contact_ && !state_.platens.empty()) records = contact_->contacts();
   for (auto& f : platen_force_) f.setZero();

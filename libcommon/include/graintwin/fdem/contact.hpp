@@ -35,6 +35,13 @@ struct PlatenState {
   double friction = 0;                                  ///< Coulomb coefficient
 };
 
+/// Where a rigid grain is: its nodes sit at rotation X + translation of their reference positions X.
+struct RigidPose {
+  bool rigid = false;  ///< false: a deformable grain (its trees are refitted to its nodes)
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  ///< m
+};
+
 /// Resultant of one grain pair (or grain-platen pair) over its node contacts.
 struct ContactRecord {
   std::uint32_t a = 0, b = 0;  ///< grain indices, a < b; b = grains.size() + platen index for platens
@@ -92,10 +99,12 @@ class ContactModel {
 
   /// Adds penalty + dashpot normal forces and Coulomb friction (tangential spring history per
   /// node contact) to f (one entry per model node) for the current node positions x and
-  /// velocities v; platen contacts too. Deterministic for a given thread count.
+  /// velocities v; platen contacts too. Deterministic for a given thread count. `poses` (empty,
+  /// or one per grain) lets rigid grains place their surface trees by their motion instead of
+  /// refitting them to the nodes (the nodes must follow that motion).
   ContactStepStats add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                               std::span<const PlatenState> platens, double dt,
-                              std::span<Eigen::Vector3d> f);
+                              std::span<Eigen::Vector3d> f, std::span<const RigidPose> poses = {});
   /// Adds the cylinder wall's forces on the grains' surface nodes to f (call after add_forces of
   /// the same step). Deterministic for a given thread count.
   BoundaryContactStats add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
