@@ -48,10 +48,11 @@ int main(int argc, char** argv) {
       "primitives: boxes (structured mesh), spheres and ellipsoids (gmsh). Contact (penalty, dashpot, friction, "
       "platens) comes from the fdem contact module and is switched off with [run] contact = false; it is verified "
       "against a spring-dashpot bounce (restitution, contact time), a block on an incline, and on spheres meshed fine "
-      "at the contact against Hertz and Chung & Ooi (2011) tests 1, 2, 6, 7 and LIGGGHTS (docs/fdemrun.md). Scene "
-      "files cannot ask for such graded meshes yet, and the SPEC's default penalty (100 E per metre) is far too soft "
-      "for mm grains: about 10 E / h (h: element size at the contact) reproduces Hertz. Not yet: the membrane, servo "
-      "control. "
+      "at the contact against Hertz and Chung & Ooi (2011) tests 1, 2, 6, 7 and LIGGGHTS (docs/fdemrun.md); a scene "
+      "grades a sphere's or ellipsoid's mesh towards points with refine_at, fine_element_size and size_growth. The "
+      "SPEC's default penalty (100 E per metre) is far too soft for mm grains: about 10 E / h (h: element size at the "
+      "contact) reproduces Hertz. Not yet: the triaxial test's wall and membrane in scene files (they exist in the "
+      "library, docs/fdem_triaxial.md). "
       "The scene format is in docs/fdemrun.md.");
   fs::path scene_path, output, checkpoint, restart;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");

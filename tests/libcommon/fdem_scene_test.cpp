@@ -182,4 +182,42 @@ TEST(FdemScene, BadModelAndShapeTablesFailWithTheFix) {
   EXPECT_NE(error_of(scene("[[grains]]\nshape = \"ellipsoid\"\n")).find("semi_axes is missing"), std::string::npos);
   EXPECT_NE(error_of(scene("[[grains]]\nshape = \"cone\"\n")).find("use box, sphere or ellipsoid"), std::string::npos);
   EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nradius = -1\n")).find("radius must be positive"), std::string::npos);
+  // Graded meshes: only on curved grains, with a fine size below the coarse one.
+  EXPECT_NE(error_of(scene("[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\nrefine_at = [[0, 0, 5e-4]]\nfine_element_size = 1e-4\n"))
+                .find("refine_at applies to spheres"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nradius = 1e-3\nrefine_at = [[0, 0, 1e-3]]\n"))
+                .find("fine_element_size is missing"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nradius = 1e-3\nelement_size = 2e-4\nrefine_at = [[0, 0, 1e-3]]\n"
+                           "fine_element_size = 3e-4\n"))
+                .find("coarse size is element_size"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nradius = 1e-3\nsize_growth = 0.2\n")).find("need refine_at"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene("[[grains]]\nshape = \"sphere\"\nradius = 1e-3\nrefine_at = [0, 0, 1]\nfine_element_size = 1e-4\n"))
+                .find("array of points"),
+            std::string::npos);
+}
+
+TEST(FdemScene, AGradedSphereIsFineOnlyNearItsRefinePoint) {
+  test::TempDir dir;
+  const auto path = write_text(dir, "graded.toml",
+                               "[run]\nduration = 1e-6\n[[grains]]\nshape = \"sphere\"\nradius = 1e-3\nelement_size = 4e-4\n"
+                               "refine_at = [[0, 0, -1e-3]]\nfine_element_size = 4e-5\nsize_growth = 0.3\n");
+  const Scene scene = read_scene(path);
+  ASSERT_TRUE(scene.grains[0].grading.has_value());
+  const Model m = build_model(scene, append_ellipsoid_grain);
+  // Mean edge of the surface triangles near the pole against those at the equator.
+  double near = 0, far = 0;
+  int n_near = 0, n_far = 0;
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d c = (m.nodes[t[0]] + m.nodes[t[1]] + m.nodes[t[2]]) / 3;
+    const double edge = (m.nodes[t[1]] - m.nodes[t[0]]).norm();
+    if ((c - Eigen::Vector3d(0, 0, -1e-3)).norm() < 1e-4) near += edge, ++n_near;
+    if (std::abs(c.z()) < 1e-4) far += edge, ++n_far;
+  }
+  ASSERT_GT(n_near, 0);
+  ASSERT_GT(n_far, 0);
+  EXPECT_LT(near / n_near, 0.3 * far / n_far);
 }

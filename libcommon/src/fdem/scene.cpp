@@ -73,6 +73,27 @@ class Table {
     }
     return v;
   }
+  /// An array of 3-vectors, e.g. [[0, 0, 1e-3], [0, 0, -1e-3]]; empty when the key is absent.
+  std::vector<Eigen::Vector3d> vectors(const char* key) const {
+    std::vector<Eigen::Vector3d> out;
+    const toml::node* n = t_.get(key);
+    if (!n) return out;
+    const toml::array* a = n->as_array();
+    const std::string usage = std::string(key) + " must be an array of points, e.g. [[0, 0, 1e-3]]";
+    if (!a || a->empty()) fail(usage);
+    for (const toml::node& item : *a) {
+      const toml::array* p = item.as_array();
+      if (!p || p->size() != 3) fail(usage);
+      Eigen::Vector3d v;
+      for (int k = 0; k < 3; ++k) {
+        const auto x = (*p)[static_cast<std::size_t>(k)].value<double>();
+        if (!x || !std::isfinite(*x)) fail(usage);
+        v[k] = *x;
+      }
+      out.push_back(v);
+    }
+    return out;
+  }
   const toml::table& raw() const { return t_; }
 
  private:
@@ -209,7 +230,7 @@ Scene read_scene(const std::filesystem::path& path) {
   for (const toml::table* g : tables(root, "grains", file)) {
     const Table t(*g, file + ": [[grains]] " + std::to_string(s.grains.size() + 1),
                   {"shape", "size", "radius", "semi_axes", "rotation", "position", "element_size", "kind", "material",
-                   "label", "velocity", "angular_velocity"});
+                   "label", "velocity", "angular_velocity", "refine_at", "fine_element_size", "size_growth"});
     GrainSpec spec;
     spec.shape = t.text("shape", "box");
     // Each shape takes exactly its own size keys, so a box given a radius is an error, not ignored.
@@ -238,6 +259,23 @@ Scene read_scene(const std::filesystem::path& path) {
     spec.element_size = t.positive("element_size", spec.shape == "box" ? spec.size.minCoeff() : spec.size.minCoeff() / 2);
     if (spec.size.maxCoeff() / spec.element_size > 200)
       t.fail("element_size is below 1/200 of the grain; give a larger element_size");
+    if (t.has("refine_at")) {
+      if (spec.shape == "box") t.fail("refine_at applies to spheres and ellipsoids; a box is meshed on a regular grid");
+      SizeGrading grading;
+      grading.points = t.vectors("refine_at");
+      if (!t.has("fine_element_size")) t.fail("fine_element_size is missing for refine_at; give the size at the points, e.g. 2e-5");
+      grading.fine = t.positive("fine_element_size", 0);
+      grading.growth = t.positive("size_growth", grading.growth);
+      grading.coarse = spec.element_size;
+      try {
+        check_size_grading(grading);
+      } catch (const UsageError& e) {
+        t.fail(e.message() + " (the coarse size is element_size)");
+      }
+      spec.grading = grading;
+    } else if (t.has("fine_element_size") || t.has("size_growth")) {
+      t.fail("fine_element_size and size_growth need refine_at, the points where the mesh is finest");
+    }
     spec.kind = parse_kind(t);
     const std::string material = t.text("material", material_names.front());
     const auto it = std::find(material_names.begin(), material_names.end(), material);

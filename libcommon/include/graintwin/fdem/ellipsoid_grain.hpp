@@ -16,15 +16,8 @@ inline mesh::TetOptions ellipsoid_mesh_options(const GrainSpec& spec) {
   return options;
 }
 
-/// Appends the ellipsoid of `spec` (semi-axes `size`, centre, orientation) meshed at its element
-/// size: 10-node elements curved onto the surface for tet10, 4-node ones for tet4 and rigid.
-inline void append_ellipsoid_grain(Model& model, const GrainSpec& spec) {
-  mesh::append_grain(model, mesh::mesh_ellipsoid(spec.position, spec.size, spec.orientation, ellipsoid_mesh_options(spec)),
-                     spec.label, spec.kind, spec.material);
-}
-
-/// The same with the element size graded by `grading` (world coordinates; its coarse size replaces
-/// the spec's element size): a mesh fine only where the grain will touch. UsageError for a bad
+/// Appends the ellipsoid of `spec` with its element size graded by `grading` (world coordinates;
+/// its coarse size replaces the spec's element size): a mesh fine only where the grain will touch. UsageError for a bad
 /// grading, before gmsh runs.
 inline void append_graded_ellipsoid_grain(Model& model, const GrainSpec& spec, const SizeGrading& grading) {
   check_size_grading(grading);
@@ -33,6 +26,15 @@ inline void append_graded_ellipsoid_grain(Model& model, const GrainSpec& spec, c
   options.size_at = [&grading](const Eigen::Vector3d& x) { return graded_element_size(grading, x); };
   mesh::append_grain(model, mesh::mesh_ellipsoid(spec.position, spec.size, spec.orientation, options), spec.label,
                      spec.kind, spec.material);
+}
+
+/// Appends the ellipsoid of `spec` (semi-axes `size`, centre, orientation) meshed at its element
+/// size, or graded by spec.grading when it has one: 10-node elements curved onto the surface for
+/// tet10, 4-node ones for tet4 and rigid.
+inline void append_ellipsoid_grain(Model& model, const GrainSpec& spec) {
+  if (spec.grading) return append_graded_ellipsoid_grain(model, spec, *spec.grading);
+  mesh::append_grain(model, mesh::mesh_ellipsoid(spec.position, spec.size, spec.orientation, ellipsoid_mesh_options(spec)),
+                     spec.label, spec.kind, spec.material);
 }
 
 }  // namespace graintwin::fdem

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/size_grading.hpp"
 
 namespace graintwin::fdem {
 
@@ -30,6 +31,9 @@ struct GrainSpec {
   std::uint32_t label = 0;                                   ///< 0: its 1-based position in the scene
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();        ///< m/s
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< rad/s about its centroid
+  /// Spheres and ellipsoids: element size graded from `fine` at the points (world, m) up to
+  /// element_size (the coarse size), e.g. to resolve a Hertz contact at the pole that will touch.
+  std::optional<SizeGrading> grading;
 };
 
 struct PlatenSpec {
