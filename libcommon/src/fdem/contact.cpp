@@ -98,6 +98,10 @@ struct ContactModel::State {
   SurfaceTrees trees;
 
   std::vector<BoxPair> grain_pairs;          ///< broad phase result
+  /// Per grain: a sphere around its surface this step (centre, radius), a tighter prefilter than
+  /// the box for nodes near a box corner (most of a round grain's box is empty).
+  std::vector<Eigen::Vector3d> sphere_centre;
+  std::vector<double> sphere_radius;
   std::vector<Eigen::Vector3d> built_at;     ///< surface node positions at the last build
   bool need_rebuild = true;
   std::size_t rebuilds = 0;
@@ -168,6 +172,8 @@ struct ContactModel::State {
   void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<const Eigen::Vector3d> x,
                   std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
     const Aabb& box = trees.bounds(to);
+    const Eigen::Vector3d& centre = sphere_centre[to];
+    const double reach2 = sphere_radius[to] * sphere_radius[to];
     const Material& mf = material_of(from);
     const Material& mt = material_of(to);
     const double p_n = std::min(mf.normal_penalty, mt.normal_penalty);
@@ -178,7 +184,7 @@ struct ContactModel::State {
     checks.nodes += surface(from).size();
     for (std::uint32_t node : surface(from)) {
       const Eigen::Vector3d& p = x[node];
-      if (!box.contains(p)) continue;
+      if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
       const bool close = trees.nearest(to, p, max_penetration, x, near);
       checks.triangles += near.tested;
       if (!close) continue;
@@ -346,6 +352,8 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   }
   const auto grain_count = static_cast<std::uint32_t>(s.grains.size());
 
+  s.sphere_centre.resize(grain_count);
+  s.sphere_radius.resize(grain_count);
   if (!poses.empty() && poses.size() != grain_count)
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
@@ -354,6 +362,13 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     const auto k = static_cast<std::size_t>(g);
     if (!poses.empty() && poses[k].rigid) s.trees.place(k, poses[k].rotation, poses[k].translation);
     else s.trees.refit(k, x);
+    // The bounding sphere: centred in the box, reaching the farthest surface node.
+    const Aabb& box = s.trees.bounds(k);
+    const Eigen::Vector3d c = 0.5 * (box.lo + box.hi);
+    double reach2 = 0;
+    for (std::uint32_t node : s.surface(static_cast<std::uint32_t>(k))) reach2 = std::max(reach2, (x[node] - c).squaredNorm());
+    s.sphere_centre[k] = c;
+    s.sphere_radius[k] = std::sqrt(reach2);
   }
 
   // Verlet criterion: the pairs stay complete until a node has moved skin / 2 since the build.
