@@ -380,9 +380,9 @@ TEST(ReportCharts, DistributionsAndFitCurves) {
 TEST(ReportCharts, LogAxesDropWhatTheyCannotShow) {
   report::Chart c;
   c.x_log = true;
-  EXPECT_TRUE(c.add({"a", "line", {-1.0, 0.0, 2.0, std::nan("")}, {1.0, 2.0, 3.0, 4.0}}));
+  EXPECT_TRUE(c.add({"a", "line", {-1.0, 0.0, 2.0, std::nan("")}, {1.0, 2.0, 3.0, 4.0}, ""}));
   EXPECT_EQ(c.series[0].x, (std::vector<double>{2.0}));
-  EXPECT_FALSE(c.add({"b", "line", {0.0}, {1.0}}));
+  EXPECT_FALSE(c.add({"b", "line", {0.0}, {1.0}, ""}));
   EXPECT_EQ(c.series.size(), 1u);
 }
 

@@ -13,6 +13,8 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/primitives.hpp"
+#include "graintwin/io/h5file.hpp"
+#include "support/run_tool.hpp"
 
 using namespace graintwin;
 using namespace graintwin::fdem;
@@ -104,11 +106,20 @@ TEST(Triaxial, ConsolidatesInTheWallThenInTheMembraneAndShears) {
   EXPECT_LT(largest_gap, 1e-9);
 }
 
-TEST(Triaxial, RefusesAMembranePoissonRatioAboveOneThirdAndAModelWithoutPlatens) {
+TEST(Triaxial, RefusesAMembranePoissonRatioAboveOneThirdACheckpointAndAModelWithoutPlatens) {
   Model model = cube_sample();
   TriaxialOptions o;
   o.membrane.poisson = 0.49;
   EXPECT_THROW(TriaxialBoundary(model, o, kEdge), UsageError);
+  // A checkpoint would lose the boundary's state, so it is refused rather than written.
+  {
+    Solver solver(model, SolverOptions{});
+    TriaxialBoundary boundary(model, TriaxialOptions{}, kEdge);
+    solver.set_boundary(&boundary);
+    test::TempDir dir;
+    io::H5File f = io::H5File::create(dir / "checkpoint.h5");
+    EXPECT_THROW(solver.save(f, "/state"), UsageError);
+  }
   model.platens.clear();
   EXPECT_THROW(find_platens(model), UsageError);
   model.sample.reset();

@@ -88,6 +88,7 @@ void TriaxialBoundary::install_membrane() {
   }
   ball_force_.assign(n, Eigen::Vector3d::Zero());
   ball_moment_.assign(n, Eigen::Vector3d::Zero());
+  pressure_force_.assign(n, Eigen::Vector3d::Zero());
   wall_force_ = 0;
   membrane_started_ = false;
 }
@@ -135,17 +136,17 @@ BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eige
   out.elastic = c.elastic_energy + add_bond_forces(m, s, dt, ball_force_, ball_moment_);
   out.dissipated = c.dissipated;
   last_contact_ = c;
-  std::vector<Eigen::Vector3d> pressure_force(m.balls(), Eigen::Vector3d::Zero());
-  add_pressure_forces(m, s.x, pressure_, pressure_force);
-  for (std::size_t b = 0; b < m.balls(); ++b) ball_force_[b] += pressure_force[b];
-  const std::vector<Eigen::Vector3d> before = s.x;
+  std::fill(pressure_force_.begin(), pressure_force_.end(), Eigen::Vector3d::Zero());
+  add_pressure_forces(m, s.x, pressure_, pressure_force_);
+  for (std::size_t b = 0; b < m.balls(); ++b) ball_force_[b] += pressure_force_[b];
+  before_ = s.x;
   // Clamp groups: 0 with the bottom platen, 1 with the top one, 2 held still (a fixed membrane).
   const Eigen::Vector3d clamp[3] = {Eigen::Vector3d(0, 0, v_bottom_), Eigen::Vector3d(0, 0, v_top_), Eigen::Vector3d::Zero()};
   out.kinetic = integrate_balls(m, s, ball_force_, ball_moment_, dt, damping, motion_, clamp_group_, clamp,
                                 first || !membrane_started_);
   membrane_started_ = true;
   for (std::size_t b = 0; b < m.balls(); ++b)
-    if (motion_[b] == BallMotion::free) out.work += pressure_force[b].dot(s.x[b] - before[b]);
+    if (motion_[b] == BallMotion::free) out.work += pressure_force_[b].dot(s.x[b] - before_[b]);
   return out;
 }
 

@@ -155,7 +155,8 @@ class Solver {
   Eigen::Vector3d platen_force(std::size_t platen) const;
   bool has_contact() const { return contact_ != nullptr; }
 
-  /// Checkpoint: the state and the contact history under `group`.
+  /// Checkpoint: the state and the contact history under `group`. UsageError while a Boundary is
+  /// set: its state (membrane balls, wall, ball friction history) is not saved yet.
   void save(io::H5File& file, const std::string& group) const;
   /// Restores what save() wrote for the same model; DataError when sizes disagree.
   void load(const io::H5File& file, const std::string& group);
@@ -177,6 +178,7 @@ class Solver {
   Boundary* boundary_ = nullptr;
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
   std::vector<Eigen::Vector3d> force_;         ///< per node, scratch
+  std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   SolverState state_;
 };

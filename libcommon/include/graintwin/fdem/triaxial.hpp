@@ -83,7 +83,8 @@ class TriaxialBoundary final : public Boundary {
   MembraneState membrane_state_;
   std::vector<BallMotion> motion_;
   std::vector<std::uint8_t> clamp_group_;  ///< 0 bottom, 1 top
-  std::vector<Eigen::Vector3d> ball_force_, ball_moment_;
+  std::vector<Eigen::Vector3d> ball_force_, ball_moment_;  ///< per ball, scratch of apply()
+  std::vector<Eigen::Vector3d> pressure_force_, before_;   ///< per ball, scratch: the pressure's work
   bool membrane_started_ = false;
 };
 
