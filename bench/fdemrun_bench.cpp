@@ -8,13 +8,15 @@
 // tet10, rigid) on 1 and 2 threads: wall and process CPU time of 40 steps after 10 warm-up steps;
 // element-steps/s/core (deformable) and grain-steps/s/core (rigid) against the targets
 // 1e7 (4-node) and 1e5 (rigid).
-// `fdemrun_bench KIND` runs one kind without publishing (for profiling with perf).
+// `fdemrun_bench KIND [STEPS [THREADS]]` runs one kind without publishing, for profiling with perf
+// (more steps make the timed loop outweigh building the packing).
 #include <fmt/format.h>
 #include <omp.h>
 #include <sys/resource.h>
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/ellipsoid_grain.hpp"
@@ -85,7 +87,8 @@ Model packing(GrainKind kind) {
 
 struct Measured {
   double wall = 0, cpu = 0;
-  std::size_t contacts = 0;
+  ContactStepStats contact;  ///< of the last step
+  std::size_t rebuilds = 0;  ///< broad-phase builds during the timed steps
 };
 
 Measured run(const Model& m, int threads, int steps) {
@@ -98,7 +101,10 @@ Measured run(const Model& m, int threads, int steps) {
   Measured r;
   const double cpu0 = process_cpu_seconds();
   const auto t0 = std::chrono::steady_clock::now();
-  for (int n = 0; n < steps; ++n) r.contacts = s.step(dt).contact.node_contacts;
+  for (int n = 0; n < steps; ++n) {
+    r.contact = s.step(dt).contact;
+    r.rebuilds += r.contact.rebuilt;
+  }
   r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.cpu = process_cpu_seconds() - cpu0;
   return r;
@@ -108,14 +114,15 @@ Measured run(const Model& m, int threads, int steps) {
 
 int main(int argc, char** argv) {
   const std::string only = argc > 1 ? argv[1] : "";
+  const int steps = argc > 2 ? std::max(1, std::atoi(argv[2])) : 40;
+  const std::vector<int> thread_counts = argc > 3 ? std::vector<int>{std::max(1, std::atoi(argv[3]))} : std::vector<int>{1, 2};
   bench::Report report(
       "fdemrun_bench", "fdemrun: solver throughput, 500 grains in contact",
       fmt::format("{} gmsh spheres of radius 0.40-0.60 mm, element size 0.22 R (tet4, rigid), 0.44 R (tet10), packed at "
                   "random to a solid fraction of 0.55 by synth::pack_grains and moved 0.3 % towards the centre so touching "
-                  "pairs overlap, over a floor platen, gravity, contact on (penalty SPEC 0 defaults). 40 steps timed "
+                  "pairs overlap, over a floor platen, gravity, contact on (penalty SPEC 0 defaults). {} steps timed "
                   "after 10. Per core = per thread used. Machine: {}. The CPU column is process CPU time.",
-                  kGrains, bench::machine_summary()));
-  const int steps = 40;
+                  kGrains, steps, bench::machine_summary()));
   for (GrainKind kind : {GrainKind::tet4, GrainKind::tet10, GrainKind::rigid}) {
     const char* name = kind == GrainKind::tet4 ? "tet4" : kind == GrainKind::tet10 ? "tet10" : "rigid";
     if (!only.empty() && only != name) continue;
@@ -124,16 +131,18 @@ int main(int argc, char** argv) {
     std::vector<char> on_surface(m.nodes.size(), 0);
     for (const auto& t : m.triangles)
       for (std::uint32_t v : t) surface += !on_surface[v], on_surface[v] = 1;
-    for (int threads : {1, 2}) {
+    for (int threads : thread_counts) {
       const Measured r = run(m, threads, steps);
       const double work = kind == GrainKind::rigid ? double(m.grains.size()) : double(m.element_count());
       const double per_core_wall = work * steps / r.wall / threads, per_cpu = work * steps / r.cpu;
       const char* unit = kind == GrainKind::rigid ? "grain-steps" : "element-steps";
       const double target = kind == GrainKind::rigid ? 1e5 : 1e7;
       const std::string note = fmt::format(
-          "{} elements, {} nodes ({:.0f} surface nodes/grain), {} node contacts; {:.3g} {}/s/core by wall, {:.3g} by CPU "
-          "time ({:.2f} s CPU); target {:.0e} ({:.2g} x of it by CPU)",
-          m.element_count(), m.nodes.size(), double(surface) / m.grains.size(), r.contacts, per_core_wall, unit, per_cpu,
+          "{} elements, {} nodes ({:.0f} surface nodes/grain), {} node contacts, {} candidate pairs, {} node checks and "
+          "{} node-triangle checks a step, {} broad-phase builds; {:.3g} {}/s/core by wall, {:.3g} by CPU time ({:.2f} s "
+          "CPU); target {:.0e} ({:.2g} x of it by CPU)",
+          m.element_count(), m.nodes.size(), double(surface) / m.grains.size(), r.contact.node_contacts,
+          r.contact.pairs, r.contact.node_checks, r.contact.triangle_checks, r.rebuilds, per_core_wall, unit, per_cpu,
           r.cpu, target, per_cpu / target);
       std::printf("%s, %d thread(s): %s\n", name, threads, note.c_str());
       std::fflush(stdout);

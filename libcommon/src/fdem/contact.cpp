@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <tuple>
@@ -29,6 +30,9 @@ constexpr double kSkinFraction = 0.05;
 /// Deepest detectable penetration, as a fraction of the smallest grain's smallest box side: the
 /// closest-triangle search looks no farther (penalty overlaps are a few per mille of a grain).
 constexpr double kMaxPenetrationFraction = 0.1;
+/// Relative allowance on the reach of the near-node lists for round-off in the distances, so a
+/// node exactly at the bound is kept rather than lost.
+constexpr double kReachRoundOff = 1e-6;
 
 // Below these sizes a parallel region costs more than the loop (and much more on a loaded machine).
 constexpr std::size_t kParallelGrains = 64, kParallelNodes = 16384, kParallelCandidates = 4;
@@ -44,9 +48,10 @@ struct NodeHit {
   NodeContactForce law;
 };
 
-/// One candidate interaction of a step: grains a < b, or grain a and platen b - grains.
+/// One candidate interaction of a step: grains a < b (entry `pair` of the broad phase's pairs), or
+/// grain a and platen b - grains.
 struct Candidate {
-  std::uint32_t a = 0, b = 0;
+  std::uint32_t a = 0, b = 0, pair = 0;
 };
 /// Work done on one candidate (for the benchmark's throughput figures).
 struct Checks {
@@ -98,6 +103,12 @@ struct ContactModel::State {
   SurfaceTrees trees;
 
   std::vector<BoxPair> grain_pairs;          ///< broad phase result
+  /// Per grain pair (a, b) of the broad phase: the surface nodes of a ([0]) and of b ([1]) that were
+  /// within max_penetration + skin of the other grain's surface at the build. A node moves at most
+  /// skin / 2 until the next build and so does every point of the other surface (linear
+  /// triangles), so the distance changes by at most skin: an unlisted node stays farther than
+  /// max_penetration, where the closest-triangle search would not find it either.
+  std::vector<std::array<std::vector<std::uint32_t>, 2>> near_nodes;
   /// Per grain: a sphere around its surface this step (centre, radius), a tighter prefilter than
   /// the box for nodes near a box corner (most of a round grain's box is empty).
   std::vector<Eigen::Vector3d> sphere_centre;
@@ -168,6 +179,40 @@ struct ContactModel::State {
     return it != history.end() && it->a == a && it->b == b && it->node == node ? &it->spring : nullptr;
   }
 
+  /// The surface nodes of grain `from` within `reach` of grain `to`'s surface (into `out`, in
+  /// surface order).
+  void collect_near_nodes(std::uint32_t from, std::uint32_t to, double reach, std::span<const Eigen::Vector3d> x,
+                          std::vector<std::uint32_t>& out) const {
+    out.clear();
+    const Aabb box = trees.bounds(to).inflated(reach);
+    const Eigen::Vector3d& centre = sphere_centre[to];
+    const double sphere_reach2 = (sphere_radius[to] + reach) * (sphere_radius[to] + reach);
+    SurfaceTrees::Nearest near;
+    for (std::uint32_t node : surface(from)) {
+      const Eigen::Vector3d& p = x[node];
+      if (box.contains(p) && (p - centre).squaredNorm() <= sphere_reach2 && trees.nearest(to, p, reach, x, near))
+        out.push_back(node);
+    }
+  }
+
+  /// Fills near_nodes for grain_pairs at positions x (the build positions).
+  void build_near_nodes(std::span<const Eigen::Vector3d> x) {
+    const double reach = (max_penetration + skin) * (1 + kReachRoundOff);
+    near_nodes.resize(grain_pairs.size());
+#pragma omp parallel for schedule(dynamic, 4) if (grain_pairs.size() >= kParallelCandidates)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(grain_pairs.size()); ++k) {
+      const auto [a, b] = grain_pairs[k];
+      collect_near_nodes(a, b, reach, x, near_nodes[k][0]);
+      collect_near_nodes(b, a, reach, x, near_nodes[k][1]);
+    }
+  }
+
+  /// The nodes of grain `from` that grain_hits must test against the other grain of candidate c.
+  std::span<const std::uint32_t> nodes_to_test(std::uint32_t from, const Candidate& c) const {
+    if (!options.near_node_lists) return surface(from);
+    return near_nodes[c.pair][from == c.a ? 0 : 1];
+  }
+
   /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces.
   void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<const Eigen::Vector3d> x,
                   std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
@@ -181,8 +226,9 @@ struct ContactModel::State {
     const double mu = std::min(mf.friction, mt.friction);
     const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
     SurfaceTrees::Nearest near;
-    checks.nodes += surface(from).size();
-    for (std::uint32_t node : surface(from)) {
+    const std::span<const std::uint32_t> nodes = nodes_to_test(from, key);
+    checks.nodes += nodes.size();
+    for (std::uint32_t node : nodes) {
       const Eigen::Vector3d& p = x[node];
       if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
       const bool close = trees.nearest(to, p, max_penetration, x, near);
@@ -384,6 +430,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     std::vector<Aabb> boxes(grain_count);
     for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
     s.grain_pairs = overlapping_box_pairs(boxes);
+    if (s.options.near_node_lists) s.build_near_nodes(x);
     s.built_at.resize(s.surface_nodes.size());
     for (std::size_t k = 0; k < s.surface_nodes.size(); ++k) s.built_at[k] = x[s.surface_nodes[k]];
     s.need_rebuild = false;
@@ -398,7 +445,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   for (std::size_t k = 0, a = 0; a < grain_count; ++a) {
     for (; k < s.grain_pairs.size() && s.grain_pairs[k].first == a; ++k)
       if (s.trees.bounds(a).overlaps(s.trees.bounds(s.grain_pairs[k].second)))
-        s.candidates.push_back({s.grain_pairs[k].first, s.grain_pairs[k].second});
+        s.candidates.push_back({s.grain_pairs[k].first, s.grain_pairs[k].second, static_cast<std::uint32_t>(k)});
     const Aabb& box = s.trees.bounds(a);
     if (!(box.lo.array() <= box.hi.array()).all()) continue;
     for (std::uint32_t p = 0; p < platens.size(); ++p) {
