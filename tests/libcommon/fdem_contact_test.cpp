@@ -229,6 +229,47 @@ TEST(SurfaceTrees, PlacedByARigidMotionTheTreeStillFindsTheNearestTriangle) {
   EXPECT_GT(found, 100);
 }
 
+TEST(SurfaceTrees, AHintNeverChangesTheNearestTriangle) {
+  // Points just off the box's corners and edge midpoints are as close to several triangles (ties
+  // go to the first met in the tree's order), random points to one; any hint, near or far, must
+  // give the same triangle as no hint.
+  Model m;
+  add_grain(m, box_mesh({1 * kMm, 0.7 * kMm, 0.5 * kMm}, 0.1 * kMm), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
+  SurfaceTrees trees(m);
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d n = (m.nodes[t[1]] - m.nodes[t[0]]).cross(m.nodes[t[2]] - m.nodes[t[0]]).normalized();
+    points.push_back(m.nodes[t[0]] + 0.01 * kMm * n);                              // above a corner
+    points.push_back(0.5 * (m.nodes[t[0]] + m.nodes[t[1]]) - 0.01 * kMm * n);      // below an edge
+  }
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-0.6 * kMm, 0.6 * kMm);
+  for (int i = 0; i < 200; ++i) points.push_back({u(rng), u(rng), u(rng)});
+  std::uniform_int_distribution<std::uint32_t> any(0, static_cast<std::uint32_t>(m.triangles.size() - 1));
+  const double radius = 0.2 * kMm;
+  int ties = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    SurfaceTrees::Nearest plain, hinted;
+    const bool hit = trees.nearest(0, points[i], radius, m.nodes, plain);
+    if (!hit) continue;
+    int tied = 0;
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+      const auto& tri = m.triangles[t];
+      const double d2 = (closest_point_on_triangle(points[i], m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]]).point -
+                         points[i]).squaredNorm();
+      if (d2 != plain.distance2) continue;
+      ++tied;
+      ASSERT_TRUE(trees.nearest(0, points[i], radius, m.nodes, hinted, t)) << i;  // hint: a tied triangle
+      EXPECT_EQ(hinted.triangle, plain.triangle) << i;
+    }
+    ties += tied > 1;
+    ASSERT_TRUE(trees.nearest(0, points[i], radius, m.nodes, hinted, any(rng))) << i;  // hint: any triangle
+    EXPECT_EQ(hinted.triangle, plain.triangle) << i;
+    EXPECT_EQ(hinted.distance2, plain.distance2) << i;
+  }
+  EXPECT_GT(ties, 100);
+}
+
 TEST(ContactModel, PressedFaceCarriesPenaltyTimesAreaTimesOverlap) {
   const double overlap = 1e-6;
   const Model m = pressed_cubes(overlap);
@@ -424,6 +465,72 @@ TEST(ContactModel, SameForcesForAnyThreadCount) {
   double sum = 0;
   for (const auto& fn : forces[0]) sum += fn.norm();
   EXPECT_GT(sum, 0);
+}
+
+/// 8 cubes of 0.5 mm in a 2 x 2 x 2 block, 1.5 skins apart to 1.5 skins overlapping, turning,
+/// closing in on the block's centre by 0.04 skin a step for 20 steps and then moving out again:
+/// nodes come into contact from beyond the near-node lists' reach within one list's life, and
+/// nodes deeper than that reach (past the deepest detectable penetration) come back up into it.
+/// At step 30 one cube jumps by 1.5 skins. Forces with the near-node lists must equal, bit for
+/// bit, those found by testing every surface node.
+void expect_near_node_lists_match_every_node(bool rigid_poses) {
+  Model m;
+  m.materials[0].damping_ratio = 0.05;
+  const double side = 0.5 * kMm;
+  const double skin = 0.05 * std::sqrt(3.0) * side;  // the automatic skin of these cubes
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> gap(-1.5 * skin, 1.5 * skin), unit(-1, 1);
+  std::vector<Eigen::Vector3d> centre, axis;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d cell((i & 1) - 0.5, ((i >> 1) & 1) - 0.5, (i >> 2) - 0.5);
+    centre.push_back(cell * side + cell.cwiseProduct(Eigen::Vector3d(gap(rng), gap(rng), gap(rng))));
+    axis.push_back(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized());
+    add_grain(m, box_mesh({side, side, side}, 0.125 * kMm), Eigen::Vector3d::Zero(),
+              rigid_poses ? GrainKind::rigid : GrainKind::tet4, 0, i + 1);
+  }
+  PlatenState floor;
+  floor.point = Eigen::Vector3d(0, 0, -side);
+  floor.friction = 0.3;
+  ContactOptions listed, every;
+  every.near_node_lists = false;
+  ContactModel with_lists(m, unit_masses(m), listed), without(m, unit_masses(m), every);
+  ASSERT_DOUBLE_EQ(with_lists.skin(), skin);
+  const double dt = 1e-8;
+  const int steps = 40, turn = 20, jump = 30;
+  std::vector<Eigen::Vector3d> x(m.nodes.size()), v = zeros(m.nodes.size());
+  std::vector<RigidPose> poses(m.grains.size());
+  std::size_t contacts = 0, checks_with = 0, checks_without = 0;
+  for (int step = 0; step < steps; ++step) {
+    for (std::uint32_t g = 0; g < m.grains.size(); ++g) {
+      const double closed =
+          0.04 * skin * (step < turn ? step : 2 * turn - step) + (step >= jump && g == 5 ? 1.5 * skin : 0.0);
+      const Eigen::Vector3d at = centre[g] - closed * centre[g].normalized();
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(0.002 * step, axis[g]).toRotationMatrix();
+      poses[g] = {rigid_poses, R, at};
+      for (std::uint32_t n = m.grains[g].node_begin; n < m.grains[g].node_end; ++n) {
+        x[n] = R * m.nodes[n] + at;
+        v[n] = (step < turn ? -0.04 : 0.04) * skin / dt * centre[g].normalized() + 0.002 / dt * axis[g].cross(x[n] - at);
+      }
+    }
+    auto fa = zeros(x.size()), fb = zeros(x.size());
+    const ContactStepStats a = with_lists.add_forces(x, v, {&floor, 1}, dt, fa, poses);
+    const ContactStepStats b = without.add_forces(x, v, {&floor, 1}, dt, fb, poses);
+    for (std::size_t n = 0; n < x.size(); ++n) ASSERT_EQ(fa[n], fb[n]) << "step " << step << " node " << n;
+    ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
+    ASSERT_EQ(a.elastic_energy, b.elastic_energy) << step;
+    contacts += a.node_contacts;
+    checks_with += a.node_checks;
+    checks_without += b.node_checks;
+  }
+  EXPECT_GE(with_lists.rebuild_count(), 4u);  // several lists' lives, the jump included
+  EXPECT_GT(contacts, 1000u);
+  EXPECT_LT(checks_with, checks_without / 3);  // the lists do save work
+}
+
+TEST(ContactModel, NearNodeListsGiveTheSameForcesAsTestingEveryNode) { expect_near_node_lists_match_every_node(false); }
+
+TEST(ContactModel, NearNodeListsGiveTheSameForcesForRigidGrainsPlacedByTheirPoses) {
+  expect_near_node_lists_match_every_node(true);
 }
 
 TEST(ContactModel, StableTimeStepIsHalfTheNodeOscillatorLimit) {

@@ -48,6 +48,13 @@ struct NodeHit {
   NodeContactForce law;
 };
 
+/// A surface node to test against another grain, with the triangle of that grain it was last
+/// closest to (a starting bound for the search, SurfaceTrees::kNoHint: none).
+struct NearNode {
+  std::uint32_t node = 0;
+  std::uint32_t hint = SurfaceTrees::kNoHint;
+};
+
 /// One candidate interaction of a step: grains a < b (entry `pair` of the broad phase's pairs), or
 /// grain a and platen b - grains.
 struct Candidate {
@@ -107,8 +114,9 @@ struct ContactModel::State {
   /// within max_penetration + skin of the other grain's surface at the build. A node moves at most
   /// skin / 2 until the next build and so does every point of the other surface (linear
   /// triangles), so the distance changes by at most skin: an unlisted node stays farther than
-  /// max_penetration, where the closest-triangle search would not find it either.
-  std::vector<std::array<std::vector<std::uint32_t>, 2>> near_nodes;
+  /// max_penetration, where the closest-triangle search would not find it either. Without
+  /// options.near_node_lists: every surface node, no hints.
+  std::vector<std::array<std::vector<NearNode>, 2>> near_nodes;
   /// Per grain: a sphere around its surface this step (centre, radius), a tighter prefilter than
   /// the box for nodes near a box corner (most of a round grain's box is empty).
   std::vector<Eigen::Vector3d> sphere_centre;
@@ -179,11 +187,15 @@ struct ContactModel::State {
     return it != history.end() && it->a == a && it->b == b && it->node == node ? &it->spring : nullptr;
   }
 
-  /// The surface nodes of grain `from` within `reach` of grain `to`'s surface (into `out`, in
-  /// surface order).
+  /// The surface nodes of grain `from` within `reach` of grain `to`'s surface, with their closest
+  /// triangles (into `out`, in surface order).
   void collect_near_nodes(std::uint32_t from, std::uint32_t to, double reach, std::span<const Eigen::Vector3d> x,
-                          std::vector<std::uint32_t>& out) const {
+                          std::vector<NearNode>& out) const {
     out.clear();
+    if (!options.near_node_lists) {
+      for (std::uint32_t node : surface(from)) out.push_back({node, SurfaceTrees::kNoHint});
+      return;
+    }
     const Aabb box = trees.bounds(to).inflated(reach);
     const Eigen::Vector3d& centre = sphere_centre[to];
     const double sphere_reach2 = (sphere_radius[to] + reach) * (sphere_radius[to] + reach);
@@ -191,7 +203,7 @@ struct ContactModel::State {
     for (std::uint32_t node : surface(from)) {
       const Eigen::Vector3d& p = x[node];
       if (box.contains(p) && (p - centre).squaredNorm() <= sphere_reach2 && trees.nearest(to, p, reach, x, near))
-        out.push_back(node);
+        out.push_back({node, near.triangle});
     }
   }
 
@@ -207,15 +219,11 @@ struct ContactModel::State {
     }
   }
 
-  /// The nodes of grain `from` that grain_hits must test against the other grain of candidate c.
-  std::span<const std::uint32_t> nodes_to_test(std::uint32_t from, const Candidate& c) const {
-    if (!options.near_node_lists) return surface(from);
-    return near_nodes[c.pair][from == c.a ? 0 : 1];
-  }
-
-  /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces.
-  void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<const Eigen::Vector3d> x,
-                  std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
+  /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces, among `nodes`
+  /// (whose hints are moved to the triangles found).
+  void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<NearNode> nodes,
+                  std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double dt,
+                  std::vector<NodeHit>& out, Checks& checks) const {
     const Aabb& box = trees.bounds(to);
     const Eigen::Vector3d& centre = sphere_centre[to];
     const double reach2 = sphere_radius[to] * sphere_radius[to];
@@ -226,14 +234,15 @@ struct ContactModel::State {
     const double mu = std::min(mf.friction, mt.friction);
     const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
     SurfaceTrees::Nearest near;
-    const std::span<const std::uint32_t> nodes = nodes_to_test(from, key);
     checks.nodes += nodes.size();
-    for (std::uint32_t node : nodes) {
+    for (NearNode& listed : nodes) {
+      const std::uint32_t node = listed.node;
       const Eigen::Vector3d& p = x[node];
       if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
-      const bool close = trees.nearest(to, p, max_penetration, x, near);
+      const bool close = trees.nearest(to, p, max_penetration, x, near, listed.hint);
       checks.triangles += near.tested;
       if (!close) continue;
+      if (listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
       const Eigen::Vector3d d = near.closest.point - p;  // from the node out to the surface
       if (!(d.dot(pseudonormal(near.triangle, near.closest.feature, x)) > 0)) continue;  // outside
       NodeHit hit;
@@ -430,7 +439,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     std::vector<Aabb> boxes(grain_count);
     for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
     s.grain_pairs = overlapping_box_pairs(boxes);
-    if (s.options.near_node_lists) s.build_near_nodes(x);
+    s.build_near_nodes(x);
     s.built_at.resize(s.surface_nodes.size());
     for (std::size_t k = 0; k < s.surface_nodes.size(); ++k) s.built_at[k] = x[s.surface_nodes[k]];
     s.need_rebuild = false;
@@ -470,8 +479,8 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
       s.platen_hits(c, platens[c.b - grain_count], x, v, dt, out, s.checks[i]);
       continue;
     }
-    s.grain_hits(c.a, c.b, c, x, v, dt, out, s.checks[i]);
-    s.grain_hits(c.b, c.a, c, x, v, dt, out, s.checks[i]);
+    s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], x, v, dt, out, s.checks[i]);
+    s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], x, v, dt, out, s.checks[i]);
     // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
     if (!std::is_sorted(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; }))
       std::sort(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; });

@@ -9,6 +9,10 @@ namespace graintwin::fdem {
 namespace {
 constexpr std::uint32_t kLeafSize = 4;
 constexpr int kStackSize = 64;  // median splits: depth <= log2(triangles), far below this
+/// Slack on a hint's distance, relative to the search radius: box distances and triangle
+/// distances are rounded differently, and a triangle exactly as close as the hint must not be
+/// pruned by round-off (ties go to the first met, as without a hint).
+constexpr double kHintSlack = 1e-6;
 }  // namespace
 
 SurfaceTrees::SurfaceTrees(const Model& model) : triangles_(model.triangles) {
@@ -85,11 +89,17 @@ const Aabb& SurfaceTrees::bounds(std::size_t grain) const {
 }
 
 bool SurfaceTrees::nearest(std::size_t grain, const Eigen::Vector3d& p, double radius,
-                           std::span<const Eigen::Vector3d> x, Nearest& out) const {
+                           std::span<const Eigen::Vector3d> x, Nearest& out, std::uint32_t hint) const {
   if (tree_begin_[grain] == tree_begin_[grain + 1]) return false;
   double best2 = radius * radius;
   bool found = false;
   std::uint32_t tested = 0;
+  if (hint != kNoHint) {
+    const auto& tri = triangles_[hint];
+    const double bound = (closest_point_on_triangle(p, x[tri[0]], x[tri[1]], x[tri[2]]).point - p).norm() + kHintSlack * radius;
+    best2 = std::min(best2, bound * bound);
+    ++tested;
+  }
   std::uint32_t stack[kStackSize];
   int top = 0;
   stack[top++] = tree_begin_[grain];

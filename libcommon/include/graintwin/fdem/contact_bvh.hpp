@@ -37,10 +37,14 @@ class SurfaceTrees {
     double distance2 = 0;        ///< m^2
     std::uint32_t tested = 0;    ///< triangles whose closest point was evaluated (cost)
   };
+  static constexpr std::uint32_t kNoHint = UINT32_MAX;
   /// The triangle of grain g closest to p among those closer than `radius` (ties: the first met in
-  /// the tree's fixed order). False when none is that close.
+  /// the tree's fixed order). False when none is that close. `hint`, a triangle of g likely to be
+  /// close, only speeds the search up: its distance (plus a round-off slack) bounds the search from
+  /// the start, and every triangle at least as close is still visited in the same order, so the
+  /// answer is the same with any hint.
   bool nearest(std::size_t grain, const Eigen::Vector3d& p, double radius, std::span<const Eigen::Vector3d> x,
-               Nearest& out) const;
+               Nearest& out, std::uint32_t hint = kNoHint) const;
 
  private:
   struct Node {
