@@ -30,6 +30,11 @@ constexpr double kSkinFraction = 0.05;
 /// Deepest detectable penetration, as a fraction of the smallest grain's smallest box side: the
 /// closest-triangle search looks no farther (penalty overlaps are a few per mille of a grain).
 constexpr double kMaxPenetrationFraction = 0.1;
+/// Relative allowance for round-off between a rigid grain's nodes, as the solver places them, and
+/// its pose (orientation matrices are orthogonal to about 1e-15): the pose-derived bounding radius
+/// and displacement bound are widened by this fraction of the grain's size and distance from the
+/// origin, so they stay bounds.
+constexpr double kRigidRoundOff = 1e-9;
 /// Relative allowance on the reach of the near-node lists for round-off in the distances, so a
 /// node exactly at the bound is kept rather than lost.
 constexpr double kReachRoundOff = 1e-6;
@@ -121,7 +126,13 @@ struct ContactModel::State {
   /// the box for nodes near a box corner (most of a round grain's box is empty).
   std::vector<Eigen::Vector3d> sphere_centre;
   std::vector<double> sphere_radius;
+  /// Per grain, in the reference configuration: the centre of its surface box and the distance to
+  /// its farthest surface node. A rigid grain's sphere is this one moved by its pose, without a
+  /// pass over its nodes.
+  std::vector<Eigen::Vector3d> reference_centre;
+  std::vector<double> reference_radius;
   std::vector<Eigen::Vector3d> built_at;     ///< surface node positions at the last build
+  std::vector<RigidPose> built_pose;         ///< per grain, its pose at the last build (rigid = false: none)
   bool need_rebuild = true;
   std::size_t rebuilds = 0;
 
@@ -185,6 +196,42 @@ struct ContactModel::State {
     auto it = std::lower_bound(history.begin(), history.end(), 0,
                                [&](const HistoryEntry& h, int) { return key_less(h, a, b, node); });
     return it != history.end() && it->a == a && it->b == b && it->node == node ? &it->spring : nullptr;
+  }
+
+  /// Places or refits grain g's tree and sets its bounding sphere; true when one of its surface
+  /// nodes may have moved more than skin / 2 since the last build (checked unless `check_moved` is
+  /// false). A rigid grain with a pose needs no pass over its nodes: the sphere is its reference
+  /// sphere moved, and its nodes moved at most |R - R_b| r + |(R - R_b) c + t - t_b| (reference
+  /// centre c, radius r, build pose R_b, t_b).
+  bool update_grain(std::uint32_t g, std::span<const Eigen::Vector3d> x, const RigidPose* pose, bool check_moved) {
+    const Aabb& box = trees.bounds(g);
+    if (pose && pose->rigid) {
+      trees.place(g, pose->rotation, pose->translation);
+      const double slack = kRigidRoundOff * (reference_radius[g] + box.hi.cwiseAbs().maxCoeff());
+      sphere_centre[g] = 0.5 * (box.lo + box.hi);
+      sphere_radius[g] = reference_radius[g] + slack;
+      const RigidPose& b = built_pose[g];
+      if (!check_moved || !b.rigid) return check_moved && moved_nodes(g, x);
+      const Eigen::Matrix3d turn = pose->rotation - b.rotation;
+      const double bound = turn.norm() * reference_radius[g] +
+                           (turn * reference_centre[g] + pose->translation - b.translation).norm() + slack;
+      return bound > 0.5 * skin;
+    }
+    trees.refit(g, x);
+    const Eigen::Vector3d c = 0.5 * (box.lo + box.hi);
+    double reach2 = 0;
+    for (std::uint32_t node : surface(g)) reach2 = std::max(reach2, (x[node] - c).squaredNorm());
+    sphere_centre[g] = c;
+    sphere_radius[g] = std::sqrt(reach2);
+    return check_moved && moved_nodes(g, x);
+  }
+
+  /// Whether a surface node of grain g moved more than skin / 2 since the last build.
+  bool moved_nodes(std::uint32_t g, std::span<const Eigen::Vector3d> x) const {
+    const double limit2 = 0.25 * skin * skin;
+    for (std::uint32_t k = surface_offset[g]; k < surface_offset[g + 1]; ++k)
+      if ((x[surface_nodes[k]] - built_at[k]).squaredNorm() > limit2) return true;
+    return false;
   }
 
   /// The surface nodes of grain `from` within `reach` of grain `to`'s surface, with their closest
@@ -346,6 +393,12 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
       box.grow(model.nodes[v]);
     }
     s.surface_offset.push_back(static_cast<std::uint32_t>(s.surface_nodes.size()));
+    const Eigen::Vector3d centre = 0.5 * (box.lo + box.hi);
+    double radius2 = 0;
+    for (std::size_t k = first; k < s.surface_nodes.size(); ++k)
+      radius2 = std::max(radius2, (model.nodes[s.surface_nodes[k]] - centre).squaredNorm());
+    s.reference_centre.push_back(centre);
+    s.reference_radius.push_back(std::sqrt(radius2));
     if (s.surface_nodes.size() > first) {
       smallest_diagonal = std::min(smallest_diagonal, (box.hi - box.lo).norm());
       smallest_side = std::min(smallest_side, (box.hi - box.lo).minCoeff());
@@ -412,29 +465,15 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   if (!poses.empty() && poses.size() != grain_count)
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
-#pragma omp parallel for schedule(dynamic, 16) if (grain_count >= kParallelGrains)
+  // Trees and spheres; the pairs stay complete until a node has moved skin / 2 since the build.
+  const bool check_moved = !s.need_rebuild;
+  bool moved = false;
+#pragma omp parallel for schedule(dynamic, 16) reduction(|| : moved) if (grain_count >= kParallelGrains)
   for (std::int64_t g = 0; g < grain_count; ++g) {
-    const auto k = static_cast<std::size_t>(g);
-    if (!poses.empty() && poses[k].rigid) s.trees.place(k, poses[k].rotation, poses[k].translation);
-    else s.trees.refit(k, x);
-    // The bounding sphere: centred in the box, reaching the farthest surface node.
-    const Aabb& box = s.trees.bounds(k);
-    const Eigen::Vector3d c = 0.5 * (box.lo + box.hi);
-    double reach2 = 0;
-    for (std::uint32_t node : s.surface(static_cast<std::uint32_t>(k))) reach2 = std::max(reach2, (x[node] - c).squaredNorm());
-    s.sphere_centre[k] = c;
-    s.sphere_radius[k] = std::sqrt(reach2);
+    const auto k = static_cast<std::uint32_t>(g);
+    if (s.update_grain(k, x, poses.empty() ? nullptr : &poses[k], check_moved)) moved = true;
   }
-
-  // Verlet criterion: the pairs stay complete until a node has moved skin / 2 since the build.
-  if (!s.need_rebuild) {
-    const double limit2 = 0.25 * s.skin * s.skin;
-    bool moved = false;
-#pragma omp parallel for reduction(|| : moved) if (s.surface_nodes.size() >= kParallelNodes)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(s.surface_nodes.size()); ++k)
-      moved = moved || (x[s.surface_nodes[k]] - s.built_at[k]).squaredNorm() > limit2;
-    s.need_rebuild = moved;
-  }
+  s.need_rebuild = s.need_rebuild || moved;
   if (s.need_rebuild) {
     std::vector<Aabb> boxes(grain_count);
     for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
@@ -442,6 +481,8 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     s.build_near_nodes(x);
     s.built_at.resize(s.surface_nodes.size());
     for (std::size_t k = 0; k < s.surface_nodes.size(); ++k) s.built_at[k] = x[s.surface_nodes[k]];
+    if (poses.empty()) s.built_pose.assign(grain_count, RigidPose{});
+    else s.built_pose.assign(poses.begin(), poses.end());
     s.need_rebuild = false;
     ++s.rebuilds;
     stats.rebuilt = true;
