@@ -54,6 +54,8 @@ SurfaceTrees::SurfaceTrees(const Model& model) : triangles_(model.triangles) {
       build(build, grain.triangle_begin, grain.triangle_end - grain.triangle_begin);
   }
   tree_begin_.push_back(static_cast<std::uint32_t>(nodes_.size()));
+  leaf_corners_.reserve(order_.size());
+  for (std::uint32_t t : order_) leaf_corners_.push_back(triangles_[t]);
   for (std::size_t g = 0; g < model.grains.size(); ++g) refit(g, model.nodes);
   reference_boxes_.reserve(nodes_.size());
   for (const Node& node : nodes_) reference_boxes_.push_back(node.box);
@@ -75,7 +77,7 @@ void SurfaceTrees::refit(std::size_t grain, std::span<const Eigen::Vector3d> x) 
     node.box = Aabb{};
     if (node.count > 0) {
       for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
-        for (std::uint32_t v : triangles_[order_[k]]) node.box.grow(x[v]);
+        for (std::uint32_t v : leaf_corners_[k]) node.box.grow(x[v]);
     } else {
       node.box.grow(nodes_[i + 1].box);
       node.box.grow(nodes_[node.first].box);
@@ -109,7 +111,7 @@ bool SurfaceTrees::nearest(std::size_t grain, const Eigen::Vector3d& p, double r
     if (node.count > 0) {
       tested += node.count;
       for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
-        const auto& tri = triangles_[order_[k]];
+        const auto& tri = leaf_corners_[k];
         TrianglePoint c = closest_point_on_triangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
         const double d2 = (c.point - p).squaredNorm();
         if (d2 < best2) {

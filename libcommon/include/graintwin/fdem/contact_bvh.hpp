@@ -56,6 +56,9 @@ class SurfaceTrees {
   std::vector<Aabb> reference_boxes_;               ///< nodes_' boxes fitted to the reference nodes
   std::vector<std::uint32_t> tree_begin_;           ///< grains + 1 entries into nodes_
   std::vector<std::uint32_t> order_;                ///< model triangle indices, leaf by leaf
+  /// The corner nodes of order_'s triangles, in the same order: a leaf reads its triangles from one
+  /// place (the searches are bound by memory latency, not arithmetic).
+  std::vector<std::array<std::uint32_t, 3>> leaf_corners_;
   std::vector<std::array<std::uint32_t, 3>> triangles_;
 };
 
