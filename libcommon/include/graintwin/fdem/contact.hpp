@@ -3,7 +3,9 @@
 // another, penalty normal force with a dashpot (never attractive), Coulomb friction with a
 // tangential spring history per node contact, rigid platens with friction. Broad phase: a uniform
 // cell grid over skin-inflated grain boxes, rebuilt only when a node moved more than skin / 2.
-// Narrow phase: a per-grain AABB tree over its surface triangles, refitted every step.
+// Narrow phase: per grain pair, only the surface nodes that were within reach of the other grain
+// at the last build (exact: nodes move at most skin / 2 between builds), each searched in the
+// other grain's AABB tree (refitted every step, or placed by a rigid grain's pose).
 // Rules, equations and measured costs: docs/fdem_contact.md.
 #include <Eigen/Core>
 #include <cstdint>
