@@ -1,8 +1,10 @@
 // fdemrun: CLI contract; a scene of a spinning elastic box and a falling rigid box against their
 // exact motion; the results file (frames, series, platen schedule); grains from a kind=fdem_model
 // file with a gmsh sphere beside them and VTK frames read back by VTK; a run split by --stop-step,
-// --checkpoint and --restart reproducing the uninterrupted run bit for bit; bad scenes and
-// options failing cleanly.
+// --checkpoint and --restart reproducing the uninterrupted run bit for bit; a triaxial test of 27
+// rigid cubes in the servo wall and in the membrane (stages, triaxial columns, frames at the asked
+// strains, membrane positions); bad scenes and options failing cleanly.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -16,7 +18,9 @@
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
 #include "support/cli_contract.hpp"
+#include "support/cube_sample.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
@@ -236,4 +240,99 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   std::filesystem::create_directory(dir / "old_frames");
   test::expect_clean_failure("fdemrun", dir, {good.string(), (dir / "new.h5").string(), "--vtk", (dir / "old_frames").string()},
                              2, "old_frames");
+}
+
+namespace {
+
+/// A triaxial scene over a model file of 27 rigid cubes (support/cube_sample.hpp); `boundary` is
+/// the [triaxial] boundary key.
+std::filesystem::path triaxial_scene(const test::TempDir& dir, const std::string& boundary) {
+  const fdem::Model cubes = test::cube_sample(1e-3);
+  fdem::write_model_file(dir / "cubes.h5", cubes, {"test"});
+  return write_scene(dir, boundary + ".toml", R"(
+[run]
+damping = 2000
+[model]
+file = "cubes.h5"
+[triaxial]
+boundary = ")" + boundary + R"("
+ball_radius = 1.4e-4
+strain_rate = 5
+target_axial_strain = 2e-3
+frame_strains = [5e-4, 1e-3]
+pressure_ramp_steps = 500
+)");
+}
+
+}  // namespace
+
+TEST(Fdemrun, TriaxialTestWritesItsSeriesStagesAndFramesAtTheAskedStrains) {
+  test::TempDir dir;
+  for (const std::string boundary : {"wall", "membrane"}) {
+    SCOPED_TRACE(boundary);
+    const auto out = dir / (boundary + ".h5");
+    const auto r = run_tool("fdemrun", {triaxial_scene(dir, boundary).string(), out.string(), "-q", "-j", "1",
+                                        "--model", (dir / "cubes.h5").string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    namespace sr = schema::fdem_results;
+    const io::H5File f = io::H5File::open(out);
+    const auto stages = f.read_strings(sr::stage_name);
+    const std::vector<std::string> expected_stages =
+        boundary == "wall" ? std::vector<std::string>{"consolidation", "shearing"}
+                           : std::vector<std::string>{"consolidation", "membrane", "shearing"};
+    EXPECT_EQ(stages, expected_stages);
+    const auto stage = f.read<std::uint32_t>(sr::series_stage);
+    const auto eps1 = f.read<double>(sr::series_axial_strain), epsv = f.read<double>(sr::series_volumetric_strain);
+    const auto ratio = f.read<double>(sr::series_stress_ratio), lateral = f.read<double>(sr::series_lateral_stress);
+    const auto volume = f.read<double>(sr::series_volume), radial = f.read<double>(sr::series_volume_radial);
+    const auto inertial = f.read<double>(sr::series_inertial_number);
+    ASSERT_EQ(eps1.size(), stage.size());
+    const std::uint32_t shearing = static_cast<std::uint32_t>(stages.size() - 1);
+    double before = -1;
+    for (std::size_t i = 0; i < stage.size(); ++i) {
+      // Strains and the inertial number exist from the start of shearing on, the volumes agree.
+      EXPECT_EQ(std::isnan(eps1[i]), stage[i] != shearing) << "row " << i;
+      EXPECT_EQ(std::isnan(inertial[i]), stage[i] != shearing) << "row " << i;
+      EXPECT_NEAR(radial[i], volume[i], 1e-9 * volume[i]) << "row " << i;
+      if (stage[i] == shearing) {
+        EXPECT_GE(eps1[i], before);
+        before = eps1[i];
+      }
+    }
+    EXPECT_NEAR(eps1.back(), 2e-3, 1e-5);
+    EXPECT_TRUE(std::isfinite(epsv.back()));
+    EXPECT_NEAR(lateral.back(), 300e3, 0.02 * 300e3);  // the wall servo or the membrane pressure
+    EXPECT_GT(ratio.back(), 1.5);                      // columns of rigid cubes carry the platens
+    // Frames: the start of shearing, the two asked strains, the end.
+    ASSERT_EQ(fdem::results_frame_count(out), 4u);
+    const std::vector<double> asked{0.0, 5e-4, 1e-3, 2e-3};
+    for (std::size_t k = 0; k < 4; ++k) {
+      const std::string g = fmt::format("{}/{:06d}", sr::frames, k);
+      EXPECT_NEAR(f.attr_doubles(g, "axial_strain").at(0), asked[k], 2e-5) << "frame " << k;
+      EXPECT_EQ(f.exists(g + "/" + sr::frame_membrane_position), boundary == "membrane");
+    }
+    const auto parameters = nlohmann::json::parse(f.read_strings(sr::parameters).at(0));
+    EXPECT_GT(parameters["triaxial"]["shear_steps"].get<int>(), 0);
+    EXPECT_EQ(parameters["triaxial"]["membrane_balls"].get<int>() > 0, boundary == "membrane");
+  }
+}
+
+TEST(Fdemrun, BadTriaxialScenesFailBeforeAnyStep) {
+  test::TempDir dir;
+  const auto scene = triaxial_scene(dir, "wall");
+  std::stringstream text;
+  text << std::ifstream(scene).rdbuf();
+  const auto out = (dir / "out.h5").string();
+  const auto bad = [&](const std::string& name, const std::string& from, const std::string& to, const std::string& says) {
+    const auto path = write_scene(dir, name, replaced(text.str(), from, to));
+    test::expect_clean_failure("fdemrun", dir, {path.string(), out}, 2, says);
+  };
+  bad("latex.toml", "ball_radius", "membrane_poisson = 0.45\nball_radius", "above 1/3");
+  bad("stages.toml", "[triaxial]", "[[stages]]\nduration = 1e-5\n[triaxial]", "runs its own stages");
+  bad("order.toml", "[5e-4, 1e-3]", "[1e-3, 5e-4]", "ascending");
+  bad("beyond.toml", "[5e-4, 1e-3]", "[5e-4, 0.1]", "ascending");
+  bad("kind.toml", "boundary = \"wall\"", "boundary = \"latex\"", "use membrane or wall");
+  bad("both.toml", "strain_rate = 5", "strain_rate = 5\nshear_inertial_number = 1e-3", "keep one");
+  test::expect_clean_failure("fdemrun", dir, {scene.string(), out, "--checkpoint", (dir / "c.h5").string()}, 2,
+                             "checkpoints");
 }

@@ -16,6 +16,7 @@
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
+#include "graintwin/fdem/triaxial_run.hpp"
 #include "graintwin/io/atomic_output.hpp"
 
 namespace fs = std::filesystem;
@@ -30,6 +31,64 @@ std::uint64_t steps_of(double interval, double dt) {
 }
 
 std::string digest_of(const std::string& text) { return fmt::format("{:016x}", std::hash<std::string>{}(text)); }
+
+/// Runs the scene's triaxial test: progress per phase, a status line every few thousand steps of a
+/// consolidation (whose length is not known in advance), a warning when shearing was not quasi-static.
+TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const TriaxialSpec& spec, double dt,
+                                     std::uint64_t row_every, ResultsWriter& writer, const std::function<void()>& on_frame) {
+  std::unique_ptr<cli::Progress> progress;
+  std::string phase;
+  std::size_t taken = 0;
+  TriaxialRunHooks hooks;
+  hooks.phase = [&](const std::string& name, std::size_t steps) {
+    if (progress) progress->done();
+    progress = steps ? ctx.progress(name + " steps", steps) : nullptr;
+    phase = name;
+    taken = 0;
+    spdlog::info("{} begins at step {}{}", name, solver.state().step, steps ? fmt::format(" ({} steps)", steps) : "");
+  };
+  hooks.step = [&](const TriaxialMeasure& m, const StepReport& r) {
+    ++taken;
+    if (progress) progress->advance();
+    if (!progress && taken % 1000 == 0)
+      spdlog::info("{}: {} steps, axial {:.4g} kPa, lateral {:.4g} kPa, kinetic / elastic energy {:.3g}, {} contact "
+                   "searches rebuilt",
+                   phase, taken, 1e-3 * m.axial_stress, 1e-3 * m.lateral_stress,
+                   r.energies.kinetic / (r.energies.strain + r.energies.contact_elastic),
+                   solver.contact_model()->rebuild_count());
+    cli::throw_if_interrupted();
+  };
+  hooks.frame = on_frame;
+  const TriaxialRunSummary s = run_triaxial(solver, spec, dt, row_every, writer, hooks);
+  if (progress) progress->done();
+  spdlog::info("consolidated in {} + {} steps; sheared {} steps at {:.4g} /s (inertial number {:.2g}) to eps_1 = {:.4g}: "
+               "sigma_1 / sigma_3 {:.4g}, eps_v {:.4g}",
+               s.consolidation_steps, s.membrane_steps, s.shear_steps, s.strain_rate, s.inertial_number,
+               std::log(s.start.height / s.end.height), s.end.axial_stress / s.end.lateral_stress,
+               std::log(s.start.volume / s.end.volume));
+  if (spec.membrane)
+    spdlog::info("membrane: {} balls of radius {:.4g} mm, density scaled x {:.4g} for the time step", s.membrane_balls,
+                 1e3 * s.ball_radius, s.density_scaling);
+  if (s.max_kinetic_ratio > kQuasiStaticRatio)
+    spdlog::warn("shearing was not quasi-static: the kinetic energy reached {:.3g} of the elastic energy (limit {:.2g}); "
+                 "lower [triaxial] shear_inertial_number or strain_rate",
+                 s.max_kinetic_ratio, kQuasiStaticRatio);
+  return s;
+}
+
+void log_end(const ResultsWriter& writer, Solver& solver) {
+  spdlog::info("{} frames, final time {:.6g} s after {} steps{}", writer.frames(), solver.state().time, solver.state().step,
+               solver.has_contact() ? fmt::format(", contact search rebuilt {} times", solver.contact_model()->rebuild_count())
+                                    : std::string());
+}
+
+nlohmann::json summary_json(const TriaxialRunSummary& s) {
+  return {{"consolidation_steps", s.consolidation_steps}, {"membrane_steps", s.membrane_steps},
+          {"shear_steps", s.shear_steps},                 {"d50", s.d50},
+          {"strain_rate", s.strain_rate},                 {"inertial_number", s.inertial_number},
+          {"max_kinetic_ratio", s.max_kinetic_ratio},     {"membrane_balls", s.membrane_balls},
+          {"ball_radius", s.ball_radius},                 {"membrane_density_scaling", s.density_scaling}};
+}
 
 }  // namespace
 
@@ -51,16 +110,25 @@ int main(int argc, char** argv) {
       "at the contact against Hertz and Chung & Ooi (2011) tests 1, 2, 6, 7 and LIGGGHTS (docs/fdemrun.md); a scene "
       "grades a sphere's or ellipsoid's mesh towards points with refine_at, fine_element_size and size_growth. The "
       "SPEC's default penalty (100 E per metre) is far too soft for mm grains: about 10 E / h (h: element size at the "
-      "contact) reproduces Hertz. Not yet: the triaxial test's wall and membrane in scene files (they exist in the "
-      "library, docs/fdem_triaxial.md). "
+      "contact) reproduces Hertz. A scene with [triaxial] runs the triaxial test instead of [[stages]] (docs/fdem_triaxial.md): "
+      "isotropic consolidation to sigma_3 inside a rigid servo wall, the membrane's forming procedure (bonded-ball "
+      "membrane, clamped ends, confining pressure; or boundary = \"wall\" to keep the wall), then strain-controlled "
+      "shearing to a target axial strain; its series adds sigma_1, sigma_3, sigma_1/sigma_3, the sample volume by eq. 27 "
+      "and eq. 28, the log strains eps_1 and eps_v from the start of shearing, the kinetic/elastic energy ratio and the "
+      "inertial number, and frames are saved at the start of shearing, at the frame_strains and at the end. Triaxial "
+      "runs cannot be checkpointed yet. "
       "The scene format is in docs/fdemrun.md.");
-  fs::path scene_path, output, checkpoint, restart;
+  fs::path scene_path, output, checkpoint, restart, model_path;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
   tool.add_output("results", output, "Output kind=fdem_results .h5");
   auto& app = tool.cli();
   app.add_option("--checkpoint", checkpoint,
                  "Write the solver state here (.h5) every [run] checkpoint_interval and at the end, for --restart");
   app.add_option("--restart", restart, "Continue from a checkpoint of the same scene (the results then start there)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--model", model_path,
+                 "Take the grains from this kind=fdem_model file (shapes2mesh) instead of the scene's [model] file, e.g. "
+                 "to run one scene on every sample")
       ->check(CLI::ExistingFile);
   fs::path vtk_folder;
   app.add_option("--vtk", vtk_folder,
@@ -83,7 +151,10 @@ int main(int argc, char** argv) {
       throw UsageError("--checkpoint and --restart name the same file; write the new checkpoint elsewhere");
     std::optional<io::AtomicOutput> vtk_out;
     if (!vtk_folder.empty()) vtk_out.emplace(vtk_folder, ctx.force());
-    const Scene scene = read_scene(scene_path);
+    const Scene scene = read_scene(scene_path, model_path);
+    if (scene.triaxial && (!checkpoint.empty() || !restart.empty() || stop_step > 0))
+      throw UsageError(scene_path.string() + " is a triaxial test, whose membrane state checkpoints do not hold yet; "
+                       "run it without --checkpoint, --restart and --stop-step");
     std::stringstream text;
     text << std::ifstream(scene_path).rdbuf();
     std::stringstream model_bytes;  // a restart needs the same model file too
@@ -93,6 +164,7 @@ int main(int argc, char** argv) {
     options.gravity = scene.gravity;
     options.damping = scene.damping;
     options.element_safety = scene.element_safety;
+    options.rigid_contact_nodes = scene.rigid_contact_nodes;
     options.contact.enabled = scene.contact;
     Solver solver(model, options);
     const StepLimits limits = solver.time_step_limits();
@@ -107,14 +179,15 @@ int main(int argc, char** argv) {
     }
     std::uint64_t total = 0;
     std::vector<std::uint64_t> stage_end;
-    for (const StageSpec& s : scene.stages) stage_end.push_back(total += steps_of(s.duration, dt));
+    for (const StageSpec& st : scene.stages) stage_end.push_back(total += steps_of(st.duration, dt));
     const std::uint64_t frame_every = scene.frame_interval > 0 ? steps_of(scene.frame_interval, dt) : total;
     const std::uint64_t row_every = scene.series_interval > 0 ? steps_of(scene.series_interval, dt) : 1;
     const std::uint64_t checkpoint_every = scene.checkpoint_interval > 0 ? steps_of(scene.checkpoint_interval, dt) : total;
-    spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s, contact {:.4g} s), "
-                 "{} steps over {} stage(s)",
+    spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s, contact {:.4g} s), {}",
                  model.grains.size(), model.nodes.size(), model.element_count(), model.platens.size(), dt,
-                 limits.element_stable, limits.contact_stable, total, scene.stages.size());
+                 limits.element_stable, limits.contact_stable,
+                 scene.triaxial ? std::string("a triaxial test")
+                                : fmt::format("{} steps over {} stage(s)", total, scene.stages.size()));
 
     const std::string digest = digest_of(text.str() + model_bytes.str() + fmt::format("|dt={:a}", dt));
     io::AtomicOutput out(output, ctx.force());
@@ -128,9 +201,24 @@ int main(int argc, char** argv) {
     nlohmann::json p = {{"scene", scene_path.string()}, {"scene_text", text.str()}, {"time_step", dt},
                         {"steps", total},           {"threads", ctx.threads()},    {"restart", restart.string()},
                         {"model_file", scene.model ? scene.model->path.string() : ""}};
-    ResultsWriter writer(out.temp_path(), solver, scene, p.dump());
+    ResultsWriter writer(out.temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());
+    if (scene.triaxial) {
+      const TriaxialRunSummary summary = run_triaxial_test(ctx, solver, *scene.triaxial, dt, row_every, writer, [&] {
+        if (frames) frames->add(solver);
+      });
+      p["steps"] = solver.state().step;
+      p["triaxial"] = summary_json(summary);
+      writer.set_parameters(p.dump());
+      writer.finish(ctx.history());
+      if (frames) frames->finish(), vtk_out->commit();
+      out.commit();
+      log_end(writer, solver);
+      return;
+    }
+    double start = 0;
+    for (const StageSpec& st : scene.stages) writer.add_stage(st.name, start), start += st.duration;
     const auto add_frame = [&] {
       writer.add_frame(solver);
       if (frames) frames->add(solver);
@@ -170,6 +258,6 @@ int main(int argc, char** argv) {
     writer.finish(ctx.history());
     if (frames) frames->finish(), vtk_out->commit();
     out.commit();
-    spdlog::info("{} frames, final time {:.6g} s", writer.frames(), solver.state().time);
+    log_end(writer, solver);
   });
 }

@@ -12,8 +12,8 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/fdem/primitives.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "support/cube_sample.hpp"
 #include "support/run_tool.hpp"
 
 using namespace graintwin;
@@ -23,26 +23,7 @@ namespace {
 
 constexpr double kEdge = 1e-3;
 
-/// 3 x 3 x 3 rigid cubes of 1 mm, 2 % apart, in a cylinder that just encloses them, between
-/// platens 2 % of an edge away.
-Model cube_sample() {
-  Model m;
-  const TetMesh cube = box_mesh(Eigen::Vector3d::Constant(kEdge), 0.5 * kEdge);
-  const double pitch = 1.02 * kEdge;
-  std::uint32_t label = 0;
-  for (int i = -1; i <= 1; ++i)
-    for (int j = -1; j <= 1; ++j)
-      for (int k = 0; k < 3; ++k)
-        add_grain(m, cube, Eigen::Vector3d(i * pitch, j * pitch, (k + 0.5) * pitch), GrainKind::rigid, 0, ++label);
-  SampleCylinder s;
-  s.radius = std::hypot(1.5 * pitch, 1.5 * pitch) * 1.01;
-  s.z_min = 0.0;
-  s.z_max = 3 * pitch;
-  m.sample = s;
-  m.platens = {Platen{"bottom", Eigen::Vector3d(0, 0, s.z_min), Eigen::Vector3d::UnitZ(), 0.0},
-               Platen{"top", Eigen::Vector3d(0, 0, s.z_max), -Eigen::Vector3d::UnitZ(), 0.0}};
-  return m;
-}
+Model cube_sample() { return test::cube_sample(kEdge); }
 
 }  // namespace
 
@@ -91,7 +72,7 @@ TEST(Triaxial, ConsolidatesInTheWallThenInTheMembraneAndShears) {
   std::size_t rows = 0;
   double last_strain = 0, largest_gap = 0;
   const double h0 = after.height;
-  shear(solver, boundary, shearing, dt_membrane, [&](const TriaxialMeasure& row, const StepReport&) {
+  shear(solver, boundary, o, shearing, dt_membrane, [&](const TriaxialMeasure& row, const StepReport&) {
     ++rows;
     const double strain = std::log(h0 / row.height);
     EXPECT_GE(strain, last_strain);
@@ -124,4 +105,26 @@ TEST(Triaxial, RefusesAMembranePoissonRatioAboveOneThirdACheckpointAndAModelWith
   EXPECT_THROW(find_platens(model), UsageError);
   model.sample.reset();
   EXPECT_THROW(TriaxialBoundary(model, TriaxialOptions{}, kEdge), UsageError);
+}
+
+TEST(Triaxial, TheWallStartsOutsideTheGrainsAndTheMembraneIsScaledToTheRunsTimeStep) {
+  Model model = cube_sample();
+  // A fitted sample radius that cuts into the outer grains: the wall starts at the outermost node.
+  double outermost = 0;
+  for (const Eigen::Vector3d& p : model.nodes) outermost = std::max(outermost, p.head<2>().norm());
+  model.sample->radius = 0.8 * outermost;
+  Solver solver(model, SolverOptions{});
+  TriaxialOptions o;
+  o.ball_radius = outermost / 15;
+  TriaxialBoundary natural(model, o, kEdge), scaled(model, o, kEdge);
+  EXPECT_DOUBLE_EQ(natural.wall().radius, outermost);
+  // A tiny run step leaves the latex as it is; one five times the membrane's own limit scales its
+  // density by 25 so that its limit (bonds and ball contact, both as sqrt(mass)) reaches the step.
+  natural.install_membrane(*solver.contact_model(), 1e-15);
+  const double own = natural.stable_time_step(*solver.contact_model());
+  EXPECT_EQ(natural.density_scaling(), 1.0);
+  scaled.install_membrane(*solver.contact_model(), 5 * own);
+  EXPECT_NEAR(scaled.density_scaling(), 25.0, 0.01);
+  EXPECT_GE(scaled.stable_time_step(*solver.contact_model()), 5 * own);
+  EXPECT_NEAR(scaled.membrane()->ball_mass / natural.membrane()->ball_mass, scaled.density_scaling(), 1e-9);
 }

@@ -55,9 +55,8 @@ inline void write_lattice_results(const std::filesystem::path& path, const Latti
       if (grain == i) v += extra;
     solver.set_grain_velocity(i, v, Eigen::Vector3d::Zero());
   }
-  fdem::Scene scene;
-  scene.stages.push_back({"move", double(run.frames * run.steps_per_frame) * run.dt, {}, {}});
-  fdem::ResultsWriter writer(path, solver, scene, "{}");
+  fdem::ResultsWriter writer(path, solver, "{}");
+  writer.add_stage("move", 0.0);
   for (std::size_t k = 0; k < run.frames; ++k) {
     if (k > 0)
       for (std::size_t s = 0; s < run.steps_per_frame; ++s) writer.add_row(solver, solver.step(run.dt), 0, run.dt);

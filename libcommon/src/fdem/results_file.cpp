@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <limits>
+
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
@@ -19,9 +22,8 @@ void push(std::vector<double>& out, const Eigen::Vector3d& v) { out.insert(out.e
 
 }  // namespace
 
-ResultsWriter::ResultsWriter(const std::filesystem::path& path, const Solver& solver, const Scene& scene,
-                             const std::string& parameters_json)
-    : file_(io::H5File::create(path)), platens_(solver.model().platens.size()) {
+ResultsWriter::ResultsWriter(const std::filesystem::path& path, const Solver& solver, std::string parameters_json)
+    : file_(io::H5File::create(path)), platens_(solver.model().platens.size()), parameters_(std::move(parameters_json)) {
   io::write_root_attrs(file_, schema::kind::fdem_results);
   const Model& m = solver.model();
   std::vector<std::uint32_t> label;
@@ -40,17 +42,24 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& path, const Solver& so
   std::vector<std::string> names;
   for (const Platen& p : m.platens) names.push_back(p.name);
   file_.write_strings(sr::platen_name, names);
-  std::vector<std::string> stages;
-  std::vector<double> start;
-  double t = 0;
-  for (const StageSpec& s : scene.stages) stages.push_back(s.name), start.push_back(t), t += s.duration;
-  file_.write_strings(sr::stage_name, stages);
-  file_.write(sr::stage_start, start, units("s"));
-  file_.write_strings(sr::parameters, {parameters_json});
   file_.ensure_group(sr::frames);
 }
 
-void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std::uint32_t stage, double dt) {
+void ResultsWriter::add_stage(const std::string& name, double start) {
+  stage_names_.push_back(name);
+  stage_starts_.push_back(start);
+}
+
+void ResultsWriter::set_strain_reference(double height, double volume) {
+  reference_row_ = rows_.size();
+  reference_height_ = height;
+  reference_volume_ = volume;
+}
+
+void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std::uint32_t stage, double dt,
+                            const std::optional<TriaxialRow>& triaxial) {
+  if (!rows_.empty() && rows_.front().triaxial.has_value() != triaxial.has_value())
+    throw UsageError("a results series has triaxial measurements in every row or in none");
   SeriesRow r;
   r.step = solver.state().step - 1;  // the report is of the step just taken
   r.time = solver.state().time - dt;
@@ -61,14 +70,21 @@ void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std:
     r.platen_force.push_back(solver.platen_force(p));
     r.platen_position.push_back(solver.state().platens[p].point);
   }
+  r.triaxial = triaxial;
   rows_.push_back(std::move(r));
 }
 
-void ResultsWriter::add_frame(const Solver& solver) {
+void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boundary, std::optional<double> axial_strain) {
   const std::string group = frame_group(frames_++);
   file_.ensure_group(group);
   file_.set_attr(group, "time", solver.state().time);
   file_.set_attr(group, "step", static_cast<long long>(solver.state().step));
+  if (axial_strain) file_.set_attr(group, "axial_strain", *axial_strain);
+  if (boundary && boundary->membrane_state()) {
+    std::vector<double> position;
+    for (const Eigen::Vector3d& x : boundary->membrane_state()->x) push(position, x);
+    file_.write(group + "/" + sr::frame_membrane_position, position.data(), {position.size() / 3, 3}, units("m"));
+  }
   const Model& m = solver.model();
   const hsize_t G = m.grains.size();
   std::vector<double> centroid, rotation, stress, velocity;
@@ -129,7 +145,37 @@ void ResultsWriter::finish(const std::vector<std::string>& history) {
     for (std::size_t p = 0; p < P; ++p) push(force, r.platen_force[p]), push(position, r.platen_position[p]);
   file_.write(sr::series_platen_force, force.data(), {R, P, 3}, units("N"));
   file_.write(sr::series_platen_position, position.data(), {R, P, 3}, units("m"));
+  if (R > 0 && rows_.front().triaxial) write_triaxial_columns();
+  file_.write_strings(sr::stage_name, stage_names_);
+  file_.write(sr::stage_start, stage_starts_, units("s"));
+  file_.write_strings(sr::parameters, {parameters_});
   io::write_history(file_, history);
+}
+
+void ResultsWriter::write_triaxial_columns() {
+  const hsize_t R = rows_.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto column = [&](const char* name, auto get, const char* unit) {
+    std::vector<double> v;
+    for (std::size_t i = 0; i < rows_.size(); ++i) v.push_back(get(i, rows_[i].triaxial->measure));
+    file_.write(name, v.data(), {R}, units(unit));
+  };
+  const auto strained = [&](std::size_t i) { return reference_row_ && i >= *reference_row_; };
+  column(sr::series_axial_stress, [](std::size_t, const TriaxialMeasure& m) { return m.axial_stress; }, "Pa");
+  column(sr::series_lateral_stress, [](std::size_t, const TriaxialMeasure& m) { return m.lateral_stress; }, "Pa");
+  column(sr::series_stress_ratio, [](std::size_t, const TriaxialMeasure& m) { return m.axial_stress / m.lateral_stress; }, "1");
+  column(sr::series_height, [](std::size_t, const TriaxialMeasure& m) { return m.height; }, "m");
+  column(sr::series_volume, [](std::size_t, const TriaxialMeasure& m) { return m.volume; }, "m^3");
+  column(sr::series_volume_radial, [](std::size_t, const TriaxialMeasure& m) { return m.volume_radial; }, "m^3");
+  column(sr::series_axial_strain,
+         [&](std::size_t i, const TriaxialMeasure& m) { return strained(i) ? std::log(reference_height_ / m.height) : nan; }, "1");
+  column(sr::series_volumetric_strain,
+         [&](std::size_t i, const TriaxialMeasure& m) { return strained(i) ? std::log(reference_volume_ / m.volume) : nan; }, "1");
+  column(sr::series_kinetic_ratio, [&](std::size_t i, const TriaxialMeasure&) {
+    const Energies& e = rows_[i].energies;
+    return e.kinetic / (e.strain + e.contact_elastic);
+  }, "1");
+  column(sr::series_inertial_number, [&](std::size_t i, const TriaxialMeasure&) { return rows_[i].triaxial->inertial_number; }, "1");
 }
 
 ResultsSeries read_results_series(const std::filesystem::path& path) {

@@ -123,6 +123,56 @@ GrainKind parse_kind(const Table& t) {
   t.fail("kind '" + k + "' is unknown; use rigid, tet4 or tet10");
 }
 
+/// The [triaxial] table (docs/fdem_triaxial.md).
+TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>& sample) {
+  TriaxialSpec spec;
+  TriaxialOptions& o = spec.options;
+  const std::string boundary = t.text("boundary", "membrane");
+  if (boundary != "membrane" && boundary != "wall") t.fail("boundary '" + boundary + "' is unknown; use membrane or wall");
+  spec.membrane = boundary == "membrane";
+  o.confining_pressure = t.positive("confining_pressure", o.confining_pressure);
+  o.membrane.young = t.positive("membrane_young", o.membrane.young);
+  o.membrane.poisson = t.number("membrane_poisson", o.membrane.poisson);
+  const double thickness = sample && sample->membrane_thickness > 0 ? sample->membrane_thickness : o.membrane.thickness;
+  o.membrane.thickness = t.positive("membrane_thickness", thickness);
+  o.membrane.density = t.positive("membrane_density", o.membrane.density);
+  try {
+    bond_stiffness(o.membrane);
+  } catch (const UsageError& e) {
+    t.fail(e.message());
+  }
+  o.ball_radius = t.non_negative("ball_radius", 0);
+  o.membrane_friction = t.non_negative("membrane_friction", o.membrane_friction);
+  o.servo_inertial_number = t.positive("servo_inertial_number", o.servo_inertial_number);
+  o.stress_tolerance = t.positive("stress_tolerance", o.stress_tolerance);
+  if (o.stress_tolerance >= 0.5) t.fail("stress_tolerance must be a small fraction of the confining pressure, e.g. 0.01");
+  spec.shear_inertial_number = t.positive("shear_inertial_number", spec.shear_inertial_number);
+  spec.strain_rate = t.non_negative("strain_rate", 0);
+  if (t.has("strain_rate") && t.has("shear_inertial_number"))
+    t.fail("strain_rate and shear_inertial_number both set the shearing rate; keep one");
+  spec.target_axial_strain = t.positive("target_axial_strain", spec.target_axial_strain);
+  if (spec.target_axial_strain >= 1) t.fail("target_axial_strain is a log strain and must be below 1, e.g. 0.1");
+  if (t.has("frame_strains")) {
+    const toml::array* a = t.raw()["frame_strains"].as_array();
+    const std::string usage = "frame_strains must be an ascending array of axial strains in (0, target_axial_strain), e.g. [0.03, 0.06]";
+    if (!a) t.fail(usage);
+    for (const toml::node& item : *a) {
+      const auto e = item.value<double>();
+      if (!e || !(*e > 0) || !(*e < spec.target_axial_strain) || (!spec.frame_strains.empty() && *e <= spec.frame_strains.back()))
+        t.fail(usage);
+      spec.frame_strains.push_back(*e);
+    }
+  }
+  const auto count = [&](const char* key, std::size_t fallback) {
+    const double v = t.positive(key, static_cast<double>(fallback));
+    if (v != std::floor(v)) t.fail(std::string(key) + " must be a whole number of steps");
+    return static_cast<std::size_t>(v);
+  };
+  spec.consolidation_steps = count("consolidation_steps", spec.consolidation_steps);
+  spec.pressure_ramp_steps = count("pressure_ramp_steps", spec.pressure_ramp_steps);
+  return spec;
+}
+
 }  // namespace
 
 double Scene::total_duration() const {
@@ -131,7 +181,7 @@ double Scene::total_duration() const {
   return t;
 }
 
-Scene read_scene(const std::filesystem::path& path) {
+Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file) {
   const std::string file = path.string();
   toml::table root;
   try {
@@ -140,15 +190,17 @@ Scene read_scene(const std::filesystem::path& path) {
     throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
                      "; fix the TOML syntax");
   }
-  const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages"});
+  const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages", "triaxial"});
   Scene s;
+  if (!model_file.empty() && !root.contains("model")) root.insert("model", toml::table{});
   if (const toml::table* model = root["model"].as_table()) {
     const Table t(*model, file + ": [model]", {"file", "kind"});
-    if (!t.has("file")) t.fail("file is missing: the kind=fdem_model .h5 of shapes2mesh");
+    if (!t.has("file") && model_file.empty()) t.fail("file is missing: the kind=fdem_model .h5 of shapes2mesh");
     ModelSource source;
-    source.path = path.parent_path() / t.text("file", "");
+    source.path = model_file.empty() ? path.parent_path() / t.text("file", "") : model_file;
     if (!std::filesystem::exists(source.path))
-      t.fail("model file " + source.path.string() + " does not exist (paths are relative to the scene's folder)");
+      t.fail("model file " + source.path.string() + " does not exist" +
+             (model_file.empty() ? " (paths are relative to the scene's folder)" : ""));
     source.model = std::make_shared<const Model>(read_model_file(source.path));
     if (t.has("kind")) {
       if (parse_kind(t) != GrainKind::rigid)
@@ -177,12 +229,14 @@ Scene read_scene(const std::filesystem::path& path) {
   double duration = 0;
   if (const toml::table* run = root["run"].as_table()) {
     const Table r(*run, file + ": [run]",
-                  {"duration", "time_step", "element_safety", "gravity", "damping", "contact", "frame_interval",
-                   "series_interval", "checkpoint_interval"});
+                  {"duration", "time_step", "element_safety", "rigid_contact_nodes", "gravity", "damping", "contact",
+                   "frame_interval", "series_interval", "checkpoint_interval"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
     s.element_safety = r.positive("element_safety", 0.8);
     if (s.element_safety > 1) r.fail("element_safety must be at most 1 (a fraction of the critical step)");
+    s.rigid_contact_nodes = r.number("rigid_contact_nodes", s.rigid_contact_nodes);
+    if (!(s.rigid_contact_nodes >= 1)) r.fail("rigid_contact_nodes must be at least 1");
     s.gravity = r.vector("gravity", Eigen::Vector3d::Zero());
     s.damping = r.non_negative("damping", 0);
     s.contact = r.flag("contact", true);
@@ -342,6 +396,20 @@ Scene read_scene(const std::filesystem::path& path) {
       }
     }
     s.stages.push_back(spec);
+  }
+  if (const toml::table* triaxial = root["triaxial"].as_table()) {
+    const Table t(*triaxial, file + ": [triaxial]",
+                  {"boundary", "confining_pressure", "membrane_young", "membrane_poisson", "membrane_thickness",
+                   "membrane_density", "ball_radius", "membrane_friction", "servo_inertial_number", "stress_tolerance",
+                   "shear_inertial_number", "strain_rate", "target_axial_strain", "frame_strains",
+                   "consolidation_steps", "pressure_ramp_steps"});
+    if (!s.stages.empty() || duration > 0)
+      t.fail("a triaxial test runs its own stages (consolidation, membrane, shearing); remove [[stages]] and [run] duration");
+    if (!s.sample) t.fail("a triaxial test needs the sample cylinder: take the grains from a shapes2mesh [model] or give [sample]");
+    s.triaxial = parse_triaxial(t, s.sample);
+    return s;
+  } else if (top.has("triaxial")) {
+    top.fail("triaxial must be a [triaxial] table");
   }
   if (s.stages.empty()) {
     if (!(duration > 0)) throw UsageError(file + ": give [run] duration (s) or at least one [[stages]] table");

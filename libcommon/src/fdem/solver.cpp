@@ -1,5 +1,6 @@
 #include "graintwin/fdem/solver.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <cmath>
@@ -44,6 +45,26 @@ std::vector<Eigen::Vector3d> unflatten(const std::vector<double>& d) {
   return out;
 }
 
+/// The node masses contact uses for its dashpots and its stable step: a deformable grain's lumped
+/// node masses; for a rigid grain, the body's effective mass at the node in its stiffest direction,
+/// 1 / (1/M + |r|^2 / I_min), shared by the `rigid_contact_nodes` nodes assumed to touch at once
+/// (its element-lumped node masses mean nothing for a body that moves as one).
+std::vector<double> contact_masses(const Model& model, std::span<const double> lumped,
+                                   const std::vector<BodyProperties>& bodies, double rigid_contact_nodes) {
+  std::vector<double> mass(lumped.begin(), lumped.end());
+  for (std::size_t g = 0; g < model.grains.size(); ++g) {
+    const Grain& grain = model.grains[g];
+    if (grain.kind != GrainKind::rigid) continue;
+    const BodyProperties& b = bodies[g];
+    const double inertia = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(b.inertia, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+      const double arm2 = (model.nodes[i] - b.centroid).squaredNorm();
+      mass[i] = 1.0 / (1.0 / b.mass + arm2 / inertia) / rigid_contact_nodes;
+    }
+  }
+  return mass;
+}
+
 }  // namespace
 
 Solver::Solver(const Model& model, const SolverOptions& options)
@@ -65,7 +86,10 @@ Solver::Solver(const Model& model, const SolverOptions& options)
   for (const Platen& p : model.platens) state_.platens.push_back({p.point, p.normal.normalized(), Eigen::Vector3d::Zero(), p.friction});
   platen_force_.assign(model.platens.size(), Eigen::Vector3d::Zero());
   force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
-  if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, mass_, options.contact);
+  if (!(options.rigid_contact_nodes >= 1))
+    throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
+  contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes);
+  if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, contact_mass_, options.contact);
 }
 
 Solver::~Solver() = default;

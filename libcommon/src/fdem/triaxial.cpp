@@ -16,8 +16,10 @@ constexpr double kPi = std::numbers::pi;
 constexpr int kClampedRings = 2;
 /// Consolidation is over when the stresses and the kinetic energy stay settled this many steps.
 constexpr std::size_t kSettledSteps = 100;
-/// Kinetic energy below this share of the elastic energy counts as at rest (SPEC section 7).
-constexpr double kQuasiStaticRatio = 0.05;
+
+bool quasi_static(const StepReport& r) {
+  return r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);
+}
 
 }  // namespace
 
@@ -56,7 +58,12 @@ TriaxialBoundary::TriaxialBoundary(const Model& model, const TriaxialOptions& op
     throw UsageError("the confining pressure must be positive; the reference test uses 300 kPa");
   bond_stiffness(options.membrane);  // refuses nu > 1/3 before any work
   const SampleCylinder& s = *model.sample;
-  wall_ = {s.axis_xy, s.radius, 0.0};
+  // The wall starts at the sample radius or just outside the outermost grain, whichever is larger:
+  // a CT sample's fitted radius can cut into the outer grains, and a wall starting inside them
+  // would fling them inwards (the servo brings it in from there).
+  double outermost = 0;
+  for (const Eigen::Vector3d& p : model.nodes) outermost = std::max(outermost, (p.head<2>() - s.axis_xy).norm());
+  wall_ = {s.axis_xy, std::max(s.radius, outermost), 0.0};
   z_bottom_ = s.z_min;
   z_top_ = s.z_max;
   ball_radius_ = options.ball_radius > 0 ? options.ball_radius : choose_ball_radius(s.radius, d50);
@@ -71,12 +78,18 @@ void TriaxialBoundary::set_platens(double z_bottom, double z_top, double v_botto
 
 double TriaxialBoundary::wall_stress() const { return wall_force_ / (2 * kPi * wall_.radius * (z_top_ - z_bottom_)); }
 
-void TriaxialBoundary::install_membrane() {
+void TriaxialBoundary::install_membrane(const ContactModel& contact, double dt) {
   if (membrane_) return;
   const double r = ball_radius_;
   const double ring_step = std::sqrt(3.0) * r;  // about: the lattice fixes it from the circumference
   membrane_ = build_membrane(options_.membrane, wall_.axis_xy, wall_.radius + r, z_bottom_ - (kClampedRings + 0.5) * ring_step,
                              z_top_ + (kClampedRings + 0.5) * ring_step, r);
+  // Bond and ball-contact limits both scale with sqrt(ball mass): one factor lifts both to dt.
+  const double own_step = stable_time_step(contact);
+  density_scaling_ = own_step < dt ? 1.0001 * (dt / own_step) * (dt / own_step) : 1.0;
+  membrane_->material.density *= density_scaling_;
+  membrane_->ball_mass *= density_scaling_;
+  membrane_->ball_inertia *= density_scaling_;
   membrane_state_ = rest_state(*membrane_);
   const std::size_t n = membrane_->balls();
   motion_.assign(n, BallMotion::free);
@@ -169,6 +182,14 @@ TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, 
   return m;
 }
 
+double inertial_number(double strain_rate, double d50, double density, double mean_stress) {
+  return strain_rate * d50 * std::sqrt(density / mean_stress);
+}
+
+double strain_rate_of(double inertial_number, double d50, double density, double mean_stress) {
+  return inertial_number / (d50 * std::sqrt(density / mean_stress));
+}
+
 double servo_velocity(double stress, double target, double fastest) {
   return fastest * std::clamp((stress - target) / (0.1 * target), -1.0, 1.0);
 }
@@ -184,14 +205,22 @@ void drive_platens(Solver& solver, TriaxialBoundary& boundary, const PlatenPair&
 }
 
 double servo_rate(const Solver& solver, const TriaxialOptions& options) {
-  const double density = solver.model().materials.front().density;
-  return options.servo_inertial_number / (grains_d50(solver) * std::sqrt(density / options.confining_pressure));
+  return strain_rate_of(options.servo_inertial_number, grains_d50(solver), solver.model().materials.front().density,
+                        options.confining_pressure);
+}
+
+/// Steps once and tells the observer.
+StepReport observed_step(Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens, double dt,
+                         const TriaxialObserver& on_step) {
+  const StepReport r = solver.step(dt);
+  if (on_step) on_step(measure(solver, boundary, platens), r);
+  return r;
 }
 
 }  // namespace
 
 std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options, double dt,
-                                std::size_t max_steps) {
+                                std::size_t max_steps, const TriaxialObserver& on_step) {
   if (boundary.has_membrane()) throw UsageError("consolidation in the wall must come before the membrane is installed");
   const PlatenPair platens = find_platens(solver.model());
   const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
@@ -201,11 +230,10 @@ std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, cons
     const double radial = servo_velocity(boundary.wall_stress(), sigma, rate * boundary.wall().radius);
     drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
     boundary.set_wall_velocity(radial);
-    const StepReport r = solver.step(dt);
+    const StepReport r = observed_step(solver, boundary, platens, dt, on_step);
     const bool stresses = std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance &&
                           std::abs(boundary.wall_stress() / sigma - 1) < options.stress_tolerance;
-    const bool at_rest = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);
-    settled = stresses && at_rest ? settled + 1 : 0;
+    settled = stresses && quasi_static(r) ? settled + 1 : 0;
   }
   drive_platens(solver, boundary, platens, 0.0);
   boundary.set_wall_velocity(0);
@@ -219,19 +247,20 @@ std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, cons
 
 
 std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
-                                    double dt, std::size_t ramp_steps, std::size_t max_steps) {
+                                    double dt, std::size_t ramp_steps, std::size_t max_steps,
+                                    const TriaxialObserver& on_step) {
+  if (!solver.contact_model()) throw UsageError("the membrane acts through contact; run with contact on");
   const PlatenPair platens = find_platens(solver.model());
   const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
   solver.stop_grains();
   drive_platens(solver, boundary, platens, 0.0);
-  boundary.install_membrane();
+  boundary.install_membrane(*solver.contact_model(), dt);
   boundary.set_membrane_fixed(true);
   boundary.set_pressure(0);
   std::size_t step = 0, settled = 0;
   // The grains settle against the fixed membrane (the wall's load is gone: they relax a little).
   for (; step < max_steps && settled < kSettledSteps; ++step) {
-    const StepReport r = solver.step(dt);
-    settled = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain) ? settled + 1 : 0;
+    settled = quasi_static(observed_step(solver, boundary, platens, dt, on_step)) ? settled + 1 : 0;
   }
   boundary.set_membrane_fixed(false);
   settled = 0;
@@ -241,10 +270,9 @@ std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, 
     boundary.set_pressure(ramp * sigma);
     const TriaxialMeasure m = measure(solver, boundary, platens);
     drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
-    const StepReport r = solver.step(dt);
+    const StepReport r = observed_step(solver, boundary, platens, dt, on_step);
     const bool stress = ramp == 1.0 && std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance;
-    const bool at_rest = r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);
-    settled = stress && at_rest ? settled + 1 : 0;
+    settled = stress && quasi_static(r) ? settled + 1 : 0;
   }
   drive_platens(solver, boundary, platens, 0.0);
   if (settled < kSettledSteps)
@@ -254,21 +282,24 @@ std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, 
   return step;
 }
 
-std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const ShearOptions& options, double dt,
-                  const std::function<void(const TriaxialMeasure&, const StepReport&)>& on_step) {
-  if (!(options.strain_rate > 0) || !(options.target_axial_strain > 0))
+std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
+                  const ShearOptions& shearing, double dt, const TriaxialObserver& on_step) {
+  if (!(shearing.strain_rate > 0) || !(shearing.target_axial_strain > 0))
     throw UsageError("shearing needs a positive strain rate and target axial strain");
   const PlatenPair platens = find_platens(solver.model());
-  const double h0 = measure(solver, boundary, platens).height;
+  const double h0 = measure(solver, boundary, platens).height, wall_rate = servo_rate(solver, options);
   std::size_t step = 0;
   for (;; ++step) {
     const TriaxialMeasure m = measure(solver, boundary, platens);
-    if (std::log(h0 / m.height) >= options.target_axial_strain) break;
-    drive_platens(solver, boundary, platens, -options.strain_rate * h0);
-    const StepReport r = solver.step(dt);
-    if (on_step) on_step(measure(solver, boundary, platens), r);
+    if (std::log(h0 / m.height) >= shearing.target_axial_strain) break;
+    drive_platens(solver, boundary, platens, -shearing.strain_rate * h0);
+    if (!boundary.has_membrane())
+      boundary.set_wall_velocity(servo_velocity(boundary.wall_stress(), options.confining_pressure,
+                                                wall_rate * boundary.wall().radius));
+    observed_step(solver, boundary, platens, dt, on_step);
   }
   drive_platens(solver, boundary, platens, 0.0);
+  boundary.set_wall_velocity(0);
   return step;
 }
 

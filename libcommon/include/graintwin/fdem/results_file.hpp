@@ -9,11 +9,17 @@
 #include <string>
 #include <vector>
 
-#include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
+#include "graintwin/fdem/triaxial.hpp"
 #include "graintwin/io/h5file.hpp"
 
 namespace graintwin::fdem {
+
+/// A triaxial test's part of a series row.
+struct TriaxialRow {
+  TriaxialMeasure measure;  ///< after the step
+  double inertial_number = std::numeric_limits<double>::quiet_NaN();  ///< while shearing
+};
 
 /// One time-series row: the energies at the start of a step and the platen state of that step.
 struct SeriesRow {
@@ -23,25 +29,44 @@ struct SeriesRow {
   Energies energies;
   std::uint64_t node_contacts = 0;
   std::vector<Eigen::Vector3d> platen_force, platen_position;
+  std::optional<TriaxialRow> triaxial;
 };
 
 class ResultsWriter {
  public:
-  /// Creates `path` and writes the grain and platen tables, the stages and `parameters_json`.
-  ResultsWriter(const std::filesystem::path& path, const Solver& solver, const Scene& scene, const std::string& parameters_json);
-  /// Books the step of `dt` just taken (its report holds the energies at its start).
-  void add_row(const Solver& solver, const StepReport& report, std::uint32_t stage, double dt);
-  /// Writes frame /frames/<k> of the solver's current state.
-  void add_frame(const Solver& solver);
+  /// Creates `path` and writes the grain and platen tables; `parameters_json` is written by finish().
+  ResultsWriter(const std::filesystem::path& path, const Solver& solver, std::string parameters_json);
+  /// Replaces the run's parameters (e.g. with what the run found out: steps taken, scalings).
+  void set_parameters(std::string parameters_json) { parameters_ = std::move(parameters_json); }
+  /// Names the next loading stage and its start time (s); rows refer to stages by their order.
+  void add_stage(const std::string& name, double start);
+  /// Books the step of `dt` just taken (its report holds the energies at its start), with the
+  /// triaxial measurement after it in a triaxial test (every row of a run has one or none has).
+  void add_row(const Solver& solver, const StepReport& report, std::uint32_t stage, double dt,
+               const std::optional<TriaxialRow>& triaxial = std::nullopt);
+  /// The reference of the triaxial strains (the start of shearing): rows booked from now on get
+  /// eps_1 = ln(H0 / H) and eps_v = ln(V0 / V), earlier rows NaN.
+  void set_strain_reference(double height, double volume);
+  /// Writes frame /frames/<k> of the solver's current state; with a membrane on `boundary`, also
+  /// its ball centres; `axial_strain` becomes the frame's attribute of that name.
+  void add_frame(const Solver& solver, const TriaxialBoundary* boundary = nullptr,
+                 std::optional<double> axial_strain = std::nullopt);
   std::size_t frames() const { return frames_; }
-  /// Writes the series and the provenance; the file is complete afterwards.
+  /// Writes the series, the stages, the parameters and the provenance; the file is complete afterwards.
   void finish(const std::vector<std::string>& history);
 
  private:
+  void write_triaxial_columns();
+
   io::H5File file_;
   std::size_t platens_ = 0;
   std::size_t frames_ = 0;
   std::vector<SeriesRow> rows_;
+  std::string parameters_;
+  std::vector<std::string> stage_names_;
+  std::vector<double> stage_starts_;
+  std::optional<std::size_t> reference_row_;  ///< first row of the strains
+  double reference_height_ = 0, reference_volume_ = 0;
 };
 
 /// Frame k of a results file, as stored.

@@ -15,6 +15,7 @@
 
 #include "graintwin/fdem/model.hpp"
 #include "graintwin/fdem/size_grading.hpp"
+#include "graintwin/fdem/triaxial.hpp"
 
 namespace graintwin::fdem {
 
@@ -56,6 +57,22 @@ struct ModelSource {
   std::optional<GrainKind> kind;        ///< every grain of the file modelled as this (only rigid: a mesh keeps its order)
 };
 
+/// A triaxial test ([triaxial], docs/fdem_triaxial.md): its stages are goal-based (isotropic
+/// consolidation inside the servo wall, then the membrane's forming procedure, then shearing),
+/// so a scene with [triaxial] has no [[stages]].
+struct TriaxialSpec {
+  TriaxialOptions options;
+  bool membrane = true;                ///< false: the rigid servo wall stays the lateral boundary
+  double shear_inertial_number = 1e-3;  ///< sets the shearing strain rate unless strain_rate does
+  double strain_rate = 0;               ///< 1/s of the platen gap; 0 = from shear_inertial_number
+  double target_axial_strain = 0.1;     ///< log strain eps_1 at which shearing ends
+  /// Axial strains (e.g. the scans') at which frames are saved, besides the start of shearing and
+  /// its end; ascending, below target_axial_strain.
+  std::vector<double> frame_strains;
+  std::size_t consolidation_steps = 200000;  ///< most steps each consolidation phase may take
+  std::size_t pressure_ramp_steps = 2000;    ///< steps over which the membrane pressure is ramped up
+};
+
 struct Scene {
   /// The model file's materials first (a [[materials]] table of the same name replaces one), then
   /// the scene's other materials.
@@ -65,11 +82,13 @@ struct Scene {
   /// The scene's [[platens]], or the model file's (at rest) when the scene has none.
   std::vector<PlatenSpec> platens;
   std::optional<SampleCylinder> sample;   ///< [sample], else the model file's
-  std::vector<StageSpec> stages;          ///< at least one (a run without [[stages]] is one stage of run.duration)
+  std::vector<StageSpec> stages;          ///< at least one (a run without [[stages]] is one stage of run.duration); none with [triaxial]
+  std::optional<TriaxialSpec> triaxial;   ///< a triaxial test instead of [[stages]]
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
   double damping = 0;                     ///< mass-proportional alpha, 1/s
   double time_step = 0;                   ///< s; 0 = the stable limit
   double element_safety = 0.8;            ///< fraction of the element critical step
+  double rigid_contact_nodes = 12;        ///< SolverOptions::rigid_contact_nodes
   bool contact = true;
   double frame_interval = 0;              ///< s between saved frames; 0 = first and last only
   double series_interval = 0;             ///< s between time-series rows; 0 = every step
@@ -79,9 +98,10 @@ struct Scene {
   std::size_t primitive_grain(std::size_t k) const { return (model ? model->model->grains.size() : 0) + k; }
 };
 
-/// Parses and checks a scene (and reads its model file, a path relative to the scene's folder);
-/// UsageError naming the file, the table and the fix on any problem.
-Scene read_scene(const std::filesystem::path& path);
+/// Parses and checks a scene (and reads its model file, a path relative to the scene's folder, or
+/// `model_file` when given, which replaces [model] file); UsageError naming the file, the table
+/// and the fix on any problem.
+Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file = {});
 
 /// Appends a sphere or ellipsoid grain to a model. gmsh is linked only into graintwin_mesh, so
 /// programs that mesh pass fdem::append_ellipsoid_grain (fdem/ellipsoid_grain.hpp).

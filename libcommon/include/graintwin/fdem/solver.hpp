@@ -53,6 +53,10 @@ struct SolverOptions {
   double damping = 0;            ///< alpha of C = alpha M, 1/s
   double element_safety = 0.8;   ///< fraction of the element critical step used as the stable limit
   ContactOptions contact;
+  /// Nodes of a rigid grain assumed to touch at once: contact sees each node of a rigid grain as
+  /// this share of the body's effective mass at it, which sets the contact dashpots and the stable
+  /// step (a few contacts of a few nodes each; a run that breaks the assumption stops as a runaway).
+  double rigid_contact_nodes = 12;
   /// A run stops when the mechanical energy exceeds this multiple of the energy put in (plus a floor
   /// of 1e-12 E V summed over the grains, below which energy is round-off).
   double runaway_factor = 10;
@@ -114,6 +118,9 @@ class Solver {
   const SolverOptions& options() const { return options_; }
   const SolverState& state() const { return state_; }
   std::span<const double> node_mass() const { return mass_; }
+  /// The node masses contact uses (dashpots, stable step): node_mass() for deformable grains; for a
+  /// rigid grain's node, the body's effective mass there over options().rigid_contact_nodes.
+  std::span<const double> contact_node_mass() const { return contact_mass_; }
   const BodyProperties& body(std::size_t grain) const { return bodies_[grain]; }
 
   /// Gives grain g a rigid velocity V + omega x (X - centroid); only before the first step.
@@ -172,6 +179,7 @@ class Solver {
   SolverOptions options_;
   ElasticElements elements_;
   std::vector<double> mass_;
+  std::vector<double> contact_mass_;
   std::vector<BodyProperties> bodies_;         ///< per grain, in the reference configuration
   std::vector<Eigen::Matrix3d> inverse_inertia_;  ///< per grain, reference axes
   std::unique_ptr<ContactModel> contact_;

@@ -34,8 +34,9 @@ PlatenPair find_platens(const Model& model);
 /// Median diameter by volume of the model's grains (equivalent spheres), m.
 double grains_d50(const Solver& solver);
 
-/// The lateral boundary: first the rigid wall at the sample radius, then (install_membrane) the
-/// membrane. Stepped by the solver (Solver::set_boundary).
+/// The lateral boundary: first the rigid wall at the sample radius (or just outside the outermost
+/// grain node when the grains reach beyond it), then (install_membrane) the membrane. Stepped by
+/// the solver (Solver::set_boundary).
 class TriaxialBoundary final : public Boundary {
  public:
   TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50);
@@ -50,8 +51,11 @@ class TriaxialBoundary final : public Boundary {
   double wall_stress() const;
   /// Replaces the wall by the membrane: ball centres on the wall's radius plus a ball radius, rings
   /// from two below the bottom platen to two above the top one; the rings beyond the platens are
-  /// clamped (radially fixed, moving with their platen). The confining pressure starts at 0.
-  void install_membrane();
+  /// clamped (radially fixed, moving with their platen). The confining pressure starts at 0. When
+  /// the membrane's own stable step (bonds and ball contact) is below the run's `dt`, its density
+  /// is scaled up until it is not (density_scaling(): the factor, 1 when none was needed).
+  void install_membrane(const ContactModel& contact, double dt);
+  double density_scaling() const { return density_scaling_; }
   void set_pressure(double pressure) { pressure_ = pressure; }
   /// Holds every membrane ball where it is (the forming procedure's fixed membrane) or releases
   /// the balls between the platens again.
@@ -86,6 +90,7 @@ class TriaxialBoundary final : public Boundary {
   std::vector<Eigen::Vector3d> ball_force_, ball_moment_;  ///< per ball, scratch of apply()
   std::vector<Eigen::Vector3d> pressure_force_, before_;   ///< per ball, scratch: the pressure's work
   bool membrane_started_ = false;
+  double density_scaling_ = 1;
 };
 
 /// One row of the triaxial time series.
@@ -98,6 +103,19 @@ struct TriaxialMeasure {
 };
 TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens);
 
+/// Called after every step of the procedures below with the measurement after it and the step's
+/// report (e.g. to write the time series, show progress or stop on an interrupt by throwing).
+using TriaxialObserver = std::function<void(const TriaxialMeasure&, const StepReport&)>;
+
+/// Kinetic energy below this share of the elastic energy (contact and strain) counts as
+/// quasi-static (SPEC section 7).
+inline constexpr double kQuasiStaticRatio = 0.05;
+/// The inertial number of a sample sheared at `strain_rate` (1/s): strain rate x d50 x
+/// sqrt(density / mean stress); quasi-static below 1e-3.
+double inertial_number(double strain_rate, double d50, double density, double mean_stress);
+/// The strain rate of a given inertial number (inverse of inertial_number), 1/s.
+double strain_rate_of(double inertial_number, double d50, double density, double mean_stress);
+
 /// Servo velocity for a stress error: the fastest speed while the error is above 10 % of the
 /// target, proportional below (m/s, positive = the boundary should open).
 double servo_velocity(double stress, double target, double fastest);
@@ -109,22 +127,24 @@ double servo_velocity(double stress, double target, double fastest);
 /// sigma_3 and the kinetic energy below 5 % of the elastic energy for 100 steps, or `max_steps`
 /// (DataError). Returns the steps taken.
 std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
-                                    double dt, std::size_t ramp_steps, std::size_t max_steps);
+                                    double dt, std::size_t ramp_steps, std::size_t max_steps,
+                                    const TriaxialObserver& on_step = {});
 
 /// Strain-controlled shearing (SPEC section 8): both platens move towards each other at
-/// strain_rate x H0 / 2 each, under the membrane pressure, until the axial strain ln(H0 / H)
-/// reaches target_axial_strain. `on_step` gets every step's measurement and report.
+/// strain_rate x H0 / 2 each, under the membrane pressure (or inside the wall, which servos to
+/// sigma_3 as in consolidation), until the axial strain ln(H0 / H) reaches target_axial_strain.
+/// `on_step` gets every step's measurement and report. Returns the steps taken.
 struct ShearOptions {
   double strain_rate = 0;          ///< 1/s, of the platen gap
   double target_axial_strain = 0;  ///< log strain, compression positive
 };
-std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const ShearOptions& options, double dt,
-                  const std::function<void(const TriaxialMeasure&, const StepReport&)>& on_step);
+std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
+                  const ShearOptions& shearing, double dt, const TriaxialObserver& on_step);
 
 /// Isotropic consolidation inside the wall: the wall and both platens servo to sigma_3 until all
 /// three stresses are within options.stress_tolerance of it and the kinetic energy is below 5 % of
 /// the contact elastic energy for 100 consecutive steps, or `max_steps`. Returns the steps taken.
 std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
-                                double dt, std::size_t max_steps);
+                                double dt, std::size_t max_steps, const TriaxialObserver& on_step = {});
 
 }  // namespace graintwin::fdem

@@ -223,10 +223,20 @@ namespace graintwin::schema::labels {
 inline constexpr const char* sample_void_ratio = "/sample/void_ratio";  ///< (1) e = V_void / V_solid
 }  // namespace graintwin::schema::labels
 
-// The triaxial measurements of fdemrun's time series (issue 10 item 3), read by report; one value
-// per series row, compression positive.
+// The triaxial measurements of fdemrun's time series (a scene with [triaxial]; docs/fdem_triaxial.md),
+// read by report; one value per series row, stresses and strains compression positive. Strains are
+// from the start of shearing (H0, V0) and NaN before it; the inertial number is NaN before it too.
 namespace graintwin::schema::fdem_results {
 inline constexpr const char* series_axial_strain = "/series/axial_strain";            ///< (R) eps_1 = ln(H0 / H)
-inline constexpr const char* series_volumetric_strain = "/series/volumetric_strain";  ///< (R) eps_v = ln(V0 / V)
+inline constexpr const char* series_volumetric_strain = "/series/volumetric_strain";  ///< (R) eps_v = ln(V0 / V), eq. 27
 inline constexpr const char* series_stress_ratio = "/series/stress_ratio";            ///< (R) sigma_1 / sigma_3
+inline constexpr const char* series_axial_stress = "/series/axial_stress";            ///< (R) Pa, sigma_1 from the platens
+inline constexpr const char* series_lateral_stress = "/series/lateral_stress";        ///< (R) Pa, sigma_3: wall or membrane
+inline constexpr const char* series_height = "/series/height";                        ///< (R) m, platen gap H
+inline constexpr const char* series_volume = "/series/volume";                        ///< (R) m^3, eq. 27
+inline constexpr const char* series_volume_radial = "/series/volume_radial";          ///< (R) m^3, eq. 28
+inline constexpr const char* series_kinetic_ratio = "/series/kinetic_ratio";          ///< (R) kinetic / elastic energy
+inline constexpr const char* series_inertial_number = "/series/inertial_number";      ///< (R) eps_1' d50 sqrt(rho / p)
+/// Membrane ball centres of a frame (B x 3, m), in frames taken while the membrane is on.
+inline constexpr const char* frame_membrane_position = "membrane/position";
 }  // namespace graintwin::schema::fdem_results

@@ -1,0 +1,44 @@
+#pragma once
+// The whole triaxial test of a scene with [triaxial] (docs/fdem_triaxial.md): isotropic
+// consolidation inside the servo wall, the membrane's forming procedure (unless the wall stays the
+// boundary), then strain-controlled shearing to the target axial strain; every step's energies and
+// triaxial measurement go to the results' time series, frames at the start of shearing, at the
+// requested axial strains and at the end.
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "graintwin/fdem/results_file.hpp"
+#include "graintwin/fdem/scene.hpp"
+
+namespace graintwin::fdem {
+
+struct TriaxialRunHooks {
+  /// A phase begins: its name and the steps it will take (0 when it runs until it has settled).
+  std::function<void(const std::string& phase, std::size_t steps)> phase;
+  /// After every step, with its measurement and report (progress display, interrupts: it may throw).
+  std::function<void(const TriaxialMeasure&, const StepReport&)> step;
+  /// After every frame written to the results (e.g. to write it as VTK too).
+  std::function<void()> frame;
+};
+
+/// What the run did, for the log and the results' parameters.
+struct TriaxialRunSummary {
+  std::size_t consolidation_steps = 0, membrane_steps = 0, shear_steps = 0;
+  double d50 = 0;                 ///< m, of the grains (volume-equivalent spheres)
+  double strain_rate = 0;         ///< 1/s, shearing
+  double inertial_number = 0;     ///< of the shearing at sigma_3
+  double max_kinetic_ratio = 0;   ///< largest kinetic / elastic energy while shearing
+  std::size_t membrane_balls = 0;
+  double ball_radius = 0;         ///< m
+  double density_scaling = 1;     ///< of the membrane, for the run's time step
+  TriaxialMeasure start, end;     ///< at the start and the end of shearing
+};
+
+/// Runs the test on `solver` (which must have contact, and platens "bottom" and "top") at time
+/// step `dt`, a series row every `row_every` steps. UsageError before any step on a model the
+/// test cannot run; DataError when a consolidation does not settle.
+TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double dt, std::uint64_t row_every,
+                                ResultsWriter& writer, const TriaxialRunHooks& hooks = {});
+
+}  // namespace graintwin::fdem
