@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
       "weak ones (f < 1, P ~ f^theta); the rose of mean normal force per direction; force chains as VTK lines "
       "(--chains: the strong network, contacts with f_n >= --chain-threshold x <f_n>; 1 = the usual definition, "
       "Radjai et al. 1998); the grain stress q = sqrt(1/2 s_ij s_ij), s the deviatoric part of the volume-averaged grain "
-      "stress (the CT-FDEM paper's definition; rigid grains carry no stress, q = 0); per strain window of --window "
+      "stress (the CT-FDEM paper's definition; for rigid grains fdemrun stores the Love-Weber average of their contact forces); per strain window of --window "
       "frames the volatility of q (sample standard deviation of ln(q_i/q_{i-1})) and Pearson's r against D2min (from "
       "--micro, else Falk-Langer D2min over --radius-d50 from the frames' centroids) with its two-sided p-value. "
       "Writes kind=forces (.h5).");
@@ -183,7 +183,7 @@ int main(int argc, char** argv) {
       spdlog::info("window {} -> {}: Pearson r of volatility against D2min {:.3f} (p = {:.3g}) over {} grains", w.from, w.to,
                    w.correlation.r, w.correlation.p_value, w.correlation.count);
       if (w.correlation.count < 3)
-        spdlog::warn("window {} -> {}: fewer than 3 grains have both a volatility and a D2min (rigid grains carry no stress)",
+        spdlog::warn("window {} -> {}: fewer than 3 grains have both a volatility and a D2min",
                      w.from, w.to);
       content.windows.push_back(std::move(w));
     }

@@ -221,3 +221,35 @@ TEST(FdemScene, AGradedSphereIsFineOnlyNearItsRefinePoint) {
   ASSERT_GT(n_far, 0);
   EXPECT_LT(near / n_near, 0.3 * far / n_far);
 }
+
+// A [triaxial] table: defaults from SPEC sections 0 and 8, the membrane thickness from the model
+// file's sample cylinder unless the table sets it, the model file replaced by read_scene's argument
+// (fdemrun --model), and the rate as a strain rate or an inertial number, not both.
+TEST(FdemScene, TriaxialTableTakesTheModelsMembraneThicknessAndItsDefaults) {
+  test::TempDir dir;
+  Model file_model;
+  add_grain(file_model, box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d::Zero(), GrainKind::rigid, 0, 1);
+  file_model.sample = SampleCylinder{Eigen::Vector2d::Zero(), 1e-3, -0.5e-3, 0.5e-3, 0.6e-3};
+  write_model_file(dir / "thick.h5", file_model, {"test"});
+  const auto path = write_text(dir, "triaxial.toml", "[model]\n[triaxial]\nframe_strains = [0.01, 0.05]\n");
+  EXPECT_THROW(read_scene(path), UsageError);  // [model] without a file and without the override
+  const Scene s = read_scene(path, dir / "thick.h5");
+  ASSERT_TRUE(s.triaxial.has_value());
+  const TriaxialSpec& t = *s.triaxial;
+  EXPECT_TRUE(t.membrane);
+  EXPECT_DOUBLE_EQ(t.options.membrane.thickness, 0.6e-3);
+  EXPECT_DOUBLE_EQ(t.options.confining_pressure, 300e3);
+  EXPECT_DOUBLE_EQ(t.options.membrane.young, 1.25e6);
+  EXPECT_DOUBLE_EQ(t.options.membrane.poisson, 0.2);
+  EXPECT_DOUBLE_EQ(t.target_axial_strain, 0.1);
+  EXPECT_EQ(t.frame_strains, (std::vector<double>{0.01, 0.05}));
+  EXPECT_TRUE(s.stages.empty());
+  const auto thin = write_text(dir, "thin.toml", "[model]\n[triaxial]\nmembrane_thickness = 0.3e-3\nstrain_rate = 10\n");
+  const Scene t2 = read_scene(thin, dir / "thick.h5");
+  EXPECT_DOUBLE_EQ(t2.triaxial->options.membrane.thickness, 0.3e-3);
+  EXPECT_DOUBLE_EQ(t2.triaxial->strain_rate, 10.0);
+  // Without a sample cylinder there is no wall to start from.
+  file_model.sample.reset();
+  write_model_file(dir / "bare.h5", file_model, {"test"});
+  EXPECT_THROW(read_scene(path, dir / "bare.h5"), UsageError);
+}

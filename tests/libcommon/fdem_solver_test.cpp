@@ -151,3 +151,24 @@ TEST(FdemSolver, CheckpointRestartReproducesTheRunBitForBit) {
   Solver c(other, o);
   EXPECT_THROW(c.load(io::H5File::open(dir / "checkpoint.h5"), "/state"), DataError);
 }
+
+// A rigid 1 mm cube squeezed between two platens that both cut 1 um into it: the forces on its
+// faces balance, and its Love-Weber stress is sigma_zz = -F / A (F the platen force, A = 1 mm^2)
+// with nothing else, to round-off; before the first step it is zero.
+TEST(FdemSolver, RigidGrainStressIsTheLoveWeberAverageOfItsContactForces) {
+  Model m;
+  add_grain(m, box_mesh(Eigen::Vector3d::Constant(1e-3), 0.25e-3), Eigen::Vector3d::Zero(), GrainKind::rigid, 0, 1);
+  m.platens = {Platen{"bottom", Eigen::Vector3d(0, 0, -0.5e-3 + 1e-6), Eigen::Vector3d::UnitZ(), 0.0},
+               Platen{"top", Eigen::Vector3d(0, 0, 0.5e-3 - 1e-6), -Eigen::Vector3d::UnitZ(), 0.0}};
+  Solver s(m, SolverOptions{});
+  EXPECT_EQ(s.grain_stress(0), Eigen::Matrix3d::Zero());
+  s.step(0.5 * s.time_step_limits().stable());
+  const double F = s.platen_force(1).z();
+  ASSERT_GT(F, 0);
+  EXPECT_NEAR(s.platen_force(0).z(), -F, 1e-9 * F);
+  const Eigen::Matrix3d sigma = s.grain_stress(0);
+  EXPECT_NEAR(sigma(2, 2), -F / 1e-6, 1e-6 * F / 1e-6);
+  Eigen::Matrix3d rest = sigma;
+  rest(2, 2) = 0;
+  EXPECT_LT(rest.cwiseAbs().maxCoeff(), 1e-6 * F / 1e-6);
+}

@@ -332,8 +332,14 @@ Eigen::Quaterniond Solver::grain_rotation(std::size_t g) const {
 
 Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
   const Grain& grain = model_->grains.at(g);
-  if (grain.kind == GrainKind::rigid) return Eigen::Matrix3d::Zero();
-  return elements_.average_cauchy_stress(state_.x, grain.element_begin, grain.element_end);
+  if (grain.kind != GrainKind::rigid) return elements_.average_cauchy_stress(state_.x, grain.element_begin, grain.element_end);
+  // A rigid body has no strain, but its average stress follows from the forces on its surface
+  // (Love-Weber): sigma = (1/V) sum_n r_n (x) f_n, the symmetric part, with the contact and
+  // boundary forces of the last step (gravity acts on the body, not on the nodes).
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  const Eigen::Vector3d c = state_.bodies[g].position;
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) sum += (state_.x[i] - c) * force_[i].transpose();
+  return 0.5 * (sum + sum.transpose()) / bodies_[g].volume;
 }
 
 Eigen::Matrix3d Solver::element_stress(std::size_t e) const {

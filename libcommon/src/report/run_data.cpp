@@ -272,11 +272,19 @@ TriaxialSeries read_triaxial_series(const fs::path& results) {
   for (const char* name : {sr::series_axial_strain, sr::series_volumetric_strain, sr::series_stress_ratio})
     if (!f.exists(name)) s.missing.push_back(name);
   if (!s.missing.empty()) return s;
-  s.axial_strain = f.read<double>(sr::series_axial_strain);
-  s.volumetric_strain = f.read<double>(sr::series_volumetric_strain);
-  s.stress_ratio = f.read<double>(sr::series_stress_ratio);
-  if (s.volumetric_strain.size() != s.axial_strain.size() || s.stress_ratio.size() != s.axial_strain.size())
+  const auto axial = f.read<double>(sr::series_axial_strain);
+  const auto volumetric = f.read<double>(sr::series_volumetric_strain);
+  const auto ratio = f.read<double>(sr::series_stress_ratio);
+  if (volumetric.size() != axial.size() || ratio.size() != axial.size())
     throw DataError(results.string() + ": the series' strains and stress ratio differ in length; rerun fdemrun");
+  // The strains are NaN before shearing starts (fdemrun measures them from there): the curves are
+  // the shearing rows.
+  for (std::size_t i = 0; i < axial.size(); ++i)
+    if (std::isfinite(axial[i])) {
+      s.axial_strain.push_back(axial[i]);
+      s.volumetric_strain.push_back(volumetric[i]);
+      s.stress_ratio.push_back(ratio[i]);
+    }
   return s;
 }
 

@@ -152,7 +152,9 @@ class Solver {
   /// Rotation of grain g from the reference: the body orientation, or the polar part of the
   /// mass-weighted best fit of its nodes (Kabsch).
   Eigen::Quaterniond grain_rotation(std::size_t grain) const;
-  /// Volume-averaged Cauchy stress of grain g, tension positive, Pa (zero for rigid grains).
+  /// Volume-averaged Cauchy stress of grain g, tension positive, Pa: of its elements, or for a rigid
+  /// grain the Love-Weber average (1/V) sym(sum_n r_n (x) f_n) of the contact and boundary forces on
+  /// its nodes in the last step (zero before the first step).
   Eigen::Matrix3d grain_stress(std::size_t grain) const;
   /// Volume-averaged Cauchy stress of element e, tension positive, Pa (zero in rigid grains).
   Eigen::Matrix3d element_stress(std::size_t element) const;

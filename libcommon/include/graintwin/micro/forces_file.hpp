@@ -50,7 +50,7 @@ struct VolatilityWindow {
 /// The q definition stored beside /grains/q.
 inline constexpr const char* kQDefinition =
     "q = sqrt(1/2 s_ij s_ij), s the deviatoric part of the volume-averaged grain stress (the CT-FDEM paper's "
-    "definition, sqrt(J2), not von Mises' sqrt(3 J2)); 0 for rigid grains, which carry no stress";
+    "definition, sqrt(J2), not von Mises' sqrt(3 J2)); rigid grains: of the Love-Weber average of their contact forces";
 
 struct ForcesFile {
   std::vector<std::uint32_t> label;   ///< G, simulation grain labels
