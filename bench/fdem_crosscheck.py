@@ -25,6 +25,9 @@ import sys
 import time
 from datetime import date
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_doc import publish  # noqa: E402
+
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 GLASS = dict(E=48e9, nu=0.2, rho=2800.0)
@@ -172,18 +175,6 @@ def table(ours, theirs):
     return "\n".join(out), times
 
 
-def publish(text):
-    path = os.path.join(SOURCE, "docs", "benchmarks.md")
-    begin, end = "<!-- bench:fdem_crosscheck -->", "<!-- /bench:fdem_crosscheck -->"
-    doc = open(path).read() if os.path.exists(path) else "# Benchmarks\n"
-    section = begin + "\n" + text + end
-    b, e = doc.find(begin), doc.find(end)
-    doc = doc[:b] + section + doc[e + len(end):] if b >= 0 and e > b else doc + "\n" + section + "\n"
-    with open(path, "w") as f:
-        f.write(doc)
-    print("updated", path, "(section fdem_crosscheck)")
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--build", default=os.path.join(SOURCE, "build"))
@@ -217,7 +208,7 @@ def main():
             f"Measured on {cpu}, {os.cpu_count()} cores, {date.today()} by `bench/fdem_crosscheck.py`.\n\n"
             + text_table + "\n\nRun times (one thread each): " + "; ".join(times) + ".\n")
     print(text)
-    publish(text)
+    publish("fdem_crosscheck", text)
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ usage: bench/fdem_triaxial_bench.py [--build DIR] [--model FILE] [--work DIR] [-
   --jobs N     runs side by side, one thread each (default 1: CPU times are then comparable)
   --reuse      keep results already in WORK (e.g. after an interrupted bench) instead of running them again"""
 import argparse
+import json
 import math
 import os
 import platform
@@ -34,6 +35,9 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_doc import publish  # noqa: E402
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TARGET = 0.06
@@ -104,7 +108,6 @@ def read(path):
                                              "inertial_number", "height", "volume")}
         last = sorted(f["frames"])[-1]
         out["membrane"] = f[f"frames/{last}/membrane/position"][:] if f"frames/{last}/membrane" in f else None
-        import json
         out["parameters"] = json.loads(f["run/parameters"][0])
     return out
 
@@ -214,18 +217,6 @@ def boundary_table(results, cpu):
             "eps_v at 6 % (%) |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows))
 
 
-def publish(text):
-    path = os.path.join(SOURCE, "docs", "benchmarks.md")
-    begin, end = "<!-- bench:fdem_triaxial -->", "<!-- /bench:fdem_triaxial -->"
-    doc = open(path).read() if os.path.exists(path) else "# Benchmarks\n"
-    section = begin + "\n" + text + end
-    b, e = doc.find(begin), doc.find(end)
-    doc = doc[:b] + section + doc[e + len(end):] if b >= 0 and e > b else doc + "\n" + section + "\n"
-    with open(path, "w") as f:
-        f.write(doc)
-    print("updated", path, "(section fdem_triaxial)")
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--build", default=os.path.join(SOURCE, "build"))
@@ -266,7 +257,7 @@ def main():
         text += (f"### Boundary: membrane thickness and the rigid wall (I = {PIPELINE_RATE})\n\n" + boundary_table(results, cpu) +
                  "\n\n![boundary](img/fdem_triaxial_boundary.png)\n\n")
     print(text)
-    publish(text)
+    publish("fdem_triaxial", text)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,17 @@
+"""Shared by the Python benchmarks: rewrites one section of docs/benchmarks.md, the part between
+<!-- bench:NAME --> and <!-- /bench:NAME --> (appended when it is not there yet)."""
+import os
+
+SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def publish(name, text):
+    path = os.path.join(SOURCE, "docs", "benchmarks.md")
+    begin, end = f"<!-- bench:{name} -->", f"<!-- /bench:{name} -->"
+    doc = open(path).read() if os.path.exists(path) else "# Benchmarks\n"
+    section = begin + "\n" + text + end
+    b, e = doc.find(begin), doc.find(end)
+    doc = doc[:b] + section + doc[e + len(end):] if b >= 0 and e > b else doc + "\n" + section + "\n"
+    with open(path, "w") as f:
+        f.write(doc)
+    print("updated", path, f"(section {name})")
