@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -300,6 +301,14 @@ TEST(Fdemrun, TriaxialTestWritesItsSeriesStagesAndFramesAtTheAskedStrains) {
       }
     }
     EXPECT_NEAR(eps1.back(), 2e-3, 1e-5);
+    // The platens start from rest and reach full speed over the default ramp of 1e-3 strain: the
+    // gap closes by 2, 3, 4 ... parts in successive steps, then by strain_rate x H0 x dt.
+    const auto height = f.read<double>(sr::series_height);
+    const auto first = static_cast<std::size_t>(std::find(stage.begin(), stage.end(), shearing) - stage.begin());
+    const double d1 = height[first] - height[first + 1], d2 = height[first + 1] - height[first + 2];
+    EXPECT_NEAR(d2 / d1, 1.5, 1e-3);
+    const double full = height[height.size() - 2] - height.back();
+    EXPECT_GT(full, 10 * d1);
     EXPECT_TRUE(std::isfinite(epsv.back()));
     EXPECT_NEAR(lateral.back(), 300e3, 0.02 * 300e3);  // the wall servo or the membrane pressure
     EXPECT_GT(ratio.back(), 1.5);                      // columns of rigid cubes carry the platens
@@ -333,6 +342,7 @@ TEST(Fdemrun, BadTriaxialScenesFailBeforeAnyStep) {
   bad("beyond.toml", "[5e-4, 1e-3]", "[5e-4, 0.1]", "ascending");
   bad("kind.toml", "boundary = \"wall\"", "boundary = \"latex\"", "use membrane or wall");
   bad("both.toml", "strain_rate = 5", "strain_rate = 5\nshear_inertial_number = 1e-3", "keep one");
+  bad("ramp.toml", "strain_rate = 5", "strain_rate = 5\nshear_ramp_strain = 0.01", "below target_axial_strain");
   test::expect_clean_failure("fdemrun", dir, {scene.string(), out, "--checkpoint", (dir / "c.h5").string()}, 2,
                              "checkpoints");
 }

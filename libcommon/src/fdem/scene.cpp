@@ -152,6 +152,9 @@ TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>&
     t.fail("strain_rate and shear_inertial_number both set the shearing rate; keep one");
   spec.target_axial_strain = t.positive("target_axial_strain", spec.target_axial_strain);
   if (spec.target_axial_strain >= 1) t.fail("target_axial_strain is a log strain and must be below 1, e.g. 0.1");
+  spec.shear_ramp_strain = t.non_negative("shear_ramp_strain", spec.shear_ramp_strain);
+  if (spec.shear_ramp_strain >= spec.target_axial_strain)
+    t.fail("shear_ramp_strain must be below target_axial_strain (the platens reach full speed within it)");
   if (t.has("frame_strains")) {
     const toml::array* a = t.raw()["frame_strains"].as_array();
     const std::string usage = "frame_strains must be an ascending array of axial strains in (0, target_axial_strain), e.g. [0.03, 0.06]";
@@ -401,7 +404,7 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     const Table t(*triaxial, file + ": [triaxial]",
                   {"boundary", "confining_pressure", "membrane_young", "membrane_poisson", "membrane_thickness",
                    "membrane_density", "ball_radius", "membrane_friction", "servo_inertial_number", "stress_tolerance",
-                   "shear_inertial_number", "strain_rate", "target_axial_strain", "frame_strains",
+                   "shear_inertial_number", "strain_rate", "target_axial_strain", "shear_ramp_strain", "frame_strains",
                    "consolidation_steps", "pressure_ramp_steps"});
     if (!s.stages.empty() || duration > 0)
       t.fail("a triaxial test runs its own stages (consolidation, membrane, shearing); remove [[stages]] and [run] duration");

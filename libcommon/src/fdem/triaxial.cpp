@@ -288,11 +288,13 @@ std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOpti
     throw UsageError("shearing needs a positive strain rate and target axial strain");
   const PlatenPair platens = find_platens(solver.model());
   const double h0 = measure(solver, boundary, platens).height, wall_rate = servo_rate(solver, options);
+  const double ramp_steps = std::ceil(shearing.ramp_strain / (shearing.strain_rate * dt));
   std::size_t step = 0;
   for (;; ++step) {
     const TriaxialMeasure m = measure(solver, boundary, platens);
     if (std::log(h0 / m.height) >= shearing.target_axial_strain) break;
-    drive_platens(solver, boundary, platens, -shearing.strain_rate * h0);
+    const double speed = ramp_steps > 0 ? std::min(1.0, double(step + 1) / ramp_steps) : 1.0;
+    drive_platens(solver, boundary, platens, -speed * shearing.strain_rate * h0);
     if (!boundary.has_membrane())
       boundary.set_wall_velocity(servo_velocity(boundary.wall_stress(), options.confining_pressure,
                                                 wall_rate * boundary.wall().radius));

@@ -64,12 +64,14 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   summary.start = measure(solver, boundary, platens);
   writer.set_strain_reference(summary.start.height, summary.start.volume);
   // H = H0 (1 - rate t) at constant platen speed, and eps_1 = ln(H0 / H).
-  const auto expected = static_cast<std::size_t>(std::ceil((1 - std::exp(-spec.target_axial_strain)) / (summary.strain_rate * dt)));
+  // Plus half the ramp's steps, which cover half the distance of full speed.
+  const auto expected = static_cast<std::size_t>(std::ceil(
+      ((1 - std::exp(-spec.target_axial_strain)) + 0.5 * spec.shear_ramp_strain) / (summary.strain_rate * dt)));
   begin("shearing", expected);
   take_frame(0.0);
   shearing_rate = summary.strain_rate;
   std::size_t next_frame = 0;
-  summary.shear_steps = shear(solver, boundary, options, ShearOptions{summary.strain_rate, spec.target_axial_strain}, dt,
+  summary.shear_steps = shear(solver, boundary, options, ShearOptions{summary.strain_rate, spec.target_axial_strain, spec.shear_ramp_strain}, dt,
                               [&](const TriaxialMeasure& m, const StepReport& r) {
                                 book(m, r);
                                 const Energies& e = r.energies;

@@ -137,6 +137,9 @@ std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, 
 struct ShearOptions {
   double strain_rate = 0;          ///< 1/s, of the platen gap
   double target_axial_strain = 0;  ///< log strain, compression positive
+  /// The platens speed up linearly from rest over the steps full speed would take to this strain
+  /// (a sudden start shakes the sample out of quasi-static equilibrium); 0 = full speed at once.
+  double ramp_strain = 0;
 };
 std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
                   const ShearOptions& shearing, double dt, const TriaxialObserver& on_step);
