@@ -177,6 +177,22 @@ TEST_P(Kinds, LumpedMassTotalAndBodyProperties) {
   EXPECT_LT((b.inertia - Eigen::Matrix3d(I.asDiagonal())).norm(), 1e-9 * I.norm());
 }
 
+TEST(FdemElements, FourNodeBodyPropertiesInClosedFormMatchTheExactRule) {
+  // A sheared, stretched box: tet4 takes the closed form, the same straight mesh as tet10 the
+  // 125-point rule (exact to degree 7), so the two must agree to round-off.
+  TetMesh mesh = box_mesh(Eigen::Vector3d(2e-3, 1e-3, 1.5e-3), 0.5e-3);
+  Eigen::Matrix3d A;
+  A << 1.0, 0.3, -0.2, 0.1, 0.8, 0.4, -0.25, 0.05, 1.3;
+  for (Eigen::Vector3d& X : mesh.nodes) X = A * X;
+  Model four, ten;
+  add_grain(four, mesh, Eigen::Vector3d(0.01, -0.02, 0.03), GrainKind::tet4, 0, 1);
+  add_grain(ten, mesh, Eigen::Vector3d(0.01, -0.02, 0.03), GrainKind::tet10, 0, 1);
+  const BodyProperties a = body_properties(four, 0), b = body_properties(ten, 0);
+  EXPECT_NEAR(a.volume, b.volume, 1e-12 * b.volume);
+  EXPECT_LT((a.centroid - b.centroid).norm(), 1e-15);
+  EXPECT_LT((a.inertia - b.inertia).norm(), 1e-10 * b.inertia.norm());
+}
+
 TEST(FdemElements, InvertedElementIsRefusedWithItsName) {
   Model m = box_model(GrainKind::tet4);
   std::swap(m.element_nodes[1], m.element_nodes[2]);

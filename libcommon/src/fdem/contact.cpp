@@ -133,6 +133,7 @@ struct ContactModel::State {
   std::vector<double> reference_radius;
   std::vector<Eigen::Vector3d> built_at;     ///< surface node positions at the last build
   std::vector<RigidPose> built_pose;         ///< per grain, its pose at the last build (rigid = false: none)
+  std::vector<RigidPose> pose;               ///< per grain, this step's pose (rigid = false: none)
   bool need_rebuild = true;
   std::size_t rebuilds = 0;
 
@@ -205,6 +206,7 @@ struct ContactModel::State {
   /// centre c, radius r, build pose R_b, t_b).
   bool update_grain(std::uint32_t g, std::span<const Eigen::Vector3d> x, const RigidPose* pose, bool check_moved) {
     const Aabb& box = trees.bounds(g);
+    this->pose[g] = pose ? *pose : RigidPose{};
     if (pose && pose->rigid) {
       trees.place(g, pose->rotation, pose->translation);
       const double slack = kRigidRoundOff * (reference_radius[g] + box.hi.cwiseAbs().maxCoeff());
@@ -224,6 +226,17 @@ struct ContactModel::State {
     sphere_centre[g] = c;
     sphere_radius[g] = std::sqrt(reach2);
     return check_moved && moved_nodes(g, x);
+  }
+
+  /// The triangle of grain g nearest to the world point p within `radius` (SurfaceTrees::nearest);
+  /// a rigid grain with a pose is searched in its body frame, on its tree that never moves.
+  bool nearest(std::uint32_t g, const Eigen::Vector3d& p, double radius, std::span<const Eigen::Vector3d> x,
+               SurfaceTrees::Nearest& out, std::uint32_t hint = SurfaceTrees::kNoHint) const {
+    const RigidPose& body = pose[g];
+    if (!body.rigid) return trees.nearest(g, p, radius, x, out, hint);
+    if (!trees.nearest_in_body(g, body.rotation.transpose() * (p - body.translation), radius, out, hint)) return false;
+    out.closest.point = body.rotation * out.closest.point + body.translation;
+    return true;
   }
 
   /// Whether a surface node of grain g moved more than skin / 2 since the last build.
@@ -249,7 +262,7 @@ struct ContactModel::State {
     SurfaceTrees::Nearest near;
     for (std::uint32_t node : surface(from)) {
       const Eigen::Vector3d& p = x[node];
-      if (box.contains(p) && (p - centre).squaredNorm() <= sphere_reach2 && trees.nearest(to, p, reach, x, near))
+      if (box.contains(p) && (p - centre).squaredNorm() <= sphere_reach2 && nearest(to, p, reach, x, near))
         out.push_back({node, near.triangle});
     }
   }
@@ -286,7 +299,7 @@ struct ContactModel::State {
       const std::uint32_t node = listed.node;
       const Eigen::Vector3d& p = x[node];
       if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
-      const bool close = trees.nearest(to, p, max_penetration, x, near, listed.hint);
+      const bool close = nearest(to, p, max_penetration, x, near, listed.hint);
       checks.triangles += near.tested;
       if (!close) continue;
       if (listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
@@ -438,6 +451,7 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
       }
   }
   s.trees = SurfaceTrees(model);
+  s.pose.assign(model.grains.size(), RigidPose{});
 }
 
 ContactModel::~ContactModel() = default;
@@ -462,6 +476,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
 
   s.sphere_centre.resize(grain_count);
   s.sphere_radius.resize(grain_count);
+  s.pose.resize(grain_count);
   if (!poses.empty() && poses.size() != grain_count)
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
@@ -664,7 +679,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
     for (std::uint32_t g : it->second) {
       if (!s.trees.bounds(g).inflated(r).contains(c)) continue;
       SurfaceTrees::Nearest near;
-      if (!s.trees.nearest(g, c, r + s.max_penetration, x, near)) continue;
+      if (!s.nearest(g, c, r + s.max_penetration, x, near)) continue;
       const Eigen::Vector3d d = near.closest.point - c;  // from the centre to the surface
       const double dist = std::sqrt(near.distance2);
       const bool inside = d.dot(s.pseudonormal(near.triangle, near.closest.feature, x)) > 0;

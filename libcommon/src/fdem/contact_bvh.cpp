@@ -15,7 +15,7 @@ constexpr int kStackSize = 64;  // median splits: depth <= log2(triangles), far 
 constexpr double kHintSlack = 1e-6;
 }  // namespace
 
-SurfaceTrees::SurfaceTrees(const Model& model) : triangles_(model.triangles) {
+SurfaceTrees::SurfaceTrees(const Model& model) : reference_x_(model.nodes), triangles_(model.triangles) {
   std::vector<Eigen::Vector3d> centroid(model.triangles.size());
   for (std::size_t t = 0; t < centroid.size(); ++t) {
     const auto& tri = model.triangles[t];
@@ -55,20 +55,22 @@ SurfaceTrees::SurfaceTrees(const Model& model) : triangles_(model.triangles) {
   }
   tree_begin_.push_back(static_cast<std::uint32_t>(nodes_.size()));
   leaf_corners_.reserve(order_.size());
-  for (std::uint32_t t : order_) leaf_corners_.push_back(triangles_[t]);
+  reference_corners_.reserve(order_.size());
+  for (std::uint32_t t : order_) {
+    const auto& tri = triangles_[t];
+    leaf_corners_.push_back(tri);
+    reference_corners_.push_back({model.nodes[tri[0]], model.nodes[tri[1]], model.nodes[tri[2]]});
+  }
   for (std::size_t g = 0; g < model.grains.size(); ++g) refit(g, model.nodes);
-  reference_boxes_.reserve(nodes_.size());
-  for (const Node& node : nodes_) reference_boxes_.push_back(node.box);
+  reference_nodes_ = nodes_;
 }
 
 void SurfaceTrees::place(std::size_t grain, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
-  const Eigen::Matrix3d spread = rotation.cwiseAbs();
-  for (std::uint32_t i = tree_begin_[grain]; i < tree_begin_[grain + 1]; ++i) {
-    const Aabb& ref = reference_boxes_[i];
-    const Eigen::Vector3d centre = rotation * (0.5 * (ref.lo + ref.hi)) + translation;
-    const Eigen::Vector3d half = spread * (0.5 * (ref.hi - ref.lo));
-    nodes_[i].box = Aabb{centre - half, centre + half};
-  }
+  if (tree_begin_[grain] == tree_begin_[grain + 1]) return;
+  const Aabb& ref = reference_nodes_[tree_begin_[grain]].box;
+  const Eigen::Vector3d centre = rotation * (0.5 * (ref.lo + ref.hi)) + translation;
+  const Eigen::Vector3d half = rotation.cwiseAbs() * (0.5 * (ref.hi - ref.lo));
+  nodes_[tree_begin_[grain]].box = Aabb{centre - half, centre + half};
 }
 
 void SurfaceTrees::refit(std::size_t grain, std::span<const Eigen::Vector3d> x) {
@@ -92,13 +94,44 @@ const Aabb& SurfaceTrees::bounds(std::size_t grain) const {
 
 bool SurfaceTrees::nearest(std::size_t grain, const Eigen::Vector3d& p, double radius,
                            std::span<const Eigen::Vector3d> x, Nearest& out, std::uint32_t hint) const {
+  return search(
+      nodes_, grain, p, radius,
+      [&](std::uint32_t k) {
+        const auto& tri = leaf_corners_[k];
+        return std::array<const Eigen::Vector3d*, 3>{&x[tri[0]], &x[tri[1]], &x[tri[2]]};
+      },
+      [&](std::uint32_t t) {
+        const auto& tri = triangles_[t];
+        return std::array<const Eigen::Vector3d*, 3>{&x[tri[0]], &x[tri[1]], &x[tri[2]]};
+      },
+      out, hint);
+}
+
+bool SurfaceTrees::nearest_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius, Nearest& out,
+                                   std::uint32_t hint) const {
+  return search(
+      reference_nodes_, grain, p_body, radius,
+      [&](std::uint32_t k) {
+        const auto& c = reference_corners_[k];
+        return std::array<const Eigen::Vector3d*, 3>{&c[0], &c[1], &c[2]};
+      },
+      [&](std::uint32_t t) {
+        const auto& tri = triangles_[t];
+        return std::array<const Eigen::Vector3d*, 3>{&reference_x_[tri[0]], &reference_x_[tri[1]], &reference_x_[tri[2]]};
+      },
+      out, hint);
+}
+
+template <class Corners, class HintCorners>
+bool SurfaceTrees::search(const std::vector<Node>& tree, std::size_t grain, const Eigen::Vector3d& p, double radius,
+                          Corners corners, HintCorners hint_corners, Nearest& out, std::uint32_t hint) const {
   if (tree_begin_[grain] == tree_begin_[grain + 1]) return false;
   double best2 = radius * radius;
   bool found = false;
   std::uint32_t tested = 0;
   if (hint != kNoHint) {
-    const auto& tri = triangles_[hint];
-    const double bound = (closest_point_on_triangle(p, x[tri[0]], x[tri[1]], x[tri[2]]).point - p).norm() + kHintSlack * radius;
+    const auto c = hint_corners(hint);
+    const double bound = (closest_point_on_triangle(p, *c[0], *c[1], *c[2]).point - p).norm() + kHintSlack * radius;
     best2 = std::min(best2, bound * bound);
     ++tested;
   }
@@ -106,25 +139,25 @@ bool SurfaceTrees::nearest(std::size_t grain, const Eigen::Vector3d& p, double r
   int top = 0;
   stack[top++] = tree_begin_[grain];
   while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
+    const Node& node = tree[stack[--top]];
     if (node.box.squared_distance(p) >= best2) continue;
     if (node.count > 0) {
       tested += node.count;
       for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
-        const auto& tri = leaf_corners_[k];
-        TrianglePoint c = closest_point_on_triangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
-        const double d2 = (c.point - p).squaredNorm();
+        const auto c = corners(k);
+        TrianglePoint closest = closest_point_on_triangle(p, *c[0], *c[1], *c[2]);
+        const double d2 = (closest.point - p).squaredNorm();
         if (d2 < best2) {
           best2 = d2;
-          out = {order_[k], c, d2, 0};
+          out = {order_[k], closest, d2, 0};
           found = true;
         }
       }
       continue;
     }
     // Visit the nearer child first so the radius shrinks early.
-    const std::uint32_t left = static_cast<std::uint32_t>(&node - nodes_.data()) + 1, right = node.first;
-    const bool left_first = nodes_[left].box.squared_distance(p) <= nodes_[right].box.squared_distance(p);
+    const std::uint32_t left = static_cast<std::uint32_t>(&node - tree.data()) + 1, right = node.first;
+    const bool left_first = tree[left].box.squared_distance(p) <= tree[right].box.squared_distance(p);
     stack[top++] = left_first ? right : left;
     stack[top++] = left_first ? left : right;
   }

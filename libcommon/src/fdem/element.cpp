@@ -287,6 +287,21 @@ BodyProperties body_properties(const Model& model, std::size_t grain) {
   Eigen::Vector3d first = Eigen::Vector3d::Zero();
   Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
   for (std::size_t e = g.element_begin; e < g.element_end; ++e) {
+    if (model.nodes_of(e) == 4) {
+      // A straight tetrahedron in closed form: int r = V (sum r_i) / 4 and
+      // int r r^T = V / 20 (sum r_i r_i^T + (sum r_i)(sum r_i)^T), r_i its corners.
+      const std::uint32_t* n = element_nodes(model, e);
+      const Eigen::Vector3d r[4] = {model.nodes[n[0]] - origin, model.nodes[n[1]] - origin,
+                                    model.nodes[n[2]] - origin, model.nodes[n[3]] - origin};
+      const double volume = std::abs((r[1] - r[0]).dot((r[2] - r[0]).cross(r[3] - r[0]))) / 6;
+      const Eigen::Vector3d sum = r[0] + r[1] + r[2] + r[3];
+      Eigen::Matrix3d outer = sum * sum.transpose();
+      for (const Eigen::Vector3d& ri : r) outer += ri * ri.transpose();
+      b.volume += volume;
+      first += volume / 4 * sum;
+      second += volume / 20 * outer;
+      continue;
+    }
     map_rule(model, e, exact_rule(), points, weights);
     for (std::size_t q = 0; q < points.size(); ++q) {
       const Eigen::Vector3d r = points[q] - origin;

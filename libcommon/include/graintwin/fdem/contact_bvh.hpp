@@ -1,8 +1,9 @@
 #pragma once
 // Per-grain bounding-volume hierarchies over surface triangles for the FDEM narrow phase. The tree
 // topology is built once from the reference configuration (median split on the longest axis, at
-// most 4 triangles a leaf); each step only refits the boxes to the current node positions, which
-// stays valid under any motion and costs one pass over the grain's triangles.
+// most 4 triangles a leaf); each step a deformable grain's boxes are refitted to the current node
+// positions (valid under any motion, one pass over its triangles), and a rigid grain is searched in
+// its body frame on its reference tree, which never changes.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -23,12 +24,13 @@ class SurfaceTrees {
 
   /// Refits grain g's boxes to the node positions x (one per model node).
   void refit(std::size_t grain, std::span<const Eigen::Vector3d> x);
-  /// Places grain g's boxes for a rigid motion x = rotation X + translation of its reference
-  /// nodes X: each reference box turned and moved, then boxed again (centre R c + t, half-sizes
-  /// |R| h). Conservative (a turned box is boxed larger), exact at no rotation, and several times
-  /// cheaper than a refit, which reads every triangle's corners.
+  /// Places grain g's bounds for a rigid motion x = rotation X + translation of its reference
+  /// nodes X: the reference root box turned and moved, then boxed again (centre R c + t,
+  /// half-sizes |R| h). Conservative (a turned box is boxed larger), exact at no rotation. Only the
+  /// root moves: a placed grain is searched in its body frame (nearest_in_body), on boxes and
+  /// corners that never change, so a step costs no pass over its tree.
   void place(std::size_t grain, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
-  /// Box of grain g's surface after the last refit (empty for a grain without triangles).
+  /// Box of grain g's surface after the last refit or placement (empty for a grain without triangles).
   const Aabb& bounds(std::size_t grain) const;
 
   struct Nearest {
@@ -45,6 +47,11 @@ class SurfaceTrees {
   /// answer is the same with any hint.
   bool nearest(std::size_t grain, const Eigen::Vector3d& p, double radius, std::span<const Eigen::Vector3d> x,
                Nearest& out, std::uint32_t hint = kNoHint) const;
+  /// nearest() in the reference configuration: p_body = R^T (p - t) for a grain placed by a rigid
+  /// motion (R, t); out.closest.point is in that frame too (distances, weights and features are the
+  /// same in both).
+  bool nearest_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius, Nearest& out,
+                       std::uint32_t hint = kNoHint) const;
 
  private:
   struct Node {
@@ -52,13 +59,20 @@ class SurfaceTrees {
     std::uint32_t first = 0;  ///< leaf: first entry in order_; inner: index of the right child (left = this + 1)
     std::uint32_t count = 0;  ///< leaf: triangles; inner: 0
   };
+  template <class Corners, class HintCorners>
+  bool search(const std::vector<Node>& tree, std::size_t grain, const Eigen::Vector3d& p, double radius,
+              Corners corners, HintCorners hint_corners, Nearest& out, std::uint32_t hint) const;
+
   std::vector<Node> nodes_;                         ///< all grains' trees, depth-first
-  std::vector<Aabb> reference_boxes_;               ///< nodes_' boxes fitted to the reference nodes
+  std::vector<Node> reference_nodes_;               ///< nodes_ fitted to the reference nodes
   std::vector<std::uint32_t> tree_begin_;           ///< grains + 1 entries into nodes_
   std::vector<std::uint32_t> order_;                ///< model triangle indices, leaf by leaf
   /// The corner nodes of order_'s triangles, in the same order: a leaf reads its triangles from one
   /// place (the searches are bound by memory latency, not arithmetic).
   std::vector<std::array<std::uint32_t, 3>> leaf_corners_;
+  /// The reference positions of leaf_corners_, for body-frame searches: no indirection at all.
+  std::vector<std::array<Eigen::Vector3d, 3>> reference_corners_;
+  std::vector<Eigen::Vector3d> reference_x_;  ///< the model's reference node positions (hints)
   std::vector<std::array<std::uint32_t, 3>> triangles_;
 };
 
