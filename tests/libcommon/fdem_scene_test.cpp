@@ -242,7 +242,7 @@ TEST(FdemScene, TriaxialTableTakesTheModelsMembraneThicknessAndItsDefaults) {
   EXPECT_DOUBLE_EQ(t.options.membrane.young, 1.25e6);
   EXPECT_DOUBLE_EQ(t.options.membrane.poisson, 0.2);
   EXPECT_DOUBLE_EQ(t.target_axial_strain, 0.1);
-  EXPECT_DOUBLE_EQ(t.shear_ramp_strain, 1e-3);
+  EXPECT_DOUBLE_EQ(t.shear_ramp_strain, 5e-3);
   EXPECT_EQ(t.frame_strains, (std::vector<double>{0.01, 0.05}));
   EXPECT_TRUE(s.stages.empty());
   const auto thin = write_text(dir, "thin.toml", "[model]\n[triaxial]\nmembrane_thickness = 0.3e-3\nstrain_rate = 10\n");

@@ -154,7 +154,7 @@ TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>&
   if (spec.target_axial_strain >= 1) t.fail("target_axial_strain is a log strain and must be below 1, e.g. 0.1");
   spec.shear_ramp_strain = t.non_negative("shear_ramp_strain", spec.shear_ramp_strain);
   if (spec.shear_ramp_strain >= spec.target_axial_strain)
-    t.fail("shear_ramp_strain must be below target_axial_strain (the platens reach full speed within it)");
+    t.fail("shear_ramp_strain (default 5e-3) must be below target_axial_strain: the platens reach full speed within it; set it to a tenth of the target, for example");
   if (t.has("frame_strains")) {
     const toml::array* a = t.raw()["frame_strains"].as_array();
     const std::string usage = "frame_strains must be an ascending array of axial strains in (0, target_axial_strain), e.g. [0.03, 0.06]";

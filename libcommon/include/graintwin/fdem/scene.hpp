@@ -66,7 +66,7 @@ struct TriaxialSpec {
   double shear_inertial_number = 1e-3;  ///< sets the shearing strain rate unless strain_rate does
   double strain_rate = 0;               ///< 1/s of the platen gap; 0 = from shear_inertial_number
   double target_axial_strain = 0.1;     ///< log strain eps_1 at which shearing ends
-  double shear_ramp_strain = 1e-3;      ///< ShearOptions::ramp_strain
+  double shear_ramp_strain = 5e-3;      ///< ShearOptions::ramp_strain
   /// Axial strains (e.g. the scans') at which frames are saved, besides the start of shearing and
   /// its end; ascending, below target_axial_strain.
   std::vector<double> frame_strains;
