@@ -58,6 +58,10 @@ struct NodeHit {
 struct NearNode {
   std::uint32_t node = 0;
   std::uint32_t hint = SurfaceTrees::kNoHint;
+  /// The node's reference position: between two rigid grains the step maps it straight into the
+  /// other grain's body frame, so the prefilters read the list in order instead of the node's
+  /// scattered current position (a cache miss per listed node, half of the narrow phase).
+  Eigen::Vector3d reference = Eigen::Vector3d::Zero();
 };
 
 /// One candidate interaction of a step: grains a < b (entry `pair` of the broad phase's pairs), or
@@ -253,7 +257,7 @@ struct ContactModel::State {
                           std::vector<NearNode>& out) const {
     out.clear();
     if (!options.near_node_lists) {
-      for (std::uint32_t node : surface(from)) out.push_back({node, SurfaceTrees::kNoHint});
+      for (std::uint32_t node : surface(from)) out.push_back({node, SurfaceTrees::kNoHint, trees.reference_positions()[node]});
       return;
     }
     const Aabb box = trees.bounds(to).inflated(reach);
@@ -263,7 +267,7 @@ struct ContactModel::State {
     for (std::uint32_t node : surface(from)) {
       const Eigen::Vector3d& p = x[node];
       if (box.contains(p) && (p - centre).squaredNorm() <= sphere_reach2 && nearest(to, p, reach, x, near))
-        out.push_back({node, near.triangle});
+        out.push_back({node, near.triangle, trees.reference_positions()[node]});
     }
   }
 
@@ -284,8 +288,19 @@ struct ContactModel::State {
   void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<NearNode> nodes,
                   std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double dt,
                   std::vector<NodeHit>& out, Checks& checks) const {
-    const Aabb& box = trees.bounds(to);
-    const Eigen::Vector3d& centre = sphere_centre[to];
+    // Two rigid grains: a listed node's reference position X maps into `to`'s body frame by one
+    // affine map, q = R_to^T (R_from X + t_from - t_to), where `to`'s box and sphere are its
+    // reference ones; the node's current position is read only once it is found close.
+    const RigidPose& body_from = pose[from];
+    const RigidPose& body_to = pose[to];
+    const bool rigid_pair = body_from.rigid && body_to.rigid;
+    const Eigen::Matrix3d to_body = rigid_pair ? Eigen::Matrix3d(body_to.rotation.transpose() * body_from.rotation)
+                                               : Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d to_body_shift = rigid_pair ? Eigen::Vector3d(body_to.rotation.transpose() *
+                                                                       (body_from.translation - body_to.translation))
+                                                     : Eigen::Vector3d::Zero();
+    const Aabb& box = rigid_pair ? trees.reference_bounds(to) : trees.bounds(to);
+    const Eigen::Vector3d& centre = rigid_pair ? reference_centre[to] : sphere_centre[to];
     const double reach2 = sphere_radius[to] * sphere_radius[to];
     const Material& mf = material_of(from);
     const Material& mt = material_of(to);
@@ -297,11 +312,19 @@ struct ContactModel::State {
     checks.nodes += nodes.size();
     for (NearNode& listed : nodes) {
       const std::uint32_t node = listed.node;
-      const Eigen::Vector3d& p = x[node];
-      if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
-      const bool close = nearest(to, p, max_penetration, x, near, listed.hint);
+      bool close = false;
+      if (rigid_pair) {
+        const Eigen::Vector3d q = to_body * listed.reference + to_body_shift;
+        if (!box.contains(q) || (q - centre).squaredNorm() > reach2) continue;
+        close = trees.nearest_in_body(to, q, max_penetration, near, listed.hint);
+        if (close) near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
+      } else {
+        if (!box.contains(x[node]) || (x[node] - centre).squaredNorm() > reach2) continue;
+        close = nearest(to, x[node], max_penetration, x, near, listed.hint);
+      }
       checks.triangles += near.tested;
       if (!close) continue;
+      const Eigen::Vector3d& p = x[node];
       if (listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
       const Eigen::Vector3d d = near.closest.point - p;  // from the node out to the surface
       if (!(d.dot(pseudonormal(near.triangle, near.closest.feature, x)) > 0)) continue;  // outside

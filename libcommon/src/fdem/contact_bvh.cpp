@@ -92,6 +92,11 @@ const Aabb& SurfaceTrees::bounds(std::size_t grain) const {
   return tree_begin_[grain] < tree_begin_[grain + 1] ? nodes_[tree_begin_[grain]].box : empty;
 }
 
+const Aabb& SurfaceTrees::reference_bounds(std::size_t grain) const {
+  static const Aabb empty;
+  return tree_begin_[grain] < tree_begin_[grain + 1] ? reference_nodes_[tree_begin_[grain]].box : empty;
+}
+
 bool SurfaceTrees::nearest(std::size_t grain, const Eigen::Vector3d& p, double radius,
                            std::span<const Eigen::Vector3d> x, Nearest& out, std::uint32_t hint) const {
   return search(

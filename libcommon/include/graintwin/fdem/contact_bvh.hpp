@@ -32,6 +32,10 @@ class SurfaceTrees {
   void place(std::size_t grain, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
   /// Box of grain g's surface after the last refit or placement (empty for a grain without triangles).
   const Aabb& bounds(std::size_t grain) const;
+  /// Box of grain g's surface in the reference configuration (its body frame).
+  const Aabb& reference_bounds(std::size_t grain) const;
+  /// The model's reference node positions, m.
+  std::span<const Eigen::Vector3d> reference_positions() const { return reference_x_; }
 
   struct Nearest {
     std::uint32_t triangle = 0;  ///< model triangle index
