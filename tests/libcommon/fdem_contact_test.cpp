@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include <filesystem>
+#include <numbers>
 #include <random>
 
 #include "graintwin/core/error.hpp"
@@ -18,6 +19,8 @@
 #include "graintwin/fdem/contact_law.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/mesh/gmsh_adapter.hpp"
+#include "graintwin/mesh/tet_mesh.hpp"
 
 using namespace graintwin;
 using namespace graintwin::fdem;
@@ -231,9 +234,57 @@ TEST(SurfaceTrees, PlacedByARigidMotionTheTreeStillFindsTheNearestTriangle) {
   EXPECT_GT(found, 100);
 }
 
+TEST(SurfaceTrees, TrianglesWithinTwoMarginsHoldTheNearestOneMarginAway) {
+  // The search memo's claim (fdem/contact.cpp SearchMemo): with d the distance from `at` to a
+  // grain's surface, the triangle nearest to any q with |q - at| <= m is among those within
+  // d + 2m of `at`, and the nearest of those is the search's own (same triangle, same distance).
+  // Points near a faceted sphere (edges and corners nearby), displaced by exactly m in random
+  // directions, the worst case; triangles_within_in_body must also list exactly the brute-force set.
+  const double radius = 0.5 * kMm, m_margin = 0.01 * radius;
+  mesh::TetOptions o;
+  o.size = 0.25 * radius;
+  Model m;
+  mesh::append_grain(m, mesh::mesh_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(radius),
+                                             Eigen::Quaterniond::Identity(), o), 1, GrainKind::rigid);
+  SurfaceTrees trees(m);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> depth(-0.03 * radius, 0.01 * radius);
+  const auto random_direction = [&] { return Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized(); };
+  int switched = 0;
+  for (int i = 0; i < 400; ++i) {
+    const Eigen::Vector3d at = (radius + depth(rng)) * random_direction();
+    SurfaceTrees::Nearest there;
+    ASSERT_TRUE(trees.nearest_in_body(0, at, radius, there));
+    const double reach = std::sqrt(there.distance2) + 2 * m_margin;
+    std::array<std::uint32_t, 64> within{};
+    const std::size_t count = trees.triangles_within_in_body(0, at, reach, within);
+    ASSERT_LE(count, within.size());
+    std::size_t brute = 0;
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+      brute += (trees.closest_in_body(t, at).point - at).squaredNorm() <= reach * reach;
+    ASSERT_EQ(count, brute) << i;
+    for (int k = 0; k < 20; ++k) {
+      const Eigen::Vector3d q = at + m_margin * random_direction();
+      SurfaceTrees::Nearest searched;
+      ASSERT_TRUE(trees.nearest_in_body(0, q, radius, searched));
+      std::uint32_t best = 0;
+      double best2 = std::numeric_limits<double>::infinity();
+      for (std::size_t j = 0; j < count; ++j) {
+        const double d2 = (trees.closest_in_body(within[j], q).point - q).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && within[j] < best)) best = within[j], best2 = d2;
+      }
+      ASSERT_EQ(best, searched.triangle) << i << " " << k;
+      ASSERT_EQ(best2, searched.distance2) << i << " " << k;
+      switched += best != there.triangle;
+    }
+  }
+  EXPECT_GT(switched, 200);  // the nearest triangle does change within the margin
+}
+
 TEST(SurfaceTrees, AHintNeverChangesTheNearestTriangle) {
   // Points just off the box's corners and edge midpoints are as close to several triangles (ties
-  // go to the first met in the tree's order), random points to one; any hint, near or far, must
+  // go to the lowest index), random points to one; any hint, near or far, must
   // give the same triangle as no hint.
   Model m;
   add_grain(m, box_mesh({1 * kMm, 0.7 * kMm, 0.5 * kMm}, 0.1 * kMm), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
@@ -473,17 +524,18 @@ TEST(ContactModel, SameForcesForAnyThreadCount) {
 /// closing in on the block's centre by 0.04 skin a step for 20 steps and then moving out again:
 /// nodes come into contact from beyond the near-node lists' reach within one list's life, and
 /// nodes deeper than that reach (past the deepest detectable penetration) come back up into it.
-/// At step 30 one cube jumps by 1.5 skins.
+/// At step 30 one cube jumps by 1.5 skins. `pace` scales the closing and turning speeds.
 struct ClosingCubes {
   static constexpr int kSteps = 40, kTurn = 20, kJump = 30;
   static constexpr double kDt = 1e-8;
   Model m;
   double side = 0.5 * kMm;
   double skin = 0.05 * std::sqrt(3.0) * side;  // the automatic skin of these cubes
+  double pace = 1;
   std::vector<Eigen::Vector3d> centre, axis;
   PlatenState floor;
 
-  explicit ClosingCubes(GrainKind kind) {
+  explicit ClosingCubes(GrainKind kind, double pace = 1) : pace(pace) {
     m.materials[0].damping_ratio = 0.05;
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> gap(-1.5 * skin, 1.5 * skin), unit(-1, 1);
@@ -504,14 +556,15 @@ struct ClosingCubes {
     v.resize(m.nodes.size());
     poses.resize(m.grains.size());
     for (std::uint32_t g = 0; g < m.grains.size(); ++g) {
-      const double closed =
-          0.04 * skin * (step < kTurn ? step : 2 * kTurn - step) + (step >= kJump && g == 5 ? 1.5 * skin : 0.0);
+      const double closed = pace * 0.04 * skin * (step < kTurn ? step : 2 * kTurn - step) +
+                            (step >= kJump && g == 5 ? 1.5 * skin : 0.0);
       const Eigen::Vector3d at = centre[g] - closed * centre[g].normalized();
-      const Eigen::Matrix3d R = Eigen::AngleAxisd(0.002 * step, axis[g]).toRotationMatrix();
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(pace * 0.002 * step, axis[g]).toRotationMatrix();
       poses[g] = {rigid, R, at};
       for (std::uint32_t n = m.grains[g].node_begin; n < m.grains[g].node_end; ++n) {
         x[n] = R * m.nodes[n] + at;
-        v[n] = (step < kTurn ? -0.04 : 0.04) * skin / kDt * centre[g].normalized() + 0.002 / kDt * axis[g].cross(x[n] - at);
+        v[n] = pace * ((step < kTurn ? -0.04 : 0.04) * skin / kDt * centre[g].normalized() +
+                       0.002 / kDt * axis[g].cross(x[n] - at));
       }
     }
   }
@@ -572,6 +625,60 @@ TEST(ContactModel, RigidGrainsSearchedInTheirBodyFramesGiveTheWorldSearchsForces
     contacts += a.node_contacts;
   }
   EXPECT_GT(contacts, 1000u);
+}
+
+TEST(ContactModel, SearchMemosOfRigidGrainsGiveTheForcesOfSearchingAnew) {
+  // Two coarse faceted spheres (R = 0.5 mm, facets of about 0.4 R) pressed about 10 % of R into
+  // each other. One breathes in and out along the line of centres (up to 0.2 memo margin a step)
+  // while it rolls and slides over the other, slowly for 300 steps (nodes mostly enter and leave
+  // the other grain, normal to its surface), then at up to 0.3 margin a step (nodes cross edges
+  // and corners, and the closest triangle keeps changing among the remembered ones). At step 500
+  // it jumps. Forces must match searching anew, bit for bit.
+  const double radius = 0.5 * kMm;
+  mesh::TetOptions o;
+  o.size = 0.25 * radius;
+  Model m;
+  for (std::uint32_t g = 0; g < 2; ++g)
+    mesh::append_grain(m, mesh::mesh_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(radius),
+                                               Eigen::Quaterniond::Identity(), o), g + 1, GrainKind::rigid);
+  ContactOptions anew;
+  anew.search_memos = false;
+  ContactModel remembering(m, unit_masses(m), {}), searching(m, unit_masses(m), anew);
+  const double margin = 0.02 * remembering.skin();  // kMemoMarginFraction
+  const Eigen::Vector3d orbit_axis = Eigen::Vector3d(1, 2, 3).normalized(), spin_axis = Eigen::Vector3d(-2, 1, 1).normalized();
+  constexpr int kSteps = 600, kJump = 500;
+  const auto pose_at = [&](int step) {
+    const double t = step + (step >= kJump ? 100.0 : 0.0);
+    const double slid = 0.01 * margin * std::min(t, 300.0) + 0.15 * margin * std::max(t - 300, 0.0);
+    const Eigen::Vector3d direction = Eigen::AngleAxisd(slid / (1.9 * radius), orbit_axis) * orbit_axis.unitOrthogonal();
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(slid / radius, spin_axis).toRotationMatrix();
+    const double breathing = 5 * margin * std::sin(2 * std::numbers::pi * t / 150);  // 0.2 margin a step at most
+    return RigidPose{true, turn, (1.97 * radius - breathing) * direction};
+  };
+  std::vector<Eigen::Vector3d> x(m.nodes.size()), v = zeros(m.nodes.size());
+  std::vector<RigidPose> poses(2, RigidPose{true, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()});
+  std::size_t contacts = 0, tested_remembering = 0, tested_searching = 0;
+  const double dt = 1e-8;
+  for (int step = 0; step < kSteps; ++step) {
+    poses[1] = pose_at(step);
+    const RigidPose next = pose_at(step + 1);
+    for (std::uint32_t n = 0; n < m.nodes.size(); ++n) {
+      const bool moving = n >= m.grains[1].node_begin;
+      x[n] = moving ? Eigen::Vector3d(poses[1].rotation * m.nodes[n] + poses[1].translation) : m.nodes[n];
+      if (moving) v[n] = (next.rotation * m.nodes[n] + next.translation - x[n]) / dt;
+    }
+    auto fa = zeros(x.size()), fb = zeros(x.size());
+    const ContactStepStats a = remembering.add_forces(x, v, {}, dt, fa, poses);
+    const ContactStepStats b = searching.add_forces(x, v, {}, dt, fb, poses);
+    for (std::size_t n = 0; n < x.size(); ++n) ASSERT_EQ(fa[n], fb[n]) << "step " << step << " node " << n;
+    ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
+    ASSERT_EQ(a.elastic_energy, b.elastic_energy) << step;
+    contacts += a.node_contacts;
+    tested_remembering += a.triangle_checks;
+    tested_searching += b.triangle_checks;
+  }
+  EXPECT_GT(contacts, 2000u);
+  EXPECT_LT(tested_remembering, tested_searching / 3);  // the memos do save searches
 }
 
 TEST(ContactModel, StableTimeStepIsHalfTheNodeOscillatorLimit) {

@@ -39,6 +39,13 @@ constexpr double kRigidRoundOff = 1e-9;
 /// node exactly at the bound is kept rather than lost.
 constexpr double kReachRoundOff = 1e-6;
 
+/// How far, as a fraction of the skin, a listed node may move in the other rigid grain's body frame
+/// before its remembered search is redone (SearchMemo). Larger keeps answers longer but remembers
+/// more triangles per node in contact.
+constexpr double kMemoMarginFraction = 0.02;
+/// Triangles a node in contact remembers (SearchMemo); a node with more within reach searches anew.
+constexpr std::size_t kMemoTriangles = 6;
+
 // Below these sizes a parallel region costs more than the loop (and much more on a loaded machine).
 constexpr std::size_t kParallelGrains = 64, kParallelNodes = 16384, kParallelCandidates = 4;
 
@@ -62,6 +69,22 @@ struct NearNode {
   /// other grain's body frame, so the prefilters read the list in order instead of the node's
   /// scattered current position (a cache miss per listed node: half of grain_hits by perf).
   Eigen::Vector3d reference = Eigen::Vector3d::Zero();
+};
+
+/// What the last closest-triangle search of a listed node against the other of two rigid grains
+/// found, in that grain's body frame where its surface never moves. With m the memo margin, d the
+/// distance found at `at` and q the node now (the distance to a fixed surface changes by at most
+/// |q - at|): a node outside at d stays outside while |q - at| < d; a node deeper than the deepest
+/// detectable penetration P stays so while |q - at| < d - P; a node with nothing within P + 2m
+/// stays without contact while |q - at| < 2m; and for a node in contact, the triangle closest to q
+/// is among those within d + 2m of `at` while |q - at| <= m. Answers from the memo are therefore
+/// the search's own, bit for bit (ties go to the lowest index in both), and a restart that starts
+/// without memos continues exactly.
+struct SearchMemo {
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  double valid2 = -1;       ///< the memo holds while |q - at|^2 < valid2 (never when negative)
+  std::uint32_t count = 0;  ///< 0: no contact; else the triangles to test
+  std::array<std::uint32_t, kMemoTriangles> triangles{};
 };
 
 /// One candidate interaction of a step: grains a < b (entry `pair` of the broad phase's pairs), or
@@ -126,6 +149,9 @@ struct ContactModel::State {
   /// max_penetration, where the closest-triangle search would not find it either. Without
   /// options.near_node_lists: every surface node, no hints.
   std::vector<std::array<std::vector<NearNode>, 2>> near_nodes;
+  /// Per listed node of near_nodes (same layout): its search memo (used between rigid grains).
+  std::vector<std::array<std::vector<SearchMemo>, 2>> memos;
+  double memo_margin = 0;  ///< m of SearchMemo
   /// Per grain: a sphere around its surface this step (centre, radius), a tighter prefilter than
   /// the box for nodes near a box corner (most of a round grain's box is empty).
   std::vector<Eigen::Vector3d> sphere_centre;
@@ -275,22 +301,73 @@ struct ContactModel::State {
   void build_near_nodes(std::span<const Eigen::Vector3d> x) {
     const double reach = (max_penetration + skin) * (1 + kReachRoundOff);
     near_nodes.resize(grain_pairs.size());
+    memos.resize(grain_pairs.size());
 #pragma omp parallel for schedule(dynamic, 4) if (grain_pairs.size() >= kParallelCandidates)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(grain_pairs.size()); ++k) {
       const auto [a, b] = grain_pairs[k];
       collect_near_nodes(a, b, reach, x, near_nodes[k][0]);
       collect_near_nodes(b, a, reach, x, near_nodes[k][1]);
+      for (int side : {0, 1}) memos[k][side].assign(near_nodes[k][side].size(), SearchMemo{});
     }
   }
 
+  /// The closest-triangle search of a listed node q (in `to`'s body frame) between two rigid
+  /// grains, from its memo when that still holds, else anew (and remembered). True when a triangle
+  /// lies within the deepest detectable penetration; `near` is then in the body frame. `outside`
+  /// tells whether the node is outside `to` given its closest point in world coordinates.
+  template <class Outside>
+  bool nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, NearNode& listed, SearchMemo& memo,
+                          SurfaceTrees::Nearest& near, Checks& checks, Outside outside) const {
+    const double deepest2 = max_penetration * max_penetration;
+    if (options.search_memos && (q - memo.at).squaredNorm() < memo.valid2) {
+      if (memo.count == 0) return false;
+      double best2 = std::numeric_limits<double>::infinity();
+      for (std::uint32_t k = 0; k < memo.count; ++k) {
+        const std::uint32_t t = memo.triangles[k];
+        const TrianglePoint closest = trees.closest_in_body(t, q);
+        const double d2 = (closest.point - q).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && t < near.triangle)) near = {t, closest, d2, 0}, best2 = d2;
+      }
+      checks.triangles += memo.count;
+      return best2 < deepest2;
+    }
+    // Round-off allowance on the memo's distances (positions are rounded at ~1e-16 of their size).
+    const double slack = kRigidRoundOff * (reference_radius[to] + reference_centre[to].norm());
+    const double margin = memo_margin;
+    memo.at = q;
+    memo.count = 0;
+    const bool found = trees.nearest_in_body(to, q, max_penetration + 2 * margin, near, listed.hint);
+    checks.triangles += near.tested;
+    if (!found) {
+      memo.valid2 = 2 * margin > slack ? (2 * margin - slack) * (2 * margin - slack) : -1;
+      return false;
+    }
+    if (listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
+    const double d = std::sqrt(near.distance2);
+    if (outside(near)) {
+      memo.valid2 = d > slack ? (d - slack) * (d - slack) : -1;
+      return false;
+    }
+    if (!options.search_memos) return near.distance2 < deepest2;
+    if (!(near.distance2 < deepest2)) {
+      memo.valid2 = d - max_penetration > slack ? (d - max_penetration - slack) * (d - max_penetration - slack) : -1;
+      return false;
+    }
+    const std::size_t count = trees.triangles_within_in_body(to, q, d + 2 * margin + slack, memo.triangles);
+    memo.count = static_cast<std::uint32_t>(std::min(count, kMemoTriangles));
+    memo.valid2 = count <= kMemoTriangles ? margin * margin : -1;
+    return true;
+  }
+
   /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces, among `nodes`
-  /// (whose hints are moved to the triangles found).
+  /// (whose hints are moved to the triangles found; `memos` has one per node).
   void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<NearNode> nodes,
-                  std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double dt,
-                  std::vector<NodeHit>& out, Checks& checks) const {
+                  std::span<SearchMemo> memos, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                  double dt, std::vector<NodeHit>& out, Checks& checks) const {
     // Two rigid grains: a listed node's reference position X maps into `to`'s body frame by one
     // affine map, q = R_to^T (R_from X + t_from - t_to), where `to`'s box and sphere are its
-    // reference ones; the node's current position is read only once it is found close.
+    // reference ones and its search memo holds; the node's current position is read only once it
+    // is found close.
     const RigidPose& body_from = pose[from];
     const RigidPose& body_to = pose[to];
     const bool rigid_pair = body_from.rigid && body_to.rigid;
@@ -310,24 +387,33 @@ struct ContactModel::State {
     const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
     SurfaceTrees::Nearest near;
     checks.nodes += nodes.size();
-    for (NearNode& listed : nodes) {
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      NearNode& listed = nodes[i];
       const std::uint32_t node = listed.node;
+      // From the node out to the surface, and whether that leaves the node outside.
+      const auto to_surface = [&](const SurfaceTrees::Nearest& n) -> Eigen::Vector3d { return n.closest.point - x[node]; };
+      const auto outside = [&](const SurfaceTrees::Nearest& n) {
+        return !(to_surface(n).dot(pseudonormal(n.triangle, n.closest.feature, x)) > 0);
+      };
       bool close = false;
       if (rigid_pair) {
         const Eigen::Vector3d q = to_body * listed.reference + to_body_shift;
         if (!box.contains(q) || (q - centre).squaredNorm() > reach2) continue;
-        close = trees.nearest_in_body(to, q, max_penetration, near, listed.hint);
+        const auto outside_in_world = [&](SurfaceTrees::Nearest n) {
+          n.closest.point = body_to.rotation * n.closest.point + body_to.translation;
+          return outside(n);
+        };
+        close = nearest_remembered(to, q, listed, memos[i], near, checks, outside_in_world);
         if (close) near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
       } else {
         if (!box.contains(x[node]) || (x[node] - centre).squaredNorm() > reach2) continue;
         close = nearest(to, x[node], max_penetration, x, near, listed.hint);
+        checks.triangles += near.tested;
+        if (close && listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
       }
-      checks.triangles += near.tested;
-      if (!close) continue;
+      if (!close || outside(near)) continue;
       const Eigen::Vector3d& p = x[node];
-      if (listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
-      const Eigen::Vector3d d = near.closest.point - p;  // from the node out to the surface
-      if (!(d.dot(pseudonormal(near.triangle, near.closest.feature, x)) > 0)) continue;  // outside
+      const Eigen::Vector3d d = to_surface(near);
       NodeHit hit;
       hit.overlap = std::sqrt(near.distance2);
       hit.normal = near.closest.feature == TriangleFeature::face
@@ -443,6 +529,7 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
   if (!std::isfinite(smallest_diagonal) || !(smallest_side > 0))
     throw DataError("fdem contact: no grain has a closed surface of positive size; mesh the grains first.");
   s.skin = options.skin > 0 ? options.skin : kSkinFraction * smallest_diagonal;
+  s.memo_margin = kMemoMarginFraction * s.skin;
   s.max_penetration = kMaxPenetrationFraction * smallest_side;
 
   // Reference triangle areas and edge neighbours (for edge pseudonormals): each grain's edges
@@ -558,8 +645,8 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
       s.platen_hits(c, platens[c.b - grain_count], x, v, dt, out, s.checks[i]);
       continue;
     }
-    s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], x, v, dt, out, s.checks[i]);
-    s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], x, v, dt, out, s.checks[i]);
+    s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], s.memos[c.pair][0], x, v, dt, out, s.checks[i]);
+    s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], s.memos[c.pair][1], x, v, dt, out, s.checks[i]);
     // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
     if (!std::is_sorted(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; }))
       std::sort(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; });

@@ -11,7 +11,7 @@ constexpr std::uint32_t kLeafSize = 4;
 constexpr int kStackSize = 64;  // median splits: depth <= log2(triangles), far below this
 /// Slack on a hint's distance, relative to the search radius: box distances and triangle
 /// distances are rounded differently, and a triangle exactly as close as the hint must not be
-/// pruned by round-off (ties go to the first met, as without a hint).
+/// pruned by round-off (ties go to the lowest index, as without a hint).
 constexpr double kHintSlack = 1e-6;
 }  // namespace
 
@@ -127,6 +127,37 @@ bool SurfaceTrees::nearest_in_body(std::size_t grain, const Eigen::Vector3d& p_b
       out, hint);
 }
 
+TrianglePoint SurfaceTrees::closest_in_body(std::uint32_t triangle, const Eigen::Vector3d& p_body) const {
+  const auto& tri = triangles_[triangle];
+  return closest_point_on_triangle(p_body, reference_x_[tri[0]], reference_x_[tri[1]], reference_x_[tri[2]]);
+}
+
+std::size_t SurfaceTrees::triangles_within_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius,
+                                                   std::span<std::uint32_t> out) const {
+  std::size_t count = 0;
+  if (tree_begin_[grain] == tree_begin_[grain + 1]) return count;
+  const double radius2 = radius * radius;
+  std::uint32_t stack[kStackSize];
+  int top = 0;
+  stack[top++] = tree_begin_[grain];
+  while (top > 0) {
+    const Node& node = reference_nodes_[stack[--top]];
+    if (node.box.squared_distance(p_body) > radius2) continue;
+    if (node.count == 0) {
+      stack[top++] = node.first;
+      stack[top++] = static_cast<std::uint32_t>(&node - reference_nodes_.data()) + 1;
+      continue;
+    }
+    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
+      const auto& c = reference_corners_[k];
+      if ((closest_point_on_triangle(p_body, c[0], c[1], c[2]).point - p_body).squaredNorm() > radius2) continue;
+      if (count < out.size()) out[count] = order_[k];
+      ++count;
+    }
+  }
+  return count;
+}
+
 template <class Corners, class HintCorners>
 bool SurfaceTrees::search(const std::vector<Node>& tree, std::size_t grain, const Eigen::Vector3d& p, double radius,
                           Corners corners, HintCorners hint_corners, Nearest& out, std::uint32_t hint) const {
@@ -145,14 +176,15 @@ bool SurfaceTrees::search(const std::vector<Node>& tree, std::size_t grain, cons
   stack[top++] = tree_begin_[grain];
   while (top > 0) {
     const Node& node = tree[stack[--top]];
-    if (node.box.squared_distance(p) >= best2) continue;
+    // A box exactly as far as the best may hold a tie with a lower index: visited.
+    if (node.box.squared_distance(p) > best2) continue;
     if (node.count > 0) {
       tested += node.count;
       for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
         const auto c = corners(k);
         TrianglePoint closest = closest_point_on_triangle(p, *c[0], *c[1], *c[2]);
         const double d2 = (closest.point - p).squaredNorm();
-        if (d2 < best2) {
+        if (d2 < best2 || (found && d2 == best2 && order_[k] < out.triangle)) {
           best2 = d2;
           out = {order_[k], closest, d2, 0};
           found = true;

@@ -30,6 +30,10 @@ struct ContactOptions {
   /// grain (max penetration + skin): the same forces, bit for bit, as testing every surface node
   /// (false; kept to verify that).
   bool near_node_lists = true;
+  /// Between two rigid grains, remember each listed node's last closest-triangle search in the
+  /// other grain's body frame and reuse it while the node has moved too little to change the
+  /// answer: the same forces, bit for bit, as searching anew every step (false; kept to verify that).
+  bool search_memos = true;
   bool enabled = true;
 };
 

@@ -44,8 +44,9 @@ class SurfaceTrees {
     std::uint32_t tested = 0;    ///< triangles whose closest point was evaluated (cost)
   };
   static constexpr std::uint32_t kNoHint = UINT32_MAX;
-  /// The triangle of grain g closest to p among those closer than `radius` (ties: the first met in
-  /// the tree's fixed order). False when none is that close. `hint`, a triangle of g likely to be
+  /// The triangle of grain g closest to p among those closer than `radius` (ties: the lowest
+  /// triangle index, so any search over a set of triangles that holds the closest one gives the
+  /// same answer). False when none is that close. `hint`, a triangle of g likely to be
   /// close, only speeds the search up: its distance (plus a round-off slack) bounds the search from
   /// the start, and every triangle at least as close is still visited in the same order, so the
   /// answer is the same with any hint.
@@ -56,6 +57,14 @@ class SurfaceTrees {
   /// same in both).
   bool nearest_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius, Nearest& out,
                        std::uint32_t hint = kNoHint) const;
+  /// The closest point to p_body on model triangle `triangle` in the reference configuration,
+  /// evaluated exactly as the searches evaluate it (the same corners in the same order).
+  TrianglePoint closest_in_body(std::uint32_t triangle, const Eigen::Vector3d& p_body) const;
+  /// The triangles of grain g (model indices) no farther than `radius` from p_body in the reference
+  /// configuration, written to `out` while it has room; returns how many there are (which may exceed
+  /// out.size()).
+  std::size_t triangles_within_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius,
+                                       std::span<std::uint32_t> out) const;
 
  private:
   struct Node {
