@@ -143,6 +143,9 @@ struct ContactModel::State {
   std::vector<std::uint32_t> node_triangle_offset, node_triangles;  ///< CSR: triangles around a node
   std::vector<std::array<std::uint32_t, 3>> neighbour;  ///< triangle across edge 01, 12, 20
   std::vector<double> triangle_area;                    ///< reference, m^2
+  /// Parallel to node_triangles: each triangle's reference unit outward normal and a third of its
+  /// reference area (rigid grains' facing_area).
+  std::vector<Eigen::Vector4d> node_facets;
   SurfaceTrees trees;
 
   std::vector<BoxPair> grain_pairs;          ///< broad phase result
@@ -190,8 +193,17 @@ struct ContactModel::State {
   /// surrounding triangle's reference area times the cosine between the triangle's outward normal
   /// and -normal (0 when it faces away). Equals A_node on a flat patch pressed head-on, and makes a
   /// face's nodes carry exactly the face's area even when its rim nodes also border side faces.
-  double facing_area(std::uint32_t node, const Eigen::Vector3d& normal, std::span<const Eigen::Vector3d> x) const {
+  /// A rigid grain's `body` turns `normal` into its body frame instead, where its triangles'
+  /// normals never change (node_facets: no pass over their corners).
+  double facing_area(std::uint32_t node, const Eigen::Vector3d& normal, std::span<const Eigen::Vector3d> x,
+                     const RigidPose& body) const {
     double area = 0;
+    if (body.rigid) {
+      const Eigen::Vector3d n = body.rotation.transpose() * normal;
+      for (std::uint32_t k = node_triangle_offset[node]; k < node_triangle_offset[node + 1]; ++k)
+        area += node_facets[k].w() * std::max(0.0, -node_facets[k].head<3>().dot(n));
+      return area;
+    }
     for (std::uint32_t k = node_triangle_offset[node]; k < node_triangle_offset[node + 1]; ++k) {
       const std::uint32_t t = node_triangles[k];
       const Eigen::Vector3d n = triangle_normal(triangles[t], x);
@@ -447,7 +459,7 @@ struct ContactModel::State {
                        ? Eigen::Vector3d(triangle_normal(triangles[near.triangle], x).normalized())
                        : Eigen::Vector3d(d / hit.overlap);
       // Both directions are evaluated, each with half the penalty (docs/fdem_contact.md).
-      const double area = 0.5 * facing_area(node, hit.normal, x);
+      const double area = 0.5 * facing_area(node, hit.normal, x, body_from);
       if (!(area > 0)) continue;
       const auto& tri = triangles[near.triangle];
       const Eigen::Vector3d w = near.closest.weights;
@@ -473,7 +485,7 @@ struct ContactModel::State {
       NodeHit hit;
       hit.overlap = -height;
       hit.normal = platen.normal;
-      const double area = facing_area(node, hit.normal, x);
+      const double area = facing_area(node, hit.normal, x, pose[key.a]);
       if (!(area > 0)) continue;
       const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
       hit.law = node_contact_force(
@@ -586,6 +598,13 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
         s.neighbour[edges[k + 1].triangle][edges[k + 1].edge] = edges[k].triangle;
         ++k;
       }
+  }
+  s.node_facets.resize(s.node_triangles.size());
+  for (std::size_t k = 0; k < s.node_triangles.size(); ++k) {
+    const std::uint32_t t = s.node_triangles[k];
+    const Eigen::Vector3d n = triangle_normal(s.triangles[t], model.nodes);
+    const double len = n.norm();
+    s.node_facets[k] << (len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero()), s.triangle_area[t] / 3.0;
   }
   s.trees = SurfaceTrees(model);
   s.pose.assign(model.grains.size(), RigidPose{});
@@ -743,7 +762,7 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
       const double rho = radial.norm();
       if (!(rho > wall.radius)) continue;
       const Eigen::Vector3d outward = radial / rho;
-      const double area = s.facing_area(node, -outward, x);
+      const double area = s.facing_area(node, -outward, x, s.pose[g]);
       if (!(area > 0)) continue;
       const ContactLaw law = contact_law(m.normal_penalty, m.tangential_penalty, area, s.node_mass[node], m.damping_ratio, 0.0);
       per_grain[g].emplace_back(node, node_contact_force(law, -outward, rho - wall.radius,
