@@ -46,6 +46,9 @@ constexpr double kMemoMarginFraction = 0.02;
 /// Triangles a node in contact remembers (SearchMemo); a node with more within reach searches anew.
 constexpr std::size_t kMemoTriangles = 6;
 
+/// How many candidates ahead the narrow phase prefetches a pair's near-node lists.
+constexpr std::size_t kPrefetchCandidates = 3;
+
 // Below these sizes a parallel region costs more than the loop (and much more on a loaded machine).
 constexpr std::size_t kParallelGrains = 64, kParallelNodes = 16384, kParallelCandidates = 4;
 
@@ -685,6 +688,16 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
 #pragma omp parallel for schedule(dynamic, 4) if (s.candidates.size() >= kParallelCandidates)
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(s.candidates.size()); ++i) {
     const Candidate& c = s.candidates[i];
+    // The heads of a later pair's lists are scattered over the heap: fetch them early (a cache miss
+    // per list was a quarter of grain_hits by perf). Prefetching never faults.
+    if (const std::size_t ahead = static_cast<std::size_t>(i) + kPrefetchCandidates; ahead < s.candidates.size()) {
+      const Candidate& later = s.candidates[ahead];
+      if (later.b < grain_count)
+        for (int side : {0, 1}) {
+          __builtin_prefetch(s.near_nodes[later.pair][side].data());
+          __builtin_prefetch(s.memos[later.pair][side].data());
+        }
+    }
     std::vector<NodeHit>& out = s.hits[i];
     out.clear();
     if (c.b >= grain_count) {
