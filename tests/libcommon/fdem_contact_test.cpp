@@ -239,7 +239,7 @@ TEST(SurfaceTrees, TrianglesWithinTwoMarginsHoldTheNearestOneMarginAway) {
   // grain's surface, the triangle nearest to any q with |q - at| <= m is among those within
   // d + 2m of `at`, and the nearest of those is the search's own (same triangle, same distance).
   // Points near a faceted sphere (edges and corners nearby), displaced by exactly m in random
-  // directions, the worst case; triangles_within_in_body must also list exactly the brute-force set.
+  // directions, the worst case; slots_within_in_body must also list exactly the brute-force set.
   const double radius = 0.5 * kMm, m_margin = 0.01 * radius;
   mesh::TetOptions o;
   o.size = 0.25 * radius;
@@ -258,11 +258,11 @@ TEST(SurfaceTrees, TrianglesWithinTwoMarginsHoldTheNearestOneMarginAway) {
     ASSERT_TRUE(trees.nearest_in_body(0, at, radius, there));
     const double reach = std::sqrt(there.distance2) + 2 * m_margin;
     std::array<std::uint32_t, 64> within{};
-    const std::size_t count = trees.triangles_within_in_body(0, at, reach, within);
+    const std::size_t count = trees.slots_within_in_body(0, at, reach, within);
     ASSERT_LE(count, within.size());
     std::size_t brute = 0;
-    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
-      brute += (trees.closest_in_body(t, at).point - at).squaredNorm() <= reach * reach;
+    for (std::uint32_t slot = 0; slot < m.triangles.size(); ++slot)
+      brute += (trees.closest_in_slot(slot, at).point - at).squaredNorm() <= reach * reach;
     ASSERT_EQ(count, brute) << i;
     for (int k = 0; k < 20; ++k) {
       const Eigen::Vector3d q = at + m_margin * random_direction();
@@ -271,8 +271,9 @@ TEST(SurfaceTrees, TrianglesWithinTwoMarginsHoldTheNearestOneMarginAway) {
       std::uint32_t best = 0;
       double best2 = std::numeric_limits<double>::infinity();
       for (std::size_t j = 0; j < count; ++j) {
-        const double d2 = (trees.closest_in_body(within[j], q).point - q).squaredNorm();
-        if (d2 < best2 || (d2 == best2 && within[j] < best)) best = within[j], best2 = d2;
+        const std::uint32_t t = trees.slot_triangle(within[j]);
+        const double d2 = (trees.closest_in_slot(within[j], q).point - q).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && t < best)) best = t, best2 = d2;
       }
       ASSERT_EQ(best, searched.triangle) << i << " " << k;
       ASSERT_EQ(best2, searched.distance2) << i << " " << k;

@@ -91,7 +91,7 @@ struct SearchMemo {
   Eigen::Vector3d at = Eigen::Vector3d::Zero();
   double valid2 = -1;       ///< the memo holds while |q - at|^2 < valid2 (never when negative)
   std::uint32_t count = 0;  ///< 0: no contact; else the triangles to test
-  std::array<std::uint32_t, kMemoTriangles> triangles{};
+  std::array<std::uint32_t, kMemoTriangles> slots{};  ///< as SurfaceTrees leaf slots
 };
 
 /// One candidate interaction of a step: grains a < b (entry `pair` of the broad phase's pairs), or
@@ -361,12 +361,15 @@ struct ContactModel::State {
     if (options.search_memos && (q - memo.at).squaredNorm() < memo.valid2) {
       if (memo.count == 0) return false;
       double best2 = std::numeric_limits<double>::infinity();
+      std::uint32_t best = 0;
       for (std::uint32_t k = 0; k < memo.count; ++k) {
-        const std::uint32_t t = memo.triangles[k];
-        const TrianglePoint closest = trees.closest_in_body(t, q);
+        const std::uint32_t slot = memo.slots[k];
+        const TrianglePoint closest = trees.closest_in_slot(slot, q);
         const double d2 = (closest.point - q).squaredNorm();
-        if (d2 < best2 || (d2 == best2 && t < near.triangle)) near = {t, closest, d2, 0}, best2 = d2;
+        if (d2 < best2 || (d2 == best2 && trees.slot_triangle(slot) < trees.slot_triangle(best)))
+          near.closest = closest, near.distance2 = d2, best2 = d2, best = slot;
       }
+      near.triangle = trees.slot_triangle(best);
       checks.triangles += memo.count;
       return best2 < deepest2;
     }
@@ -392,7 +395,7 @@ struct ContactModel::State {
       memo.valid2 = d - max_penetration > slack ? (d - max_penetration - slack) * (d - max_penetration - slack) : -1;
       return false;
     }
-    const std::size_t count = trees.triangles_within_in_body(to, q, d + 2 * margin + slack, memo.triangles);
+    const std::size_t count = trees.slots_within_in_body(to, q, d + 2 * margin + slack, memo.slots);
     memo.count = static_cast<std::uint32_t>(std::min(count, kMemoTriangles));
     memo.valid2 = count <= kMemoTriangles ? margin * margin : -1;
     return true;

@@ -127,13 +127,8 @@ bool SurfaceTrees::nearest_in_body(std::size_t grain, const Eigen::Vector3d& p_b
       out, hint);
 }
 
-TrianglePoint SurfaceTrees::closest_in_body(std::uint32_t triangle, const Eigen::Vector3d& p_body) const {
-  const auto& tri = triangles_[triangle];
-  return closest_point_on_triangle(p_body, reference_x_[tri[0]], reference_x_[tri[1]], reference_x_[tri[2]]);
-}
-
-std::size_t SurfaceTrees::triangles_within_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius,
-                                                   std::span<std::uint32_t> out) const {
+std::size_t SurfaceTrees::slots_within_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius,
+                                               std::span<std::uint32_t> out) const {
   std::size_t count = 0;
   if (tree_begin_[grain] == tree_begin_[grain + 1]) return count;
   const double radius2 = radius * radius;
@@ -151,7 +146,7 @@ std::size_t SurfaceTrees::triangles_within_in_body(std::size_t grain, const Eige
     for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
       const auto& c = reference_corners_[k];
       if ((closest_point_on_triangle(p_body, c[0], c[1], c[2]).point - p_body).squaredNorm() > radius2) continue;
-      if (count < out.size()) out[count] = order_[k];
+      if (count < out.size()) out[count] = k;
       ++count;
     }
   }

@@ -57,14 +57,19 @@ class SurfaceTrees {
   /// same in both).
   bool nearest_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius, Nearest& out,
                        std::uint32_t hint = kNoHint) const;
-  /// The closest point to p_body on model triangle `triangle` in the reference configuration,
-  /// evaluated exactly as the searches evaluate it (the same corners in the same order).
-  TrianglePoint closest_in_body(std::uint32_t triangle, const Eigen::Vector3d& p_body) const;
-  /// The triangles of grain g (model indices) no farther than `radius` from p_body in the reference
-  /// configuration, written to `out` while it has room; returns how many there are (which may exceed
-  /// out.size()).
-  std::size_t triangles_within_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius,
-                                       std::span<std::uint32_t> out) const;
+  /// The triangles of grain g no farther than `radius` from p_body in the reference configuration,
+  /// as slots of the trees' leaf order (slot_triangle() gives the model triangle; a slot's corners
+  /// are stored together, so testing it is one read), written to `out` while it has room; returns
+  /// how many there are (which may exceed out.size()).
+  std::size_t slots_within_in_body(std::size_t grain, const Eigen::Vector3d& p_body, double radius,
+                                   std::span<std::uint32_t> out) const;
+  /// The closest point to p_body on the triangle in leaf slot `slot`, in the reference
+  /// configuration, evaluated exactly as the searches evaluate it.
+  TrianglePoint closest_in_slot(std::uint32_t slot, const Eigen::Vector3d& p_body) const {
+    const auto& c = reference_corners_[slot];
+    return closest_point_on_triangle(p_body, c[0], c[1], c[2]);
+  }
+  std::uint32_t slot_triangle(std::uint32_t slot) const { return order_[slot]; }
 
  private:
   struct Node {
