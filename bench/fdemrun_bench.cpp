@@ -171,6 +171,7 @@ struct Measured {
   double wall = 0, cpu = 0;
   ContactStepStats contact;  ///< of the last step
   std::size_t rebuilds = 0;  ///< broad-phase builds during the timed steps
+  std::size_t pair_lists_built = 0;  ///< rigid pairs' near-node lists built again between them
   double coordination = 0;   ///< grain-grain contacts per grain after the last step
 };
 
@@ -188,6 +189,7 @@ Measured run(const Model& m, int threads, int steps) {
   for (int n = 0; n < steps; ++n) {
     r.contact = s.step(dt).contact;
     r.rebuilds += r.contact.rebuilt;
+    r.pair_lists_built += r.contact.pair_lists_built;
   }
   r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.cpu = process_cpu_seconds() - cpu0;
@@ -244,10 +246,11 @@ int run_bench(int argc, char** argv) {
       const double target = kind == GrainKind::rigid ? 1e5 : 1e7;
       const std::string note = fmt::format(
           "{} elements, {} nodes ({:.0f} surface nodes/grain), coordination number {:.2f}, {} node contacts, {} "
-          "candidate pairs, {} node checks and {} node-triangle checks a step, {} broad-phase builds; {:.3g} {}/s/core "
+          "candidate pairs, {} node checks and {} node-triangle checks a step, {} broad-phase builds and {} rigid pairs' "
+          "lists built again between them; {:.3g} {}/s/core "
           "by wall, {:.3g} by CPU time ({:.2f} s CPU; the {} runs {:.3g}-{:.3g}); target {:.0e} ({:.2g} x of it by CPU)",
           m.element_count(), m.nodes.size(), double(surface) / m.grains.size(), r.coordination, r.contact.node_contacts,
-          r.contact.pairs, r.contact.node_checks, r.contact.triangle_checks, r.rebuilds, per_core_wall, unit, per_cpu,
+          r.contact.pairs, r.contact.node_checks, r.contact.triangle_checks, r.rebuilds, r.pair_lists_built, per_core_wall, unit, per_cpu,
           r.cpu, kRepeats, slowest, fastest, target, per_cpu / target);
       std::printf("%s, %d thread(s): %s\n", name, threads, note.c_str());
       std::fflush(stdout);

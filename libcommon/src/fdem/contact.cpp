@@ -102,6 +102,7 @@ struct Candidate {
 /// Work done on one candidate (for the benchmark's throughput figures).
 struct Checks {
   std::size_t nodes = 0, triangles = 0;
+  bool lists_built = false;  ///< the pair's near-node lists were built again this step
 };
 
 struct HistoryEntry {
@@ -161,6 +162,12 @@ struct ContactModel::State {
   std::vector<std::array<std::vector<NearNode>, 2>> near_nodes;
   /// Per listed node of near_nodes (same layout): its search memo (used between rigid grains).
   std::vector<std::array<std::vector<SearchMemo>, 2>> memos;
+  /// Per grain pair: the poses of a and b when its lists were built. Between two rigid grains the
+  /// lists stay valid while the pair's relative motion since then is below the skin (a node then
+  /// farther than max_penetration + skin from the other surface is still beyond max_penetration),
+  /// whatever the other grains do: they outlive the broad phase's rebuilds and are rebuilt alone
+  /// when the pair has moved that much. Other pairs' lists are rebuilt with the broad phase.
+  std::vector<std::array<RigidPose, 2>> list_pose;
   double memo_margin = 0;  ///< m of SearchMemo
   /// Per grain: a sphere around its surface this step (centre, radius), a tighter prefilter than
   /// the box for nodes near a box corner (most of a round grain's box is empty).
@@ -322,11 +329,11 @@ struct ContactModel::State {
   }
 
   /// How far any surface node of rigid grain `from` can have moved in rigid grain `to`'s body frame
-  /// since the last build (infinity unless both were rigid then and now): with the map q = A X + b
-  /// of reference positions X into `to`'s frame, |dA| r + |dA c + db| for the reference sphere
-  /// (c, r) of `from`, plus round-off.
-  double relative_motion_since_build(std::uint32_t from, std::uint32_t to) const {
-    const RigidPose &f = pose[from], &t = pose[to], &f0 = built_pose[from], &t0 = built_pose[to];
+  /// since both were at poses f0 and t0 (infinity unless all four poses are rigid): with the map
+  /// q = A X + b of reference positions X into `to`'s frame, |dA| r + |dA c + db| for the reference
+  /// sphere (c, r) of `from`, plus round-off.
+  double relative_motion(std::uint32_t from, std::uint32_t to, const RigidPose& f0, const RigidPose& t0) const {
+    const RigidPose &f = pose[from], &t = pose[to];
     if (!(f.rigid && t.rigid && f0.rigid && t0.rigid)) return std::numeric_limits<double>::infinity();
     const Eigen::Matrix3d turn = t.rotation.transpose() * f.rotation - t0.rotation.transpose() * f0.rotation;
     const Eigen::Vector3d shift =
@@ -336,18 +343,52 @@ struct ContactModel::State {
     return turn.norm() * reference_radius[from] + (turn * reference_centre[from] + shift).norm() + slack;
   }
 
-  /// Fills near_nodes for grain_pairs at positions x (the build positions).
-  void build_near_nodes(std::span<const Eigen::Vector3d> x) {
+  /// The relative motion of pair k's grains since its lists were built, seen from each side's
+  /// other grain ([0]: a's nodes in b's frame, [1]: b's nodes in a's frame).
+  std::array<double, 2> pair_motion(std::size_t k) const {
+    const auto [a, b] = grain_pairs[k];
+    return {relative_motion(a, b, list_pose[k][0], list_pose[k][1]), relative_motion(b, a, list_pose[k][1], list_pose[k][0])};
+  }
+
+  /// Builds pair k's lists at positions x and this step's poses.
+  void build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x) {
     const double reach = (max_penetration + skin) * (1 + kReachRoundOff);
-    near_nodes.resize(grain_pairs.size());
-    memos.resize(grain_pairs.size());
-#pragma omp parallel for schedule(dynamic, 4) if (grain_pairs.size() >= kParallelCandidates)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(grain_pairs.size()); ++k) {
-      const auto [a, b] = grain_pairs[k];
-      collect_near_nodes(a, b, reach, x, near_nodes[k][0]);
-      collect_near_nodes(b, a, reach, x, near_nodes[k][1]);
-      for (int side : {0, 1}) memos[k][side].assign(near_nodes[k][side].size(), SearchMemo{});
+    const auto [a, b] = grain_pairs[k];
+    collect_near_nodes(a, b, reach, x, near_nodes[k][0]);
+    collect_near_nodes(b, a, reach, x, near_nodes[k][1]);
+    for (int side : {0, 1}) memos[k][side].assign(near_nodes[k][side].size(), SearchMemo{});
+    list_pose[k] = {pose[a], pose[b]};
+  }
+
+  /// Pair k's lists are still valid only while both grains are rigid and have moved less than the
+  /// skin relative to each other since they were built.
+  bool lists_hold(std::size_t k) const {
+    const auto motion = pair_motion(k);
+    return motion[0] < skin && motion[1] < skin;
+  }
+
+  /// Replaces the broad phase's pairs by `pairs` (sorted) at positions x: a rigid pair that stays
+  /// keeps its lists and memos while they hold (lists_hold); the others are built anew.
+  void rebuild_pairs(std::vector<BoxPair> pairs, std::span<const Eigen::Vector3d> x) {
+    std::vector<std::array<std::vector<NearNode>, 2>> kept_nodes(pairs.size());
+    std::vector<std::array<std::vector<SearchMemo>, 2>> kept_memos(pairs.size());
+    std::vector<std::array<RigidPose, 2>> kept_pose(pairs.size());
+    std::vector<char> fresh(pairs.size(), 1);
+    for (std::size_t k = 0, old = 0; k < pairs.size(); ++k) {
+      while (old < grain_pairs.size() && grain_pairs[old] < pairs[k]) ++old;
+      if (old == grain_pairs.size() || grain_pairs[old] != pairs[k] || !lists_hold(old)) continue;
+      kept_nodes[k] = std::move(near_nodes[old]);
+      kept_memos[k] = std::move(memos[old]);
+      kept_pose[k] = list_pose[old];
+      fresh[k] = 0;
     }
+    grain_pairs = std::move(pairs);
+    near_nodes = std::move(kept_nodes);
+    memos = std::move(kept_memos);
+    list_pose = std::move(kept_pose);
+#pragma omp parallel for schedule(dynamic, 4) if (grain_pairs.size() >= kParallelCandidates)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(grain_pairs.size()); ++k)
+      if (fresh[k]) build_pair_lists(static_cast<std::size_t>(k), x);
   }
 
   /// The closest-triangle search of a listed node q (in `to`'s body frame) between two rigid
@@ -403,9 +444,11 @@ struct ContactModel::State {
 
   /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces, among `nodes`
   /// (whose hints are moved to the triangles found; `memos` has one per node).
+  /// `moved`: the pair's relative motion since the lists were built (pair_motion; infinity
+  /// unless both grains are rigid), as far as the clearance-sorted list is read.
   void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<NearNode> nodes,
-                  std::span<SearchMemo> memos, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                  double dt, std::vector<NodeHit>& out, Checks& checks) const {
+                  std::span<SearchMemo> memos, double moved, std::span<const Eigen::Vector3d> x,
+                  std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
     // Two rigid grains: a listed node's reference position X maps into `to`'s body frame by one
     // affine map, q = R_to^T (R_from X + t_from - t_to), where `to`'s box and sphere are its
     // reference ones and its search memo holds; the node's current position is read only once it
@@ -429,7 +472,6 @@ struct ContactModel::State {
     const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
     SurfaceTrees::Nearest near;
     // Between rigid grains the list is sorted by clearance: read it only as far as the pair moved.
-    const double moved = rigid_pair ? relative_motion_since_build(from, to) : std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       NearNode& listed = nodes[i];
       if (listed.clearance > moved) break;
@@ -654,8 +696,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   if (s.need_rebuild) {
     std::vector<Aabb> boxes(grain_count);
     for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
-    s.grain_pairs = overlapping_box_pairs(boxes);
-    s.build_near_nodes(x);
+    s.rebuild_pairs(overlapping_box_pairs(boxes), x);
     s.built_at.resize(s.surface_nodes.size());
     for (std::size_t k = 0; k < s.surface_nodes.size(); ++k) s.built_at[k] = x[s.surface_nodes[k]];
     if (poses.empty()) s.built_pose.assign(grain_count, RigidPose{});
@@ -707,8 +748,15 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
       s.platen_hits(c, platens[c.b - grain_count], x, v, dt, out, s.checks[i]);
       continue;
     }
-    s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], s.memos[c.pair][0], x, v, dt, out, s.checks[i]);
-    s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], s.memos[c.pair][1], x, v, dt, out, s.checks[i]);
+    // A rigid pair whose lists no longer hold builds them again now (only its own data: any thread).
+    std::array<double, 2> moved = s.pair_motion(c.pair);
+    if (std::isfinite(moved[0]) && !(moved[0] < s.skin && moved[1] < s.skin)) {
+      s.build_pair_lists(c.pair, x);
+      s.checks[i].lists_built = true;
+      moved = s.pair_motion(c.pair);
+    }
+    s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], s.memos[c.pair][0], moved[0], x, v, dt, out, s.checks[i]);
+    s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], s.memos[c.pair][1], moved[1], x, v, dt, out, s.checks[i]);
     // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
     if (!std::is_sorted(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; }))
       std::sort(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; });
@@ -719,6 +767,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     const Candidate& c = s.candidates[i];
     stats.node_checks += s.checks[i].nodes;
     stats.triangle_checks += s.checks[i].triangles;
+    stats.pair_lists_built += s.checks[i].lists_built;
     if (s.hits[i].empty()) continue;
     const bool platen = c.b >= grain_count;
     const Grain& b_grain = s.grains[platen ? c.a : c.b];

@@ -95,6 +95,9 @@ struct ContactStepStats {
   double max_overlap = 0;         ///< m
   std::size_t node_checks = 0;      ///< surface nodes tested against another grain's box or a platen
   std::size_t triangle_checks = 0;  ///< closest-point evaluations in the trees
+  /// Rigid pairs whose near-node lists were built again this step (they moved a skin relative to
+  /// each other since their lists were built), besides the broad phase's rebuilds.
+  std::size_t pair_lists_built = 0;
 };
 
 class ContactModel {
