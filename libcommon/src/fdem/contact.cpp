@@ -191,6 +191,7 @@ struct ContactModel::State {
   std::vector<std::vector<BallHit>> ball_hits;   ///< per ball, this step
 
   std::vector<Candidate> candidates;
+  std::vector<std::array<double, 2>> candidate_motion;  ///< per grain-pair candidate: pair_motion
   std::vector<std::vector<NodeHit>> hits;
   std::vector<Checks> checks;
 
@@ -360,12 +361,9 @@ struct ContactModel::State {
     list_pose[k] = {pose[a], pose[b]};
   }
 
-  /// Pair k's lists are still valid only while both grains are rigid and have moved less than the
-  /// skin relative to each other since they were built.
-  bool lists_hold(std::size_t k) const {
-    const auto motion = pair_motion(k);
-    return motion[0] < skin && motion[1] < skin;
-  }
+  /// Lists whose pair moved `motion` (pair_motion) since they were built still hold: both grains
+  /// rigid and moved less than the skin relative to each other.
+  bool lists_hold(const std::array<double, 2>& motion) const { return motion[0] < skin && motion[1] < skin; }
 
   /// Replaces the broad phase's pairs by `pairs` (sorted) at positions x: a rigid pair that stays
   /// keeps its lists and memos while they hold (lists_hold); the others are built anew.
@@ -376,7 +374,7 @@ struct ContactModel::State {
     std::vector<char> fresh(pairs.size(), 1);
     for (std::size_t k = 0, old = 0; k < pairs.size(); ++k) {
       while (old < grain_pairs.size() && grain_pairs[old] < pairs[k]) ++old;
-      if (old == grain_pairs.size() || grain_pairs[old] != pairs[k] || !lists_hold(old)) continue;
+      if (old == grain_pairs.size() || grain_pairs[old] != pairs[k] || !lists_hold(pair_motion(old))) continue;
       kept_nodes[k] = std::move(near_nodes[old]);
       kept_memos[k] = std::move(memos[old]);
       kept_pose[k] = list_pose[old];
@@ -394,7 +392,7 @@ struct ContactModel::State {
   /// The closest-triangle search of a listed node q (in `to`'s body frame) between two rigid
   /// grains, from its memo when that still holds, else anew (and remembered). True when a triangle
   /// lies within the deepest detectable penetration; `near` is then in the body frame. `outside`
-  /// tells whether the node is outside `to` given its closest point in world coordinates.
+  /// tells whether the node is outside `to` given a search's answer (in the body frame).
   template <class Outside>
   bool nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, NearNode& listed, SearchMemo& memo,
                           SurfaceTrees::Nearest& near, Checks& checks, Outside outside) const {
@@ -729,6 +727,22 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   // them, and are applied below in candidate order: results are the same for any thread count.
   if (s.hits.size() < s.candidates.size()) s.hits.resize(s.candidates.size());
   s.checks.assign(s.candidates.size(), {});
+  // Rigid pairs whose lists no longer hold build them again first, so that the narrow phase below
+  // changes no list's storage (its prefetches read other pairs' lists).
+  s.candidate_motion.resize(s.candidates.size());
+  std::vector<std::uint32_t> stale;
+  for (std::uint32_t i = 0; i < s.candidates.size(); ++i) {
+    if (s.candidates[i].b >= grain_count) continue;
+    s.candidate_motion[i] = s.pair_motion(s.candidates[i].pair);
+    if (std::isfinite(s.candidate_motion[i][0]) && !s.lists_hold(s.candidate_motion[i])) stale.push_back(i);
+  }
+#pragma omp parallel for schedule(dynamic, 1) if (stale.size() >= kParallelCandidates)
+  for (std::int64_t k = 0; k < static_cast<std::int64_t>(stale.size()); ++k) {
+    const std::uint32_t i = stale[k];
+    s.build_pair_lists(s.candidates[i].pair, x);
+    s.checks[i].lists_built = true;
+    s.candidate_motion[i] = s.pair_motion(s.candidates[i].pair);
+  }
 #pragma omp parallel for schedule(dynamic, 4) if (s.candidates.size() >= kParallelCandidates)
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(s.candidates.size()); ++i) {
     const Candidate& c = s.candidates[i];
@@ -748,13 +762,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
       s.platen_hits(c, platens[c.b - grain_count], x, v, dt, out, s.checks[i]);
       continue;
     }
-    // A rigid pair whose lists no longer hold builds them again now (only its own data: any thread).
-    std::array<double, 2> moved = s.pair_motion(c.pair);
-    if (std::isfinite(moved[0]) && !(moved[0] < s.skin && moved[1] < s.skin)) {
-      s.build_pair_lists(c.pair, x);
-      s.checks[i].lists_built = true;
-      moved = s.pair_motion(c.pair);
-    }
+    const std::array<double, 2>& moved = s.candidate_motion[i];
     s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], s.memos[c.pair][0], moved[0], x, v, dt, out, s.checks[i]);
     s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], s.memos[c.pair][1], moved[1], x, v, dt, out, s.checks[i]);
     // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
