@@ -561,11 +561,13 @@ struct ClosingCubes {
                             (step >= kJump && g == 5 ? 1.5 * skin : 0.0);
       const Eigen::Vector3d at = centre[g] - closed * centre[g].normalized();
       const Eigen::Matrix3d R = Eigen::AngleAxisd(pace * 0.002 * step, axis[g]).toRotationMatrix();
-      poses[g] = {rigid, R, at};
+      const Eigen::Vector3d velocity = pace * (step < kTurn ? -0.04 : 0.04) * skin / kDt * centre[g].normalized();
+      const Eigen::Vector3d omega = pace * 0.002 / kDt * axis[g];
+      // The reference centroid is taken at the origin (the boxes are meshed around it).
+      poses[g] = rigid ? RigidPose::of_body(R, at, Eigen::Vector3d::Zero(), velocity, omega) : RigidPose{};
       for (std::uint32_t n = m.grains[g].node_begin; n < m.grains[g].node_end; ++n) {
         x[n] = R * m.nodes[n] + at;
-        v[n] = pace * ((step < kTurn ? -0.04 : 0.04) * skin / kDt * centre[g].normalized() +
-                       0.002 / kDt * axis[g].cross(x[n] - at));
+        v[n] = velocity + omega.cross(x[n] - at);
       }
     }
   }
@@ -641,6 +643,57 @@ TEST(ContactModel, RigidGrainsSearchedInTheirBodyFramesGiveTheWorldSearchsForces
   EXPECT_GT(contacts, 1000u);
 }
 
+TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheLoadedNodesAreListed) {
+  // With poses, a rigid grain's nodes are placed by its pose: the node arrays may hold anything
+  // (here NaN) and the grain, platen, wall and ball forces must be those of nodes placed in the
+  // arrays, bit for bit. take_loaded_rigid_nodes lists exactly the nodes given a force.
+  const ClosingCubes c(GrainKind::rigid);
+  ContactModel placed(c.m, unit_masses(c.m), {}), unread(c.m, unit_masses(c.m), {});
+  std::vector<Eigen::Vector3d> x, v;
+  std::vector<RigidPose> poses;
+  const Eigen::Vector3d nan = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  CylinderWallState wall;
+  wall.radius = 0.45 * c.side;  // cuts the block's vertical edges
+  const std::vector<Eigen::Vector3d> balls = {Eigen::Vector3d(c.side, 0, 0), Eigen::Vector3d(0, -c.side, 0.25 * c.side)};
+  const BallContactOptions ball_options{0.1 * c.side, 1e-9, 0.3};
+  std::size_t loaded = 0, ball_contacts = 0, wall_contacts = 0;
+  for (int step = 0; step < ClosingCubes::kSteps; ++step) {
+    c.place(step, true, x, v, poses);
+    const std::vector<Eigen::Vector3d> garbage(x.size(), nan);
+    auto fa = zeros(x.size()), fb = zeros(x.size());
+    auto ball_fa = zeros(balls.size()), ball_fb = zeros(balls.size()), moment_a = ball_fa, moment_b = ball_fb;
+    const ContactStepStats a = placed.add_forces(x, v, {&c.floor, 1}, ClosingCubes::kDt, fa, poses);
+    const ContactStepStats b = unread.add_forces(garbage, garbage, {&c.floor, 1}, ClosingCubes::kDt, fb, poses);
+    const BoundaryContactStats wall_a = placed.add_wall_forces(x, v, wall, ClosingCubes::kDt, fa);
+    const BoundaryContactStats wall_b = unread.add_wall_forces(garbage, garbage, wall, ClosingCubes::kDt, fb);
+    const auto still = zeros(balls.size());
+    ball_contacts += placed.add_ball_forces(x, v, balls, still, still, ball_options, ClosingCubes::kDt, fa, ball_fa, moment_a).contacts;
+    unread.add_ball_forces(garbage, garbage, balls, still, still, ball_options, ClosingCubes::kDt, fb, ball_fb, moment_b);
+    ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
+    ASSERT_EQ(wall_a.contacts, wall_b.contacts) << step;
+    ASSERT_EQ(ball_fa, ball_fb) << step;
+    ASSERT_EQ(fa, fb) << step;
+    std::vector<LoadedNode> loaded_nodes;
+    unread.take_loaded_rigid_nodes(loaded_nodes);
+    std::vector<std::uint32_t> listed, forced;
+    for (const LoadedNode& n : loaded_nodes) {
+      listed.push_back(n.node);
+      ASSERT_TRUE(n.node >= c.m.grains[n.grain].node_begin && n.node < c.m.grains[n.grain].node_end) << n.node;
+    }
+    std::sort(listed.begin(), listed.end());
+    ASSERT_EQ(std::adjacent_find(listed.begin(), listed.end()), listed.end()) << "listed twice";
+    for (std::uint32_t n = 0; n < fb.size(); ++n)
+      if (fb[n] != Eigen::Vector3d::Zero()) forced.push_back(n);
+    // A node may be listed with a zero sum (forces that cancel); none with a force may be missing.
+    ASSERT_TRUE(std::includes(listed.begin(), listed.end(), forced.begin(), forced.end())) << step;
+    loaded += forced.size();
+    wall_contacts += wall_a.contacts;
+  }
+  EXPECT_GT(loaded, 1000u);
+  EXPECT_GT(wall_contacts, 100u);
+  EXPECT_GT(ball_contacts, 10u);
+}
+
 TEST(ContactModel, SearchMemosOfRigidGrainsGiveTheForcesOfSearchingAnew) {
   // Two coarse faceted spheres (R = 0.5 mm, facets of about 0.4 R) pressed about 10 % of R into
   // each other. One breathes in and out along the line of centres (up to 0.2 memo margin a step)
@@ -667,15 +720,19 @@ TEST(ContactModel, SearchMemosOfRigidGrainsGiveTheForcesOfSearchingAnew) {
     const Eigen::Vector3d direction = Eigen::AngleAxisd(slid / (1.9 * radius), orbit_axis) * orbit_axis.unitOrthogonal();
     const Eigen::Matrix3d turn = Eigen::AngleAxisd(slid / radius, spin_axis).toRotationMatrix();
     const double breathing = 5 * margin * std::sin(2 * std::numbers::pi * t / 150);  // 0.2 margin a step at most
-    return RigidPose{true, turn, (1.97 * radius - breathing) * direction};
+    return RigidPose::of_body(turn, (1.97 * radius - breathing) * direction, Eigen::Vector3d::Zero());
   };
   std::vector<Eigen::Vector3d> x(m.nodes.size()), v = zeros(m.nodes.size());
-  std::vector<RigidPose> poses(2, RigidPose{true, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()});
+  std::vector<RigidPose> poses(2, RigidPose::of_body(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()));
   std::size_t contacts = 0, tested_remembering = 0, tested_searching = 0;
   const double dt = 1e-8;
   for (int step = 0; step < kSteps; ++step) {
     poses[1] = pose_at(step);
     const RigidPose next = pose_at(step + 1);
+    // The moving grain's velocities: from this pose to the next in one step.
+    poses[1].velocity = (next.centre - poses[1].centre) / dt;
+    const Eigen::AngleAxisd turn(Eigen::Matrix3d(next.rotation * poses[1].rotation.transpose()));
+    poses[1].angular_velocity = turn.angle() / dt * turn.axis();
     for (std::uint32_t n = 0; n < m.nodes.size(); ++n) {
       const bool moving = n >= m.grains[1].node_begin;
       x[n] = moving ? Eigen::Vector3d(poses[1].rotation * m.nodes[n] + poses[1].translation) : m.nodes[n];

@@ -128,8 +128,9 @@ struct BallHit {
   NodeContactForce law;
 };
 
+/// Twice the area times the unit normal of triangle t at node positions x.
 Eigen::Vector3d triangle_normal(const std::array<std::uint32_t, 3>& t, std::span<const Eigen::Vector3d> x) {
-  return (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);  // length = twice the area
+  return (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
 }
 
 }  // namespace
@@ -138,6 +139,7 @@ struct ContactModel::State {
   std::vector<Grain> grains;
   std::vector<Material> materials;
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::uint32_t> triangle_grain;
   std::vector<double> node_mass;
   std::size_t node_count = 0;
   ContactOptions options;
@@ -190,12 +192,47 @@ struct ContactModel::State {
   std::vector<BallHistoryEntry> ball_history;  ///< sorted by (ball, grain)
   std::vector<std::vector<BallHit>> ball_hits;   ///< per ball, this step
 
+  /// Rigid grains' nodes given a force since take_loaded_rigid_nodes(), in the order first loaded,
+  /// and a mark per node for those in the list.
+  std::vector<LoadedNode> loaded;
+  std::vector<char> is_loaded;
+
   std::vector<Candidate> candidates;
   std::vector<std::array<double, 2>> candidate_motion;  ///< per grain-pair candidate: pair_motion
   std::vector<std::vector<NodeHit>> hits;
   std::vector<Checks> checks;
 
   const Material& material_of(std::uint32_t grain) const { return materials[grains[grain].material]; }
+
+  /// Where node `node` of grain g is now: placed by a rigid grain's pose, else x[node].
+  Eigen::Vector3d position(std::uint32_t node, std::uint32_t g, std::span<const Eigen::Vector3d> x) const {
+    const RigidPose& body = pose[g];
+    return body.rigid ? body.place(trees.reference_positions()[node]) : x[node];
+  }
+  /// How fast node `node` of grain g moves: by a rigid grain's pose, else v[node].
+  Eigen::Vector3d velocity(std::uint32_t node, std::uint32_t g, std::span<const Eigen::Vector3d> v) const {
+    const RigidPose& body = pose[g];
+    return body.rigid ? body.velocity_of(trees.reference_positions()[node]) : v[node];
+  }
+  /// Triangle t's normal now, twice its area long.
+  Eigen::Vector3d normal_of(std::uint32_t t, std::span<const Eigen::Vector3d> x) const {
+    const std::uint32_t g = triangle_grain[t];
+    const auto& c = triangles[t];
+    if (!pose[g].rigid) return triangle_normal(c, x);
+    const Eigen::Vector3d a = position(c[0], g, x);
+    return (position(c[1], g, x) - a).cross(position(c[2], g, x) - a);
+  }
+  /// How fast the point with barycentric weights w on triangle t moves.
+  Eigen::Vector3d surface_velocity(std::uint32_t t, const Eigen::Vector3d& w, std::span<const Eigen::Vector3d> v) const {
+    const std::uint32_t g = triangle_grain[t];
+    const auto& c = triangles[t];
+    return w[0] * velocity(c[0], g, v) + w[1] * velocity(c[1], g, v) + w[2] * velocity(c[2], g, v);
+  }
+  /// Adds force to f at `node` of grain g, recording a rigid grain's node in `loaded`.
+  void apply_force(std::span<Eigen::Vector3d> f, std::uint32_t node, std::uint32_t g, const Eigen::Vector3d& force) {
+    f[node] += force;
+    if (pose[g].rigid && !is_loaded[node]) is_loaded[node] = 1, loaded.push_back({node, g});
+  }
   std::span<const std::uint32_t> surface(std::uint32_t grain) const {
     return {surface_nodes.data() + surface_offset[grain], surface_offset[grain + 1] - surface_offset[grain]};
   }
@@ -217,7 +254,7 @@ struct ContactModel::State {
     }
     for (std::uint32_t k = node_triangle_offset[node]; k < node_triangle_offset[node + 1]; ++k) {
       const std::uint32_t t = node_triangles[k];
-      const Eigen::Vector3d n = triangle_normal(triangles[t], x);
+      const Eigen::Vector3d n = normal_of(t, x);
       const double len = n.norm();
       if (len > 0) area += triangle_area[t] / 3.0 * std::max(0.0, -n.dot(normal) / len);
     }
@@ -227,10 +264,10 @@ struct ContactModel::State {
   /// A normal at the closest feature whose sign tells inside from outside for a closed surface
   /// (angle-weighted pseudonormals at corners, the two faces' sum at edges).
   Eigen::Vector3d pseudonormal(std::uint32_t t, TriangleFeature feature, std::span<const Eigen::Vector3d> x) const {
-    const Eigen::Vector3d n = triangle_normal(triangles[t], x).normalized();
+    const Eigen::Vector3d n = normal_of(t, x).normalized();
     auto across = [&](int edge) -> Eigen::Vector3d {
       const std::uint32_t o = neighbour[t][edge];
-      return o == kNoTriangle ? n : Eigen::Vector3d(n + triangle_normal(triangles[o], x).normalized());
+      return o == kNoTriangle ? n : Eigen::Vector3d(n + normal_of(o, x).normalized());
     };
     switch (feature) {
       case TriangleFeature::face: return n;
@@ -240,12 +277,15 @@ struct ContactModel::State {
       default: break;
     }
     const std::uint32_t v = triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)];
+    const std::uint32_t g = triangle_grain[t];
+    const Eigen::Vector3d at_v = position(v, g, x);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (std::uint32_t k = node_triangle_offset[v]; k < node_triangle_offset[v + 1]; ++k) {
       const auto& tri = triangles[node_triangles[k]];
       const int i = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-      const Eigen::Vector3d e1 = (x[tri[(i + 1) % 3]] - x[v]).normalized(), e2 = (x[tri[(i + 2) % 3]] - x[v]).normalized();
-      sum += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * triangle_normal(tri, x).normalized();
+      const Eigen::Vector3d e1 = (position(tri[(i + 1) % 3], g, x) - at_v).normalized();
+      const Eigen::Vector3d e2 = (position(tri[(i + 2) % 3], g, x) - at_v).normalized();
+      sum += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * normal_of(node_triangles[k], x).normalized();
     }
     return sum;
   }
@@ -300,7 +340,7 @@ struct ContactModel::State {
   bool moved_nodes(std::uint32_t g, std::span<const Eigen::Vector3d> x) const {
     const double limit2 = 0.25 * skin * skin;
     for (std::uint32_t k = surface_offset[g]; k < surface_offset[g + 1]; ++k)
-      if ((x[surface_nodes[k]] - built_at[k]).squaredNorm() > limit2) return true;
+      if ((position(surface_nodes[k], g, x) - built_at[k]).squaredNorm() > limit2) return true;
     return false;
   }
 
@@ -319,7 +359,7 @@ struct ContactModel::State {
     SurfaceTrees::Nearest near;
     const bool rigid_pair = pose[from].rigid && pose[to].rigid;
     for (std::uint32_t node : surface(from)) {
-      const Eigen::Vector3d& p = x[node];
+      const Eigen::Vector3d p = position(node, from, x);
       if (!box.contains(p) || (p - centre).squaredNorm() > sphere_reach2 || !nearest(to, p, reach, x, near)) continue;
       const bool inside = (near.closest.point - p).dot(pseudonormal(near.triangle, near.closest.feature, x)) > 0;
       out.push_back({node, near.triangle, trees.reference_positions()[node],
@@ -449,8 +489,8 @@ struct ContactModel::State {
                   std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
     // Two rigid grains: a listed node's reference position X maps into `to`'s body frame by one
     // affine map, q = R_to^T (R_from X + t_from - t_to), where `to`'s box and sphere are its
-    // reference ones and its search memo holds; the node's current position is read only once it
-    // is found close.
+    // reference ones and its search memo holds; the node is placed in the world only once it is
+    // found close.
     const RigidPose& body_from = pose[from];
     const RigidPose& body_to = pose[to];
     const bool rigid_pair = body_from.rigid && body_to.rigid;
@@ -475,8 +515,9 @@ struct ContactModel::State {
       if (listed.clearance > moved) break;
       ++checks.nodes;
       const std::uint32_t node = listed.node;
+      const Eigen::Vector3d p = body_from.rigid ? body_from.place(listed.reference) : x[node];
       // From the node out to the surface, and whether that leaves the node outside.
-      const auto to_surface = [&](const SurfaceTrees::Nearest& n) -> Eigen::Vector3d { return n.closest.point - x[node]; };
+      const auto to_surface = [&](const SurfaceTrees::Nearest& n) -> Eigen::Vector3d { return n.closest.point - p; };
       const auto outside = [&](const SurfaceTrees::Nearest& n) {
         return !(to_surface(n).dot(pseudonormal(n.triangle, n.closest.feature, x)) > 0);
       };
@@ -491,25 +532,22 @@ struct ContactModel::State {
         close = nearest_remembered(to, q, listed, memos[i], near, checks, outside_in_world);
         if (close) near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
       } else {
-        if (!box.contains(x[node]) || (x[node] - centre).squaredNorm() > reach2) continue;
-        close = nearest(to, x[node], max_penetration, x, near, listed.hint);
+        if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
+        close = nearest(to, p, max_penetration, x, near, listed.hint);
         checks.triangles += near.tested;
         if (close && listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
       }
       if (!close || outside(near)) continue;
-      const Eigen::Vector3d& p = x[node];
       const Eigen::Vector3d d = to_surface(near);
       NodeHit hit;
       hit.overlap = std::sqrt(near.distance2);
-      hit.normal = near.closest.feature == TriangleFeature::face
-                       ? Eigen::Vector3d(triangle_normal(triangles[near.triangle], x).normalized())
-                       : Eigen::Vector3d(d / hit.overlap);
+      hit.normal = near.closest.feature == TriangleFeature::face ? Eigen::Vector3d(normal_of(near.triangle, x).normalized())
+                                                                 : Eigen::Vector3d(d / hit.overlap);
       // Both directions are evaluated, each with half the penalty (docs/fdem_contact.md).
       const double area = 0.5 * facing_area(node, hit.normal, x, body_from);
       if (!(area > 0)) continue;
-      const auto& tri = triangles[near.triangle];
       const Eigen::Vector3d w = near.closest.weights;
-      const Eigen::Vector3d relative = v[node] - (w[0] * v[tri[0]] + w[1] * v[tri[1]] + w[2] * v[tri[2]]);
+      const Eigen::Vector3d relative = velocity(node, from, v) - surface_velocity(near.triangle, w, v);
       const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
       hit.law = node_contact_force(contact_law(p_n, p_t, area, node_mass[node], beta, mu), hit.normal, hit.overlap,
                                    relative, spring ? *spring : Eigen::Vector3d::Zero(), dt);
@@ -526,7 +564,8 @@ struct ContactModel::State {
     const Material& m = material_of(key.a);
     checks.nodes += surface(key.a).size();
     for (std::uint32_t node : surface(key.a)) {
-      const double height = (x[node] - platen.point).dot(platen.normal);
+      const Eigen::Vector3d p = position(node, key.a, x);
+      const double height = (p - platen.point).dot(platen.normal);
       if (!(height < 0)) continue;
       NodeHit hit;
       hit.overlap = -height;
@@ -536,9 +575,10 @@ struct ContactModel::State {
       const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
       hit.law = node_contact_force(
           contact_law(m.normal_penalty, m.tangential_penalty, area, node_mass[node], m.damping_ratio, platen.friction),
-          hit.normal, hit.overlap, v[node] - platen.velocity, spring ? *spring : Eigen::Vector3d::Zero(), dt);
+          hit.normal, hit.overlap, velocity(node, key.a, v) - platen.velocity,
+          spring ? *spring : Eigen::Vector3d::Zero(), dt);
       hit.node = node;
-      hit.point = x[node] + 0.5 * hit.overlap * platen.normal;
+      hit.point = p + 0.5 * hit.overlap * platen.normal;
       out.push_back(hit);
     }
   }
@@ -555,6 +595,8 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
   s.grains = model.grains;
   s.materials = model.materials;
   s.triangles = model.triangles;
+  s.triangle_grain = model.triangle_grain;
+  s.is_loaded.assign(model.nodes.size(), 0);
   s.node_mass.assign(node_mass.begin(), node_mass.end());
   s.node_count = model.nodes.size();
   s.options = options;
@@ -696,7 +738,9 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
     s.rebuild_pairs(overlapping_box_pairs(boxes), x);
     s.built_at.resize(s.surface_nodes.size());
-    for (std::size_t k = 0; k < s.surface_nodes.size(); ++k) s.built_at[k] = x[s.surface_nodes[k]];
+    for (std::uint32_t g = 0; g < grain_count; ++g)
+      for (std::uint32_t k = s.surface_offset[g]; k < s.surface_offset[g + 1]; ++k)
+        s.built_at[k] = s.position(s.surface_nodes[k], g, x);
     if (poses.empty()) s.built_pose.assign(grain_count, RigidPose{});
     else s.built_pose.assign(poses.begin(), poses.end());
     s.need_rebuild = false;
@@ -779,6 +823,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     if (s.hits[i].empty()) continue;
     const bool platen = c.b >= grain_count;
     const Grain& b_grain = s.grains[platen ? c.a : c.b];
+    const auto node_grain = [&](std::uint32_t node) { return node >= b_grain.node_begin && node < b_grain.node_end ? c.b : c.a; };
     ContactRecord record;
     record.a = c.a;
     record.b = c.b;
@@ -787,13 +832,14 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
     for (const NodeHit& h : s.hits[i]) {
       const Eigen::Vector3d& force = h.law.force;
-      f[h.node] += force;
+      // The node belongs to b (pushed along +normal by a) or to a (its reaction acts on b).
+      const std::uint32_t grain = platen ? c.a : node_grain(h.node);
+      s.apply_force(f, h.node, grain, force);
       if (!platen) {
         const auto& tri = s.triangles[h.triangle];
-        for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
+        for (int k = 0; k < 3; ++k) s.apply_force(f, tri[k], s.triangle_grain[h.triangle], -h.weights[k] * force);
       }
-      // The node belongs to b (pushed along +normal by a) or to a (its reaction acts on b).
-      const double sign = !platen && h.node >= b_grain.node_begin && h.node < b_grain.node_end ? 1.0 : -1.0;
+      const double sign = !platen && grain == c.b ? 1.0 : -1.0;
       record.force += sign * force;
       normal_force_on_b += sign * h.law.normal_force * h.normal;
       record.point += h.law.normal_force * h.point;
@@ -830,8 +876,10 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
     const double fy = std::max(std::abs(box.lo.y() - wall.axis_xy.y()), std::abs(box.hi.y() - wall.axis_xy.y()));
     if (fx * fx + fy * fy <= wall.radius * wall.radius) continue;
     const Material& m = s.material_of(static_cast<std::uint32_t>(g));
-    for (std::uint32_t node : s.surface(static_cast<std::uint32_t>(g))) {
-      const Eigen::Vector3d radial(x[node].x() - wall.axis_xy.x(), x[node].y() - wall.axis_xy.y(), 0.0);
+    const auto grain = static_cast<std::uint32_t>(g);
+    for (std::uint32_t node : s.surface(grain)) {
+      const Eigen::Vector3d p = s.position(node, grain, x);
+      const Eigen::Vector3d radial(p.x() - wall.axis_xy.x(), p.y() - wall.axis_xy.y(), 0.0);
       const double rho = radial.norm();
       if (!(rho > wall.radius)) continue;
       const Eigen::Vector3d outward = radial / rho;
@@ -839,13 +887,14 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
       if (!(area > 0)) continue;
       const ContactLaw law = contact_law(m.normal_penalty, m.tangential_penalty, area, s.node_mass[node], m.damping_ratio, 0.0);
       per_grain[g].emplace_back(node, node_contact_force(law, -outward, rho - wall.radius,
-                                                          v[node] - wall.radial_velocity * outward, Eigen::Vector3d::Zero(), dt));
+                                                          s.velocity(node, grain, v) - wall.radial_velocity * outward,
+                                                          Eigen::Vector3d::Zero(), dt));
     }
   }
   BoundaryContactStats stats;
-  for (const auto& hits : per_grain)
-    for (const auto& [node, law] : hits) {
-      f[node] += law.force;
+  for (std::uint32_t g = 0; g < per_grain.size(); ++g)
+    for (const auto& [node, law] : per_grain[g]) {
+      s.apply_force(f, node, g, law.force);
       stats.radial_force += law.normal_force;
       stats.elastic_energy += law.elastic_energy;
       stats.dissipated += law.dissipated;
@@ -915,11 +964,10 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
       BallHit hit;
       hit.overlap = inside ? r + dist : r - dist;
       if (!(hit.overlap > 0)) continue;
-      const Eigen::Vector3d face = triangle_normal(s.triangles[near.triangle], x).normalized();
+      const Eigen::Vector3d face = s.normal_of(near.triangle, x).normalized();
       hit.normal = dist > 1e-12 * r ? Eigen::Vector3d((inside ? 1.0 : -1.0) * d / dist) : face;
-      const auto& tri = s.triangles[near.triangle];
       const Eigen::Vector3d w = near.closest.weights;
-      const Eigen::Vector3d surface_velocity = w[0] * v[tri[0]] + w[1] * v[tri[1]] + w[2] * v[tri[2]];
+      const Eigen::Vector3d surface_velocity = s.surface_velocity(near.triangle, w, v);
       const Eigen::Vector3d contact_velocity = ball_velocity[b] + ball_spin[b].cross(-r * hit.normal);
       const Material& m = s.material_of(g);
       hit.law = node_contact_force(contact_law(m.normal_penalty, m.tangential_penalty, area, balls.mass, m.damping_ratio,
@@ -941,7 +989,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
       ball_force[b] += force;
       ball_moment[b] += (-r * h.normal).cross(force - h.law.normal_force * h.normal);
       const auto& tri = s.triangles[h.triangle];
-      for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
+      for (int k = 0; k < 3; ++k) s.apply_force(f, tri[k], h.grain, -h.weights[k] * force);
       stats.elastic_energy += h.law.elastic_energy;
       stats.dissipated += h.law.dissipated;
       stats.max_overlap = std::max(stats.max_overlap, h.overlap);
@@ -961,6 +1009,13 @@ double ContactModel::ball_stable_time_step(const BallContactOptions& balls) cons
     dt = std::min(dt, kTimeStepSafety * 2.0 / std::sqrt(k_n / balls.mass) * (std::sqrt(1 + beta * beta) - beta));
   }
   return dt;
+}
+
+void ContactModel::take_loaded_rigid_nodes(std::vector<LoadedNode>& nodes) {
+  State& s = *state_;
+  nodes.clear();
+  nodes.swap(s.loaded);
+  for (const LoadedNode& n : nodes) s.is_loaded[n.node] = 0;
 }
 
 std::vector<ContactRecord> ContactModel::contacts() const { return state_->records; }

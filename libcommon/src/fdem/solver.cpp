@@ -86,6 +86,8 @@ Solver::Solver(const Model& model, const SolverOptions& options)
   for (const Platen& p : model.platens) state_.platens.push_back({p.point, p.normal.normalized(), Eigen::Vector3d::Zero(), p.friction});
   platen_force_.assign(model.platens.size(), Eigen::Vector3d::Zero());
   force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
+  rigid_force_.assign(grains, Eigen::Vector3d::Zero());
+  rigid_moment_.assign(grains, Eigen::Matrix3d::Zero());
   if (!(options.rigid_contact_nodes >= 1))
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes);
@@ -153,17 +155,30 @@ Eigen::Vector3d Solver::angular_velocity(std::size_t g, const Eigen::Quaterniond
   return R * (inverse_inertia_[g] * (R.transpose() * L));
 }
 
-void Solver::place_rigid_nodes(std::size_t g) {
-  const Grain& grain = model_->grains[g];
-  const RigidBodyState& b = state_.bodies[g];
-  const Eigen::Matrix3d R = b.orientation.toRotationMatrix();
-  const Eigen::Vector3d omega = angular_velocity(g, b.orientation, b.angular_momentum);
-  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
-    const Eigen::Vector3d r = R * (model_->nodes[i] - bodies_[g].centroid);
-    state_.x[i] = b.position + r;
-    state_.v[i] = b.velocity + omega.cross(r);
+void Solver::place_rigid_nodes() const {
+  if (!rigid_nodes_stale_) return;
+  const std::size_t grains = model_->grains.size();
+#pragma omp parallel for schedule(dynamic, 8) if (model_->nodes.size() > 4096)
+  for (std::size_t g = 0; g < grains; ++g) {
+    const Grain& grain = model_->grains[g];
+    if (grain.kind != GrainKind::rigid) continue;
+    const RigidBodyState& b = state_.bodies[g];
+    const Eigen::Matrix3d R = b.orientation.toRotationMatrix();
+    const Eigen::Vector3d omega = angular_velocity(g, b.orientation, b.angular_momentum);
+    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+      const Eigen::Vector3d r = R * (model_->nodes[i] - bodies_[g].centroid);
+      state_.x[i] = b.position + r;
+      state_.v[i] = b.velocity + omega.cross(r);
+    }
   }
+  rigid_nodes_stale_ = false;
 }
+
+const SolverState& Solver::state() const {
+  place_rigid_nodes();
+  return state_;
+}
+
 
 StepReport Solver::step(double dt) {
   const Model& m = *model_;
@@ -177,22 +192,24 @@ StepReport Solver::step(double dt) {
   // Threads only pay off beyond a few thousand nodes: a barrier per loop costs more on small scenes.
   const bool parallel = m.nodes.size() > 4096;
 
+  for (const LoadedNode& n : loaded_) force_[n.node].setZero();  // a rigid grain's other nodes hold none
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
     const Grain& grain = m.grains[g];
+    if (grain.kind == GrainKind::rigid) continue;
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) force_[i].setZero();
-    if (grain.kind != GrainKind::rigid)
-      strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
+    strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
   }
 
   StepReport report;
   if (contact_) {
-    // Rigid grains' surface trees follow their body motion: x = R (X - c0) + c.
+    // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
     poses_.resize(grains);
     for (std::size_t g = 0; g < grains; ++g)
       if (m.grains[g].kind == GrainKind::rigid) {
-        const Eigen::Matrix3d R = state_.bodies[g].orientation.toRotationMatrix();
-        poses_[g] = {true, R, state_.bodies[g].position - R * bodies_[g].centroid};
+        const RigidBodyState& b = state_.bodies[g];
+        poses_[g] = RigidPose::of_body(b.orientation.toRotationMatrix(), b.position, bodies_[g].centroid, b.velocity,
+                                       angular_velocity(g, b.orientation, b.angular_momentum));
       }
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
   }
@@ -203,6 +220,14 @@ StepReport Solver::step(double dt) {
     if (r.b >= grains) platen_force_[r.b - grains] += r.force;
   BoundaryStep boundary;
   if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
+  if (contact_) contact_->take_loaded_rigid_nodes(loaded_);
+  // Rigid grains' resultants, over the few nodes loaded (in the order contact loaded them: the
+  // same for any thread count).
+  for (std::size_t g = 0; g < grains; ++g) rigid_force_[g].setZero(), rigid_moment_[g].setZero();
+  for (const auto [i, g] : loaded_) {
+    rigid_force_[g] += force_[i];
+    rigid_moment_[g] += poses_[g].arm(m.nodes[i]) * force_[i].transpose();
+  }
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
@@ -226,11 +251,9 @@ StepReport Solver::step(double dt) {
     }
     RigidBodyState& b = state_.bodies[g];
     const double M = bodies_[g].mass;
-    Eigen::Vector3d F = M * g_acc, T = Eigen::Vector3d::Zero();
-    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
-      F += force_[i];
-      T += (state_.x[i] - b.position).cross(force_[i]);
-    }
+    const Eigen::Vector3d F = M * g_acc + rigid_force_[g];
+    const Eigen::Matrix3d& moment = rigid_moment_[g];  // sum r f^T: the torque is its skew part
+    const Eigen::Vector3d T(moment(1, 2) - moment(2, 1), moment(2, 0) - moment(0, 2), moment(0, 1) - moment(1, 0));
     const Eigen::Vector3d V_old = b.velocity, L_old = b.angular_momentum;
     const Eigen::Vector3d V_new = first ? Eigen::Vector3d(V_old + 0.5 * dt * (F / M - options_.damping * V_old))
                                         : Eigen::Vector3d(((1 - a) * V_old + dt * F / M) / (1 + a));
@@ -250,7 +273,7 @@ StepReport Solver::step(double dt) {
     b.velocity = V_new;
     b.angular_momentum = L_new;
     b.position += dt * V_new;
-    place_rigid_nodes(g);
+    rigid_nodes_stale_ = true;
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
 
@@ -335,10 +358,8 @@ Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
   if (grain.kind != GrainKind::rigid) return elements_.average_cauchy_stress(state_.x, grain.element_begin, grain.element_end);
   // A rigid body has no strain, but its average stress follows from the forces on its surface
   // (Love-Weber): sigma = (1/V) sum_n r_n (x) f_n, the symmetric part, with the contact and
-  // boundary forces of the last step (gravity acts on the body, not on the nodes).
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-  const Eigen::Vector3d c = state_.bodies[g].position;
-  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) sum += (state_.x[i] - c) * force_[i].transpose();
+  // boundary forces of the last step where they acted (gravity acts on the body, not on the nodes).
+  const Eigen::Matrix3d& sum = rigid_moment_[g];
   return 0.5 * (sum + sum.transpose()) / bodies_[g].volume;
 }
 

@@ -45,11 +45,36 @@ struct PlatenState {
   double friction = 0;                                  ///< Coulomb coefficient
 };
 
-/// Where a rigid grain is: its nodes sit at rotation X + translation of their reference positions X.
+/// Where a rigid grain is and how it moves. Its node with reference position X sits at
+/// centre + rotation (X - reference_centre) and moves at velocity + angular_velocity x rotation (X -
+/// reference_centre); its surface tree is placed at rotation X + translation (translation = centre - rotation
+/// reference_centre). Contact reads a rigid grain's nodes from its pose, never from the node arrays.
 struct RigidPose {
   bool rigid = false;  ///< false: a deformable grain (its trees are refitted to its nodes)
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  ///< m
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();       ///< m
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();            ///< m, the body's centroid now
+  Eigen::Vector3d reference_centre = Eigen::Vector3d::Zero();  ///< m, the centroid in the reference
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< m/s, of the centroid
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< rad/s, world axes
+
+  /// The pose of a body with centroid `centre` (reference `reference_centre`) turned by `rotation`.
+  static RigidPose of_body(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& centre,
+                           const Eigen::Vector3d& reference_centre, const Eigen::Vector3d& velocity = Eigen::Vector3d::Zero(),
+                           const Eigen::Vector3d& angular_velocity = Eigen::Vector3d::Zero()) {
+    return {true, rotation, centre - rotation * reference_centre, centre, reference_centre, velocity, angular_velocity};
+  }
+  /// Where the node with reference position X is now.
+  Eigen::Vector3d place(const Eigen::Vector3d& X) const { return centre + arm(X); }
+  /// How fast the node with reference position X moves.
+  Eigen::Vector3d velocity_of(const Eigen::Vector3d& X) const { return velocity + angular_velocity.cross(arm(X)); }
+  /// From the centroid to the node with reference position X, now.
+  Eigen::Vector3d arm(const Eigen::Vector3d& X) const { return rotation * (X - reference_centre); }
+};
+
+/// A node of a rigid grain that contact gave a force.
+struct LoadedNode {
+  std::uint32_t node = 0, grain = 0;
 };
 
 /// Resultant of one grain pair (or grain-platen pair) over its node contacts.
@@ -113,8 +138,9 @@ class ContactModel {
   /// Adds penalty + dashpot normal forces and Coulomb friction (tangential spring history per
   /// node contact) to f (one entry per model node) for the current node positions x and
   /// velocities v; platen contacts too. Deterministic for a given thread count. `poses` (empty,
-  /// or one per grain) lets rigid grains place their surface trees by their motion instead of
-  /// refitting them to the nodes (the nodes must follow that motion).
+  /// or one per grain) gives rigid grains' motion: their nodes and surface trees are placed by it
+  /// (their entries in x and v are not read, here nor by add_wall_forces and add_ball_forces of
+  /// the same step).
   ContactStepStats add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                               std::span<const PlatenState> platens, double dt,
                               std::span<Eigen::Vector3d> f, std::span<const RigidPose> poses = {});
@@ -136,6 +162,12 @@ class ContactModel {
                                        std::span<Eigen::Vector3d> ball_moment);
   /// Ball contact limit on the time step, s, like stable_time_step() for the stiffest grain material.
   double ball_stable_time_step(const BallContactOptions& balls) const;
+  /// Sets `nodes` to the nodes of rigid grains (those with a pose) that add_forces,
+  /// add_wall_forces and add_ball_forces gave a force since the last call, each once, in the order
+  /// first loaded (the same for any thread count); every other node of a rigid grain got none.
+  /// Starts the next list in `nodes`' old storage. The solver sums a rigid body's force and moment
+  /// over these only.
+  void take_loaded_rigid_nodes(std::vector<LoadedNode>& nodes);
   /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
   std::vector<ContactRecord> contacts() const;
   /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).

@@ -4,7 +4,9 @@
 // positions at whole steps). Deformable grains (tet4/tet10) move node by node; rigid grains are
 // 6-DOF bodies whose nodes follow the body, so contact sees every grain as a moving surface. The
 // time step is checked against the element and contact limits; NaN or runaway energy stops the
-// run with the step number and the likely cause.
+// run with the step number and the likely cause. A rigid grain's step touches only its body and the
+// few nodes contact loaded: contact places its nodes from the body's pose, and the node arrays are
+// brought up to date only when the state is read.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -116,7 +118,13 @@ class Solver {
 
   const Model& model() const { return *model_; }
   const SolverOptions& options() const { return options_; }
-  const SolverState& state() const { return state_; }
+  /// The whole state. The step moves rigid grains as bodies only; their nodes are placed from the
+  /// bodies here, on the first call after a step (a pass over their nodes: per-step readers of the
+  /// step, time or platens use the accessors below).
+  const SolverState& state() const;
+  std::uint64_t step_count() const { return state_.step; }
+  double time() const { return state_.time; }  ///< s
+  std::span<const PlatenState> platens() const { return state_.platens; }
   std::span<const double> node_mass() const { return mass_; }
   /// The node masses contact uses (dashpots, stable step): node_mass() for deformable grains; for a
   /// rigid grain's node, the body's effective mass there over options().rigid_contact_nodes.
@@ -171,7 +179,8 @@ class Solver {
   void load(const io::H5File& file, const std::string& group);
 
  private:
-  void place_rigid_nodes(std::size_t grain);
+  /// Places every rigid grain's nodes (x, v) from its body, if a step moved them since.
+  void place_rigid_nodes() const;
   /// Mass-weighted mean of per-node `values` over grain g's nodes.
   Eigen::Vector3d mass_mean(std::size_t grain, const std::vector<Eigen::Vector3d>& values) const;
   Eigen::Vector3d angular_velocity(std::size_t grain, const Eigen::Quaterniond& q, const Eigen::Vector3d& L) const;
@@ -187,10 +196,19 @@ class Solver {
   std::unique_ptr<ContactModel> contact_;
   Boundary* boundary_ = nullptr;
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
-  std::vector<Eigen::Vector3d> force_;         ///< per node, scratch
+  /// Per node, the last step's forces. A rigid grain's nodes are zero but for those in loaded_.
+  std::vector<Eigen::Vector3d> force_;
+  /// Rigid grains' nodes given a force in the last step (ContactModel::take_loaded_rigid_nodes).
+  std::vector<LoadedNode> loaded_;
+  /// Per rigid grain, over its loaded nodes in the last step: sum f_n, and sum r_n f_n^T with r_n
+  /// from the centroid to the node where the force acted (torque and Love-Weber stress).
+  std::vector<Eigen::Vector3d> rigid_force_;
+  std::vector<Eigen::Matrix3d> rigid_moment_;
   std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
-  SolverState state_;
+  /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
+  mutable SolverState state_;
+  mutable bool rigid_nodes_stale_ = false;
 };
 
 }  // namespace graintwin::fdem
