@@ -160,8 +160,8 @@ Packing settled_packing(std::size_t& steps, double& seconds) {
     p.rotation.push_back(solver.grain_rotation(g) * random.rotation[g]);
   }
   const PlatenPair platens = find_platens(loose);
-  p.z_bottom = solver.state().platens[platens.bottom].point.z();
-  p.z_top = solver.state().platens[platens.top].point.z();
+  p.z_bottom = solver.platens()[platens.bottom].point.z();
+  p.z_top = solver.platens()[platens.top].point.z();
   p.radius = wall.wall().radius;
   seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return p;

@@ -45,7 +45,7 @@ TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const
     progress = steps ? ctx.progress(name + " steps", steps) : nullptr;
     phase = name;
     taken = 0;
-    spdlog::info("{} begins at step {}{}", name, solver.state().step, steps ? fmt::format(" ({} steps)", steps) : "");
+    spdlog::info("{} begins at step {}{}", name, solver.step_count(), steps ? fmt::format(" ({} steps)", steps) : "");
   };
   hooks.step = [&](const TriaxialMeasure& m, const StepReport& r) {
     ++taken;
@@ -77,7 +77,7 @@ TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const
 }
 
 void log_end(const ResultsWriter& writer, Solver& solver) {
-  spdlog::info("{} frames, final time {:.6g} s after {} steps{}", writer.frames(), solver.state().time, solver.state().step,
+  spdlog::info("{} frames, final time {:.6g} s after {} steps{}", writer.frames(), solver.time(), solver.step_count(),
                solver.has_contact() ? fmt::format(", contact search rebuilt {} times", solver.contact_model()->rebuild_count())
                                     : std::string());
 }
@@ -193,7 +193,7 @@ int main(int argc, char** argv) {
     io::AtomicOutput out(output, ctx.force());
     if (!restart.empty()) {
       read_checkpoint(restart, solver, digest);
-      spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.state().step, solver.state().time);
+      spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.step_count(), solver.time());
     } else {
       for (std::size_t g = 0; g < scene.grains.size(); ++g)
         solver.set_grain_velocity(scene.primitive_grain(g), scene.grains[g].velocity, scene.grains[g].angular_velocity);
@@ -208,7 +208,7 @@ int main(int argc, char** argv) {
       const TriaxialRunSummary summary = run_triaxial_test(ctx, solver, *scene.triaxial, dt, row_every, writer, [&] {
         if (frames) frames->add(solver);
       });
-      p["steps"] = solver.state().step;
+      p["steps"] = solver.step_count();
       p["triaxial"] = summary_json(summary);
       writer.set_parameters(p.dump());
       writer.finish(ctx.history());
@@ -230,10 +230,10 @@ int main(int argc, char** argv) {
       ckpt.commit();
     };
     const std::uint64_t last = stop_step > 0 ? std::min(stop_step, total) : total;
-    auto progress = ctx.progress("steps", last - std::min(last, solver.state().step));
+    auto progress = ctx.progress("steps", last - std::min(last, solver.step_count()));
     std::uint32_t stage = 0;
-    while (solver.state().step < last) {
-      const std::uint64_t n = solver.state().step;
+    while (solver.step_count() < last) {
+      const std::uint64_t n = solver.step_count();
       while (n >= stage_end[stage]) ++stage;
       const StageSpec& s = scene.stages[stage];
       solver.set_damping(s.damping.value_or(scene.damping));
@@ -249,7 +249,7 @@ int main(int argc, char** argv) {
         throw;
       }
       if (n % row_every == 0) writer.add_row(solver, report, stage, dt);
-      if (solver.state().step % checkpoint_every == 0 || solver.state().step == last) save_checkpoint();
+      if (solver.step_count() % checkpoint_every == 0 || solver.step_count() == last) save_checkpoint();
       progress->advance();
       cli::throw_if_interrupted();
     }

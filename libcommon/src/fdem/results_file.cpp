@@ -61,14 +61,14 @@ void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std:
   if (!rows_.empty() && rows_.front().triaxial.has_value() != triaxial.has_value())
     throw UsageError("a results series has triaxial measurements in every row or in none");
   SeriesRow r;
-  r.step = solver.state().step - 1;  // the report is of the step just taken
-  r.time = solver.state().time - dt;
+  r.step = solver.step_count() - 1;  // the report is of the step just taken
+  r.time = solver.time() - dt;
   r.stage = stage;
   r.energies = report.energies;
   r.node_contacts = report.contact.node_contacts;
   for (std::size_t p = 0; p < platens_; ++p) {
     r.platen_force.push_back(solver.platen_force(p));
-    r.platen_position.push_back(solver.state().platens[p].point);
+    r.platen_position.push_back(solver.platens()[p].point);
   }
   r.triaxial = triaxial;
   rows_.push_back(std::move(r));
@@ -77,8 +77,8 @@ void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std:
 void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boundary, std::optional<double> axial_strain) {
   const std::string group = frame_group(frames_++);
   file_.ensure_group(group);
-  file_.set_attr(group, "time", solver.state().time);
-  file_.set_attr(group, "step", static_cast<long long>(solver.state().step));
+  file_.set_attr(group, "time", solver.time());
+  file_.set_attr(group, "step", static_cast<long long>(solver.step_count()));
   if (axial_strain) file_.set_attr(group, "axial_strain", *axial_strain);
   if (boundary && boundary->membrane_state()) {
     std::vector<double> position;

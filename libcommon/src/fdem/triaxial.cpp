@@ -171,7 +171,7 @@ double TriaxialBoundary::stable_time_step(const ContactModel& contact) const {
 
 TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens) {
   TriaxialMeasure m;
-  const auto& state = solver.state().platens;
+  const auto& state = solver.platens();
   m.height = state[platens.top].point.z() - state[platens.bottom].point.z();
   m.volume = boundary.volume();
   m.volume_radial = boundary.volume_radial();
@@ -198,7 +198,7 @@ namespace {
 
 /// Moves both platens apart at +-velocity / 2 (positive: opening) and tells the boundary.
 void drive_platens(Solver& solver, TriaxialBoundary& boundary, const PlatenPair& platens, double velocity) {
-  const auto& state = solver.state().platens;
+  const auto& state = solver.platens();
   solver.set_platen_velocity(platens.bottom, Eigen::Vector3d(0, 0, -0.5 * velocity));
   solver.set_platen_velocity(platens.top, Eigen::Vector3d(0, 0, 0.5 * velocity));
   boundary.set_platens(state[platens.bottom].point.z(), state[platens.top].point.z(), -0.5 * velocity, 0.5 * velocity);

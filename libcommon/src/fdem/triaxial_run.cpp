@@ -30,7 +30,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   std::uint32_t stage = 0;
   double shearing_rate = std::numeric_limits<double>::quiet_NaN();
   const auto book = [&](const TriaxialMeasure& m, const StepReport& r) {
-    if ((solver.state().step - 1) % row_every == 0) {
+    if ((solver.step_count() - 1) % row_every == 0) {
       TriaxialRow row{m, std::numeric_limits<double>::quiet_NaN()};
       if (std::isfinite(shearing_rate))
         row.inertial_number = inertial_number(shearing_rate, summary.d50, density,
@@ -44,7 +44,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
     if (hooks.frame) hooks.frame();
   };
   const auto begin = [&](const char* name, std::size_t steps) {
-    writer.add_stage(name, solver.state().time);
+    writer.add_stage(name, solver.time());
     if (hooks.phase) hooks.phase(name, steps);
   };
 
