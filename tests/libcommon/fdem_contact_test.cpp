@@ -31,6 +31,36 @@ constexpr double kMm = 1e-3;
 
 std::vector<Eigen::Vector3d> zeros(std::size_t n) { return std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()); }
 
+/// What per-node forces f on the grains of m add up to about the centres of `poses`.
+std::vector<RigidLoad> loads_of(const Model& m, const std::vector<Eigen::Vector3d>& x, const std::vector<Eigen::Vector3d>& f,
+                                const std::vector<RigidPose>& poses) {
+  std::vector<RigidLoad> loads(m.grains.size());
+  for (std::size_t g = 0; g < m.grains.size(); ++g)
+    for (std::uint32_t n = m.grains[g].node_begin; n < m.grains[g].node_end; ++n) loads[g].add(x[n] - poses[g].centre, f[n]);
+  return loads;
+}
+
+/// Whether two sets of rigid loads are the same, bit for bit.
+::testing::AssertionResult same_loads(std::span<const RigidLoad> a, std::span<const RigidLoad> b) {
+  if (a.size() != b.size()) return ::testing::AssertionFailure() << a.size() << " against " << b.size() << " grains";
+  for (std::size_t g = 0; g < a.size(); ++g)
+    if (a[g].force != b[g].force || a[g].moment != b[g].moment)
+      return ::testing::AssertionFailure() << "grain " << g << ": force " << a[g].force.transpose() << " against "
+                                           << b[g].force.transpose();
+  return ::testing::AssertionSuccess();
+}
+
+/// Whether two sets of rigid loads agree within `tolerance` times the largest force and moment.
+::testing::AssertionResult near_loads(std::span<const RigidLoad> a, std::span<const RigidLoad> b, double tolerance) {
+  double force = 0, moment = 0;
+  for (const RigidLoad& l : b) force = std::max(force, l.force.norm()), moment = std::max(moment, l.moment.norm());
+  for (std::size_t g = 0; g < a.size(); ++g)
+    if ((a[g].force - b[g].force).norm() > tolerance * force || (a[g].moment - b[g].moment).norm() > tolerance * moment)
+      return ::testing::AssertionFailure() << "grain " << g << ": force " << a[g].force.transpose() << " against "
+                                           << b[g].force.transpose();
+  return ::testing::AssertionSuccess();
+}
+
 /// A 2 x 2 x 1 mm slab (0.25 mm cells, top face at z = 0.5 mm) and, on it, a 1 mm cube pressed in
 /// by `overlap`. The cube's footprint [-0.625, 0.375]^2 mm holds exactly 4 x 4 of the slab's top
 /// nodes, each 0.125 mm from the cube's sides, so both directions see exactly the footprint area.
@@ -593,6 +623,7 @@ std::size_t expect_near_node_lists_match_every_node(bool rigid_poses, double pac
       EXPECT_EQ(fa[n], fb[n]) << "step " << step << " node " << n;
       if (fa[n] != fb[n]) return pair_lists;
     }
+    EXPECT_TRUE(same_loads(with_lists.rigid_loads(), without.rigid_loads())) << "step " << step;
     EXPECT_EQ(a.node_contacts, b.node_contacts) << step;
     EXPECT_EQ(a.elastic_energy, b.elastic_energy) << step;
     contacts += a.node_contacts;
@@ -621,8 +652,9 @@ TEST(ContactModel, RigidPairsListsOutliveTheBroadPhaseUntilThePairMovesASkin) {
 
 TEST(ContactModel, RigidGrainsSearchedInTheirBodyFramesGiveTheWorldSearchsForces) {
   // With poses, rigid grains are searched in their body frames and listed nodes reach them through
-  // one affine map per pair; without poses the same positions go through refitted world trees. The
-  // two must find the same node contacts with the same forces, to round-off.
+  // one affine map per pair, and their forces go to their loads; without poses the same positions go
+  // through refitted world trees and the forces to the nodes. The two must find the same node
+  // contacts, and the loads must be what the node forces add up to, to round-off.
   const ClosingCubes c(GrainKind::rigid);
   ContactModel body(c.m, unit_masses(c.m), {}), world(c.m, unit_masses(c.m), {});
   std::vector<Eigen::Vector3d> x, v;
@@ -634,21 +666,21 @@ TEST(ContactModel, RigidGrainsSearchedInTheirBodyFramesGiveTheWorldSearchsForces
     const ContactStepStats a = body.add_forces(x, v, {&c.floor, 1}, ClosingCubes::kDt, fa, poses);
     const ContactStepStats b = world.add_forces(x, v, {&c.floor, 1}, ClosingCubes::kDt, fb);
     ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
-    double largest = 0;
-    for (const auto& f : fb) largest = std::max(largest, f.norm());
-    for (std::size_t n = 0; n < x.size(); ++n) ASSERT_LT((fa[n] - fb[n]).norm(), 1e-9 * largest) << "step " << step << " node " << n;
+    ASSERT_EQ(fa, zeros(x.size())) << "rigid grains' nodes got forces at step " << step;
+    ASSERT_TRUE(near_loads(body.rigid_loads(), loads_of(c.m, x, fb, poses), 1e-9)) << "step " << step;
     ASSERT_NEAR(a.elastic_energy, b.elastic_energy, 1e-9 * b.elastic_energy) << step;
     contacts += a.node_contacts;
   }
   EXPECT_GT(contacts, 1000u);
 }
 
-TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheLoadedNodesAreListed) {
+TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheirForcesGoToTheirLoads) {
   // With poses, a rigid grain's nodes are placed by its pose: the node arrays may hold anything
-  // (here NaN) and the grain, platen, wall and ball forces must be those of nodes placed in the
-  // arrays, bit for bit. take_loaded_rigid_nodes lists exactly the nodes given a force.
+  // (here NaN), the grain, platen, wall and ball forces must be those of nodes placed in the arrays,
+  // bit for bit, and go to the grains' loads, not to the nodes. Without poses the same grains get
+  // node forces; the loads must be what those add up to.
   const ClosingCubes c(GrainKind::rigid);
-  ContactModel placed(c.m, unit_masses(c.m), {}), unread(c.m, unit_masses(c.m), {});
+  ContactModel placed(c.m, unit_masses(c.m), {}), unread(c.m, unit_masses(c.m), {}), world(c.m, unit_masses(c.m), {});
   std::vector<Eigen::Vector3d> x, v;
   std::vector<RigidPose> poses;
   const Eigen::Vector3d nan = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -656,40 +688,34 @@ TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheLoadedNodesAreListed)
   wall.radius = 0.45 * c.side;  // cuts the block's vertical edges
   const std::vector<Eigen::Vector3d> balls = {Eigen::Vector3d(c.side, 0, 0), Eigen::Vector3d(0, -c.side, 0.25 * c.side)};
   const BallContactOptions ball_options{0.1 * c.side, 1e-9, 0.3};
-  std::size_t loaded = 0, ball_contacts = 0, wall_contacts = 0;
+  const double dt = ClosingCubes::kDt;
+  std::size_t contacts = 0, ball_contacts = 0, wall_contacts = 0;
   for (int step = 0; step < ClosingCubes::kSteps; ++step) {
     c.place(step, true, x, v, poses);
-    const std::vector<Eigen::Vector3d> garbage(x.size(), nan);
-    auto fa = zeros(x.size()), fb = zeros(x.size());
-    auto ball_fa = zeros(balls.size()), ball_fb = zeros(balls.size()), moment_a = ball_fa, moment_b = ball_fb;
-    const ContactStepStats a = placed.add_forces(x, v, {&c.floor, 1}, ClosingCubes::kDt, fa, poses);
-    const ContactStepStats b = unread.add_forces(garbage, garbage, {&c.floor, 1}, ClosingCubes::kDt, fb, poses);
-    const BoundaryContactStats wall_a = placed.add_wall_forces(x, v, wall, ClosingCubes::kDt, fa);
-    const BoundaryContactStats wall_b = unread.add_wall_forces(garbage, garbage, wall, ClosingCubes::kDt, fb);
-    const auto still = zeros(balls.size());
-    ball_contacts += placed.add_ball_forces(x, v, balls, still, still, ball_options, ClosingCubes::kDt, fa, ball_fa, moment_a).contacts;
-    unread.add_ball_forces(garbage, garbage, balls, still, still, ball_options, ClosingCubes::kDt, fb, ball_fb, moment_b);
+    const std::vector<Eigen::Vector3d> garbage(x.size(), nan), still = zeros(balls.size());
+    auto fa = zeros(x.size()), fb = zeros(x.size()), fw = zeros(x.size());
+    auto ball_fa = zeros(balls.size()), ball_fb = ball_fa, ball_fw = ball_fa, moment_a = ball_fa, moment_b = ball_fa,
+         moment_w = ball_fa;
+    const ContactStepStats a = placed.add_forces(x, v, {&c.floor, 1}, dt, fa, poses);
+    const ContactStepStats b = unread.add_forces(garbage, garbage, {&c.floor, 1}, dt, fb, poses);
+    world.add_forces(x, v, {&c.floor, 1}, dt, fw);
+    const BoundaryContactStats wall_a = placed.add_wall_forces(x, v, wall, dt, fa);
+    const BoundaryContactStats wall_b = unread.add_wall_forces(garbage, garbage, wall, dt, fb);
+    world.add_wall_forces(x, v, wall, dt, fw);
+    ball_contacts += placed.add_ball_forces(x, v, balls, still, still, ball_options, dt, fa, ball_fa, moment_a).contacts;
+    unread.add_ball_forces(garbage, garbage, balls, still, still, ball_options, dt, fb, ball_fb, moment_b);
+    world.add_ball_forces(x, v, balls, still, still, ball_options, dt, fw, ball_fw, moment_w);
     ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
     ASSERT_EQ(wall_a.contacts, wall_b.contacts) << step;
     ASSERT_EQ(ball_fa, ball_fb) << step;
-    ASSERT_EQ(fa, fb) << step;
-    std::vector<LoadedNode> loaded_nodes;
-    unread.take_loaded_rigid_nodes(loaded_nodes);
-    std::vector<std::uint32_t> listed, forced;
-    for (const LoadedNode& n : loaded_nodes) {
-      listed.push_back(n.node);
-      ASSERT_TRUE(n.node >= c.m.grains[n.grain].node_begin && n.node < c.m.grains[n.grain].node_end) << n.node;
-    }
-    std::sort(listed.begin(), listed.end());
-    ASSERT_EQ(std::adjacent_find(listed.begin(), listed.end()), listed.end()) << "listed twice";
-    for (std::uint32_t n = 0; n < fb.size(); ++n)
-      if (fb[n] != Eigen::Vector3d::Zero()) forced.push_back(n);
-    // A node may be listed with a zero sum (forces that cancel); none with a force may be missing.
-    ASSERT_TRUE(std::includes(listed.begin(), listed.end(), forced.begin(), forced.end())) << step;
-    loaded += forced.size();
+    ASSERT_TRUE(same_loads(placed.rigid_loads(), unread.rigid_loads())) << "step " << step;
+    ASSERT_EQ(fa, zeros(x.size())) << "rigid grains' nodes got forces at step " << step;
+    ASSERT_EQ(fb, zeros(x.size())) << step;
+    ASSERT_TRUE(near_loads(placed.rigid_loads(), loads_of(c.m, x, fw, poses), 1e-9)) << "step " << step;
+    contacts += a.node_contacts;
     wall_contacts += wall_a.contacts;
   }
-  EXPECT_GT(loaded, 1000u);
+  EXPECT_GT(contacts, 1000u);
   EXPECT_GT(wall_contacts, 100u);
   EXPECT_GT(ball_contacts, 10u);
 }
@@ -741,7 +767,7 @@ TEST(ContactModel, SearchMemosOfRigidGrainsGiveTheForcesOfSearchingAnew) {
     auto fa = zeros(x.size()), fb = zeros(x.size());
     const ContactStepStats a = remembering.add_forces(x, v, {}, dt, fa, poses);
     const ContactStepStats b = searching.add_forces(x, v, {}, dt, fb, poses);
-    for (std::size_t n = 0; n < x.size(); ++n) ASSERT_EQ(fa[n], fb[n]) << "step " << step << " node " << n;
+    ASSERT_TRUE(same_loads(remembering.rigid_loads(), searching.rigid_loads())) << "step " << step;
     ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
     ASSERT_EQ(a.elastic_energy, b.elastic_energy) << step;
     contacts += a.node_contacts;

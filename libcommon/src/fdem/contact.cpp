@@ -59,8 +59,23 @@ struct NodeHit {
   Eigen::Vector3d weights = Eigen::Vector3d::Zero();
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< midpoint of node and surface point
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, the direction the node is pushed
+  Eigen::Vector3d arm = Eigen::Vector3d::Zero();     ///< from a rigid grain's centroid to the node
   double overlap = 0;
   NodeContactForce law;
+};
+
+/// A surface node beyond the cylinder wall.
+struct WallHit {
+  std::uint32_t node = 0;
+  Eigen::Vector3d arm = Eigen::Vector3d::Zero();  ///< from a rigid grain's centroid to the node
+  NodeContactForce law;
+};
+
+/// What one candidate's node contacts add up to (found with them, in parallel).
+struct CandidateSum {
+  ContactRecord record;
+  double elastic_energy = 0, dissipated = 0;
+  std::array<RigidLoad, 2> load;  ///< on grains a and b when rigid
 };
 
 /// A surface node to test against another grain, with the triangle of that grain it was last
@@ -192,14 +207,13 @@ struct ContactModel::State {
   std::vector<BallHistoryEntry> ball_history;  ///< sorted by (ball, grain)
   std::vector<std::vector<BallHit>> ball_hits;   ///< per ball, this step
 
-  /// Rigid grains' nodes given a force since take_loaded_rigid_nodes(), in the order first loaded,
-  /// and a mark per node for those in the list.
-  std::vector<LoadedNode> loaded;
-  std::vector<char> is_loaded;
+  std::vector<RigidLoad> loads;  ///< per grain, this step's (rigid_loads())
 
   std::vector<Candidate> candidates;
   std::vector<std::array<double, 2>> candidate_motion;  ///< per grain-pair candidate: pair_motion
   std::vector<std::vector<NodeHit>> hits;
+  std::vector<CandidateSum> sums;  ///< per candidate with hits
+  std::vector<std::vector<WallHit>> wall_hits;  ///< per grain, this step
   std::vector<Checks> checks;
 
   const Material& material_of(std::uint32_t grain) const { return materials[grains[grain].material]; }
@@ -228,10 +242,45 @@ struct ContactModel::State {
     const auto& c = triangles[t];
     return w[0] * velocity(c[0], g, v) + w[1] * velocity(c[1], g, v) + w[2] * velocity(c[2], g, v);
   }
-  /// Adds force to f at `node` of grain g, recording a rigid grain's node in `loaded`.
-  void apply_force(std::span<Eigen::Vector3d> f, std::uint32_t node, std::uint32_t g, const Eigen::Vector3d& force) {
-    f[node] += force;
-    if (pose[g].rigid && !is_loaded[node]) is_loaded[node] = 1, loaded.push_back({node, g});
+  /// From rigid grain t's centroid to the point with barycentric weights w on triangle t.
+  Eigen::Vector3d surface_arm(std::uint32_t t, const Eigen::Vector3d& w) const {
+    const RigidPose& body = pose[triangle_grain[t]];
+    const auto& c = triangles[t];
+    const auto& X = trees.reference_positions();
+    return w[0] * body.arm(X[c[0]]) + w[1] * body.arm(X[c[1]]) + w[2] * body.arm(X[c[2]]);
+  }
+
+  /// Candidate c's record, energies and rigid loads from its hits.
+  CandidateSum sum_hits(const Candidate& c, std::span<const NodeHit> hits) const {
+    CandidateSum sum;
+    const bool platen = c.b >= grains.size();
+    const Grain& b_grain = grains[platen ? c.a : c.b];
+    ContactRecord& record = sum.record;
+    record.a = c.a;
+    record.b = c.b;
+    Eigen::Vector3d normal_force_on_b = Eigen::Vector3d::Zero(), point_sum = Eigen::Vector3d::Zero();
+    double weight = 0;
+    for (const NodeHit& h : hits) {
+      const Eigen::Vector3d& force = h.law.force;
+      // The node belongs to b (pushed along +normal by a) or to a (its reaction acts on b).
+      const bool on_b = !platen && h.node >= b_grain.node_begin && h.node < b_grain.node_end;
+      if (pose[on_b ? c.b : c.a].rigid) sum.load[on_b].add(h.arm, force);
+      if (!platen && pose[on_b ? c.a : c.b].rigid) sum.load[!on_b].add(surface_arm(h.triangle, h.weights), -force);
+      const double sign = on_b ? 1.0 : -1.0;
+      record.force += sign * force;
+      normal_force_on_b += sign * h.law.normal_force * h.normal;
+      record.point += h.law.normal_force * h.point;
+      weight += h.law.normal_force;
+      point_sum += h.point;
+      record.overlap = std::max(record.overlap, h.overlap);
+      sum.elastic_energy += h.law.elastic_energy;
+      sum.dissipated += h.law.dissipated;
+    }
+    // Normal-force-weighted; a plain mean when every node force is clamped to zero.
+    record.point = weight > 0 ? Eigen::Vector3d(record.point / weight) : Eigen::Vector3d(point_sum / static_cast<double>(hits.size()));
+    const double nf = normal_force_on_b.norm();
+    record.normal = nf > 0 ? Eigen::Vector3d(normal_force_on_b / nf) : Eigen::Vector3d::Zero();
+    return sum;
   }
   std::span<const std::uint32_t> surface(std::uint32_t grain) const {
     return {surface_nodes.data() + surface_offset[grain], surface_offset[grain + 1] - surface_offset[grain]};
@@ -515,7 +564,11 @@ struct ContactModel::State {
       if (listed.clearance > moved) break;
       ++checks.nodes;
       const std::uint32_t node = listed.node;
-      const Eigen::Vector3d p = body_from.rigid ? body_from.place(listed.reference) : x[node];
+      Eigen::Vector3d p, arm = Eigen::Vector3d::Zero();  // arm: from a rigid grain's centroid
+      const auto place_node = [&] {
+        if (body_from.rigid) arm = body_from.arm(listed.reference), p = body_from.centre + arm;
+        else p = x[node];
+      };
       // From the node out to the surface, and whether that leaves the node outside.
       const auto to_surface = [&](const SurfaceTrees::Nearest& n) -> Eigen::Vector3d { return n.closest.point - p; };
       const auto outside = [&](const SurfaceTrees::Nearest& n) {
@@ -525,6 +578,7 @@ struct ContactModel::State {
       if (rigid_pair) {
         const Eigen::Vector3d q = to_body * listed.reference + to_body_shift;
         if (!box.contains(q) || (q - centre).squaredNorm() > reach2) continue;
+        place_node();
         const auto outside_in_world = [&](SurfaceTrees::Nearest n) {
           n.closest.point = body_to.rotation * n.closest.point + body_to.translation;
           return outside(n);
@@ -532,6 +586,7 @@ struct ContactModel::State {
         close = nearest_remembered(to, q, listed, memos[i], near, checks, outside_in_world);
         if (close) near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
       } else {
+        place_node();
         if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
         close = nearest(to, p, max_penetration, x, near, listed.hint);
         checks.triangles += near.tested;
@@ -554,6 +609,7 @@ struct ContactModel::State {
       hit.node = node;
       hit.triangle = near.triangle;
       hit.weights = w;
+      hit.arm = arm;
       hit.point = 0.5 * (p + near.closest.point);
       out.push_back(hit);
     }
@@ -563,8 +619,10 @@ struct ContactModel::State {
                    std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
     const Material& m = material_of(key.a);
     checks.nodes += surface(key.a).size();
+    const RigidPose& body = pose[key.a];
     for (std::uint32_t node : surface(key.a)) {
-      const Eigen::Vector3d p = position(node, key.a, x);
+      const Eigen::Vector3d arm = body.rigid ? body.arm(trees.reference_positions()[node]) : Eigen::Vector3d::Zero();
+      const Eigen::Vector3d p = body.rigid ? Eigen::Vector3d(body.centre + arm) : x[node];
       const double height = (p - platen.point).dot(platen.normal);
       if (!(height < 0)) continue;
       NodeHit hit;
@@ -578,6 +636,7 @@ struct ContactModel::State {
           hit.normal, hit.overlap, velocity(node, key.a, v) - platen.velocity,
           spring ? *spring : Eigen::Vector3d::Zero(), dt);
       hit.node = node;
+      hit.arm = arm;
       hit.point = p + 0.5 * hit.overlap * platen.normal;
       out.push_back(hit);
     }
@@ -596,7 +655,6 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
   s.materials = model.materials;
   s.triangles = model.triangles;
   s.triangle_grain = model.triangle_grain;
-  s.is_loaded.assign(model.nodes.size(), 0);
   s.node_mass.assign(node_mass.begin(), node_mass.end());
   s.node_count = model.nodes.size();
   s.options = options;
@@ -721,6 +779,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   s.sphere_centre.resize(grain_count);
   s.sphere_radius.resize(grain_count);
   s.pose.resize(grain_count);
+  s.loads.assign(grain_count, RigidLoad{});
   if (!poses.empty() && poses.size() != grain_count)
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
@@ -771,15 +830,17 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   // them, and are applied below in candidate order: results are the same for any thread count.
   if (s.hits.size() < s.candidates.size()) s.hits.resize(s.candidates.size());
   s.checks.assign(s.candidates.size(), {});
+  s.sums.resize(s.candidates.size());
   // Rigid pairs whose lists no longer hold build them again first, so that the narrow phase below
   // changes no list's storage (its prefetches read other pairs' lists).
   s.candidate_motion.resize(s.candidates.size());
+#pragma omp parallel for schedule(static) if (s.candidates.size() >= kParallelCandidates)
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(s.candidates.size()); ++i)
+    if (s.candidates[i].b < grain_count) s.candidate_motion[i] = s.pair_motion(s.candidates[i].pair);
   std::vector<std::uint32_t> stale;
-  for (std::uint32_t i = 0; i < s.candidates.size(); ++i) {
-    if (s.candidates[i].b >= grain_count) continue;
-    s.candidate_motion[i] = s.pair_motion(s.candidates[i].pair);
-    if (std::isfinite(s.candidate_motion[i][0]) && !s.lists_hold(s.candidate_motion[i])) stale.push_back(i);
-  }
+  for (std::uint32_t i = 0; i < s.candidates.size(); ++i)
+    if (s.candidates[i].b < grain_count && std::isfinite(s.candidate_motion[i][0]) && !s.lists_hold(s.candidate_motion[i]))
+      stale.push_back(i);
 #pragma omp parallel for schedule(dynamic, 1) if (stale.size() >= kParallelCandidates)
   for (std::int64_t k = 0; k < static_cast<std::int64_t>(stale.size()); ++k) {
     const std::uint32_t i = stale[k];
@@ -804,14 +865,15 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     out.clear();
     if (c.b >= grain_count) {
       s.platen_hits(c, platens[c.b - grain_count], x, v, dt, out, s.checks[i]);
-      continue;
+    } else {
+      const std::array<double, 2>& moved = s.candidate_motion[i];
+      s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], s.memos[c.pair][0], moved[0], x, v, dt, out, s.checks[i]);
+      s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], s.memos[c.pair][1], moved[1], x, v, dt, out, s.checks[i]);
+      // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
+      if (!std::is_sorted(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; }))
+        std::sort(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; });
     }
-    const std::array<double, 2>& moved = s.candidate_motion[i];
-    s.grain_hits(c.a, c.b, c, s.near_nodes[c.pair][0], s.memos[c.pair][0], moved[0], x, v, dt, out, s.checks[i]);
-    s.grain_hits(c.b, c.a, c, s.near_nodes[c.pair][1], s.memos[c.pair][1], moved[1], x, v, dt, out, s.checks[i]);
-    // History lookups need (a, b, node) order; the grains' node ranges need not be increasing.
-    if (!std::is_sorted(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; }))
-      std::sort(out.begin(), out.end(), [](const NodeHit& p, const NodeHit& q) { return p.node < q.node; });
+    if (!out.empty()) s.sums[i] = s.sum_hits(c, out);
   }
 
   s.history.clear();
@@ -821,43 +883,27 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.triangle_checks += s.checks[i].triangles;
     stats.pair_lists_built += s.checks[i].lists_built;
     if (s.hits[i].empty()) continue;
+    // Forces on deformable grains' nodes, in candidate order; rigid grains get their sums.
     const bool platen = c.b >= grain_count;
+    const bool node_rigid[2] = {s.pose[c.a].rigid, !platen && s.pose[c.b].rigid};
     const Grain& b_grain = s.grains[platen ? c.a : c.b];
-    const auto node_grain = [&](std::uint32_t node) { return node >= b_grain.node_begin && node < b_grain.node_end ? c.b : c.a; };
-    ContactRecord record;
-    record.a = c.a;
-    record.b = c.b;
-    Eigen::Vector3d normal_force_on_b = Eigen::Vector3d::Zero();
-    double weight = 0;
-    Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
     for (const NodeHit& h : s.hits[i]) {
-      const Eigen::Vector3d& force = h.law.force;
-      // The node belongs to b (pushed along +normal by a) or to a (its reaction acts on b).
-      const std::uint32_t grain = platen ? c.a : node_grain(h.node);
-      s.apply_force(f, h.node, grain, force);
-      if (!platen) {
+      const bool on_b = !platen && h.node >= b_grain.node_begin && h.node < b_grain.node_end;
+      if (!node_rigid[on_b]) f[h.node] += h.law.force;
+      if (!platen && !node_rigid[!on_b]) {
         const auto& tri = s.triangles[h.triangle];
-        for (int k = 0; k < 3; ++k) s.apply_force(f, tri[k], s.triangle_grain[h.triangle], -h.weights[k] * force);
+        for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * h.law.force;
       }
-      const double sign = !platen && grain == c.b ? 1.0 : -1.0;
-      record.force += sign * force;
-      normal_force_on_b += sign * h.law.normal_force * h.normal;
-      record.point += h.law.normal_force * h.point;
-      weight += h.law.normal_force;
-      point_sum += h.point;
-      record.overlap = std::max(record.overlap, h.overlap);
-      stats.elastic_energy += h.law.elastic_energy;
-      stats.dissipated += h.law.dissipated;
       s.history.push_back({c.a, c.b, h.node, h.law.spring});
     }
-    // Normal-force-weighted; a plain mean when every node force is clamped to zero.
-    record.point = weight > 0 ? Eigen::Vector3d(record.point / weight)
-                              : Eigen::Vector3d(point_sum / static_cast<double>(s.hits[i].size()));
-    const double nf = normal_force_on_b.norm();
-    record.normal = nf > 0 ? Eigen::Vector3d(normal_force_on_b / nf) : Eigen::Vector3d::Zero();
+    const CandidateSum& sum = s.sums[i];
+    if (node_rigid[0]) s.loads[c.a] += sum.load[0];
+    if (node_rigid[1]) s.loads[c.b] += sum.load[1];
+    stats.elastic_energy += sum.elastic_energy;
+    stats.dissipated += sum.dissipated;
     stats.node_contacts += s.hits[i].size();
-    stats.max_overlap = std::max(stats.max_overlap, record.overlap);
-    s.records.push_back(record);
+    stats.max_overlap = std::max(stats.max_overlap, sum.record.overlap);
+    s.records.push_back(sum.record);
   }
   return stats;
 }
@@ -866,19 +912,25 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
                                                    const CylinderWallState& wall, double dt, std::span<Eigen::Vector3d> f) {
   State& s = *state_;
   const auto grain_count = static_cast<std::int64_t>(s.grains.size());
-  std::vector<std::vector<std::pair<std::uint32_t, NodeContactForce>>> per_grain(s.grains.size());
+  s.wall_hits.resize(s.grains.size());
 #pragma omp parallel for schedule(dynamic, 16) if (grain_count >= static_cast<std::int64_t>(kParallelGrains))
   for (std::int64_t g = 0; g < grain_count; ++g) {
+    std::vector<WallHit>& hits = s.wall_hits[g];
+    hits.clear();
     const Aabb& box = s.trees.bounds(static_cast<std::size_t>(g));
     if (!(box.lo.array() <= box.hi.array()).all()) continue;
-    // The box corner farthest from the axis decides whether the wall can touch the grain.
+    // The box corner farthest from the axis, and the bounding sphere, decide whether the wall can
+    // touch the grain.
     const double fx = std::max(std::abs(box.lo.x() - wall.axis_xy.x()), std::abs(box.hi.x() - wall.axis_xy.x()));
     const double fy = std::max(std::abs(box.lo.y() - wall.axis_xy.y()), std::abs(box.hi.y() - wall.axis_xy.y()));
     if (fx * fx + fy * fy <= wall.radius * wall.radius) continue;
+    if ((s.sphere_centre[g].head<2>() - wall.axis_xy).norm() + s.sphere_radius[g] <= wall.radius) continue;
     const Material& m = s.material_of(static_cast<std::uint32_t>(g));
     const auto grain = static_cast<std::uint32_t>(g);
+    const RigidPose& body = s.pose[g];
     for (std::uint32_t node : s.surface(grain)) {
-      const Eigen::Vector3d p = s.position(node, grain, x);
+      const Eigen::Vector3d arm = body.rigid ? body.arm(s.trees.reference_positions()[node]) : Eigen::Vector3d::Zero();
+      const Eigen::Vector3d p = body.rigid ? Eigen::Vector3d(body.centre + arm) : x[node];
       const Eigen::Vector3d radial(p.x() - wall.axis_xy.x(), p.y() - wall.axis_xy.y(), 0.0);
       const double rho = radial.norm();
       if (!(rho > wall.radius)) continue;
@@ -886,15 +938,16 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
       const double area = s.facing_area(node, -outward, x, s.pose[g]);
       if (!(area > 0)) continue;
       const ContactLaw law = contact_law(m.normal_penalty, m.tangential_penalty, area, s.node_mass[node], m.damping_ratio, 0.0);
-      per_grain[g].emplace_back(node, node_contact_force(law, -outward, rho - wall.radius,
-                                                          s.velocity(node, grain, v) - wall.radial_velocity * outward,
-                                                          Eigen::Vector3d::Zero(), dt));
+      hits.push_back({node, arm, node_contact_force(law, -outward, rho - wall.radius,
+                                                    s.velocity(node, grain, v) - wall.radial_velocity * outward,
+                                                    Eigen::Vector3d::Zero(), dt)});
     }
   }
   BoundaryContactStats stats;
-  for (std::uint32_t g = 0; g < per_grain.size(); ++g)
-    for (const auto& [node, law] : per_grain[g]) {
-      s.apply_force(f, node, g, law.force);
+  for (std::uint32_t g = 0; g < grain_count; ++g)
+    for (const auto& [node, arm, law] : s.wall_hits[g]) {
+      if (s.pose[g].rigid) s.loads[g].add(arm, law.force);
+      else f[node] += law.force;
       stats.radial_force += law.normal_force;
       stats.elastic_energy += law.elastic_energy;
       stats.dissipated += law.dissipated;
@@ -988,8 +1041,12 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
       const Eigen::Vector3d& force = h.law.force;
       ball_force[b] += force;
       ball_moment[b] += (-r * h.normal).cross(force - h.law.normal_force * h.normal);
-      const auto& tri = s.triangles[h.triangle];
-      for (int k = 0; k < 3; ++k) s.apply_force(f, tri[k], h.grain, -h.weights[k] * force);
+      if (s.pose[h.grain].rigid) {
+        s.loads[h.grain].add(s.surface_arm(h.triangle, h.weights), -force);
+      } else {
+        const auto& tri = s.triangles[h.triangle];
+        for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
+      }
       stats.elastic_energy += h.law.elastic_energy;
       stats.dissipated += h.law.dissipated;
       stats.max_overlap = std::max(stats.max_overlap, h.overlap);
@@ -1011,12 +1068,7 @@ double ContactModel::ball_stable_time_step(const BallContactOptions& balls) cons
   return dt;
 }
 
-void ContactModel::take_loaded_rigid_nodes(std::vector<LoadedNode>& nodes) {
-  State& s = *state_;
-  nodes.clear();
-  nodes.swap(s.loaded);
-  for (const LoadedNode& n : nodes) s.is_loaded[n.node] = 0;
-}
+std::span<const RigidLoad> ContactModel::rigid_loads() const { return state_->loads; }
 
 std::vector<ContactRecord> ContactModel::contacts() const { return state_->records; }
 

@@ -86,8 +86,7 @@ Solver::Solver(const Model& model, const SolverOptions& options)
   for (const Platen& p : model.platens) state_.platens.push_back({p.point, p.normal.normalized(), Eigen::Vector3d::Zero(), p.friction});
   platen_force_.assign(model.platens.size(), Eigen::Vector3d::Zero());
   force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
-  rigid_force_.assign(grains, Eigen::Vector3d::Zero());
-  rigid_moment_.assign(grains, Eigen::Matrix3d::Zero());
+  rigid_loads_.assign(grains, RigidLoad{});
   if (!(options.rigid_contact_nodes >= 1))
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes);
@@ -192,7 +191,6 @@ StepReport Solver::step(double dt) {
   // Threads only pay off beyond a few thousand nodes: a barrier per loop costs more on small scenes.
   const bool parallel = m.nodes.size() > 4096;
 
-  for (const LoadedNode& n : loaded_) force_[n.node].setZero();  // a rigid grain's other nodes hold none
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
     const Grain& grain = m.grains[g];
@@ -220,13 +218,9 @@ StepReport Solver::step(double dt) {
     if (r.b >= grains) platen_force_[r.b - grains] += r.force;
   BoundaryStep boundary;
   if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
-  if (contact_) contact_->take_loaded_rigid_nodes(loaded_);
-  // Rigid grains' resultants, over the few nodes loaded (in the order contact loaded them: the
-  // same for any thread count).
-  for (std::size_t g = 0; g < grains; ++g) rigid_force_[g].setZero(), rigid_moment_[g].setZero();
-  for (const auto [i, g] : loaded_) {
-    rigid_force_[g] += force_[i];
-    rigid_moment_[g] += poses_[g].arm(m.nodes[i]) * force_[i].transpose();
+  if (contact_) {
+    const std::span<const RigidLoad> loads = contact_->rigid_loads();
+    rigid_loads_.assign(loads.begin(), loads.end());
   }
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
@@ -251,9 +245,7 @@ StepReport Solver::step(double dt) {
     }
     RigidBodyState& b = state_.bodies[g];
     const double M = bodies_[g].mass;
-    const Eigen::Vector3d F = M * g_acc + rigid_force_[g];
-    const Eigen::Matrix3d& moment = rigid_moment_[g];  // sum r f^T: the torque is its skew part
-    const Eigen::Vector3d T(moment(1, 2) - moment(2, 1), moment(2, 0) - moment(0, 2), moment(0, 1) - moment(1, 0));
+    const Eigen::Vector3d F = M * g_acc + rigid_loads_[g].force, T = rigid_loads_[g].torque();
     const Eigen::Vector3d V_old = b.velocity, L_old = b.angular_momentum;
     const Eigen::Vector3d V_new = first ? Eigen::Vector3d(V_old + 0.5 * dt * (F / M - options_.damping * V_old))
                                         : Eigen::Vector3d(((1 - a) * V_old + dt * F / M) / (1 + a));
@@ -359,7 +351,7 @@ Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
   // A rigid body has no strain, but its average stress follows from the forces on its surface
   // (Love-Weber): sigma = (1/V) sum_n r_n (x) f_n, the symmetric part, with the contact and
   // boundary forces of the last step where they acted (gravity acts on the body, not on the nodes).
-  const Eigen::Matrix3d& sum = rigid_moment_[g];
+  const Eigen::Matrix3d& sum = rigid_loads_[g].moment;
   return 0.5 * (sum + sum.transpose()) / bodies_[g].volume;
 }
 

@@ -72,9 +72,16 @@ struct RigidPose {
   Eigen::Vector3d arm(const Eigen::Vector3d& X) const { return rotation * (X - reference_centre); }
 };
 
-/// A node of a rigid grain that contact gave a force.
-struct LoadedNode {
-  std::uint32_t node = 0, grain = 0;
+/// The contact forces on a rigid grain in one step, about its centroid.
+struct RigidLoad {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();   ///< N, sum f
+  Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();  ///< N m, sum r f^T, r from the centroid to where f acts
+  /// N m, the torque sum r x f (the skew part of `moment`).
+  Eigen::Vector3d torque() const {
+    return {moment(1, 2) - moment(2, 1), moment(2, 0) - moment(0, 2), moment(0, 1) - moment(1, 0)};
+  }
+  void add(const Eigen::Vector3d& arm, const Eigen::Vector3d& f) { force += f, moment += arm * f.transpose(); }
+  RigidLoad& operator+=(const RigidLoad& o) { return force += o.force, moment += o.moment, *this; }
 };
 
 /// Resultant of one grain pair (or grain-platen pair) over its node contacts.
@@ -138,9 +145,9 @@ class ContactModel {
   /// Adds penalty + dashpot normal forces and Coulomb friction (tangential spring history per
   /// node contact) to f (one entry per model node) for the current node positions x and
   /// velocities v; platen contacts too. Deterministic for a given thread count. `poses` (empty,
-  /// or one per grain) gives rigid grains' motion: their nodes and surface trees are placed by it
-  /// (their entries in x and v are not read, here nor by add_wall_forces and add_ball_forces of
-  /// the same step).
+  /// or one per grain) gives rigid grains' motion: their nodes and surface trees are placed by it,
+  /// and the forces on them go to rigid_loads(), not to f (their entries in x, v and f are neither
+  /// read nor written, here nor by add_wall_forces and add_ball_forces of the same step).
   ContactStepStats add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                               std::span<const PlatenState> platens, double dt,
                               std::span<Eigen::Vector3d> f, std::span<const RigidPose> poses = {});
@@ -162,12 +169,9 @@ class ContactModel {
                                        std::span<Eigen::Vector3d> ball_moment);
   /// Ball contact limit on the time step, s, like stable_time_step() for the stiffest grain material.
   double ball_stable_time_step(const BallContactOptions& balls) const;
-  /// Sets `nodes` to the nodes of rigid grains (those with a pose) that add_forces,
-  /// add_wall_forces and add_ball_forces gave a force since the last call, each once, in the order
-  /// first loaded (the same for any thread count); every other node of a rigid grain got none.
-  /// Starts the next list in `nodes`' old storage. The solver sums a rigid body's force and moment
-  /// over these only.
-  void take_loaded_rigid_nodes(std::vector<LoadedNode>& nodes);
+  /// Per grain, the forces on the rigid ones (those with a pose) in this step: from add_forces, which
+  /// starts them, and add_wall_forces and add_ball_forces after it.
+  std::span<const RigidLoad> rigid_loads() const;
   /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
   std::vector<ContactRecord> contacts() const;
   /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).

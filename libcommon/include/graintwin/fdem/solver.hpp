@@ -4,9 +4,9 @@
 // positions at whole steps). Deformable grains (tet4/tet10) move node by node; rigid grains are
 // 6-DOF bodies whose nodes follow the body, so contact sees every grain as a moving surface. The
 // time step is checked against the element and contact limits; NaN or runaway energy stops the
-// run with the step number and the likely cause. A rigid grain's step touches only its body and the
-// few nodes contact loaded: contact places its nodes from the body's pose, and the node arrays are
-// brought up to date only when the state is read.
+// run with the step number and the likely cause. A rigid grain's step touches only its body: contact
+// places its nodes from the body's pose and sums the forces on them into the body's force and moment,
+// and the node arrays are brought up to date only when the state is read.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -196,14 +196,10 @@ class Solver {
   std::unique_ptr<ContactModel> contact_;
   Boundary* boundary_ = nullptr;
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
-  /// Per node, the last step's forces. A rigid grain's nodes are zero but for those in loaded_.
+  /// Per node, the last step's forces on deformable grains (a rigid grain's nodes hold none).
   std::vector<Eigen::Vector3d> force_;
-  /// Rigid grains' nodes given a force in the last step (ContactModel::take_loaded_rigid_nodes).
-  std::vector<LoadedNode> loaded_;
-  /// Per rigid grain, over its loaded nodes in the last step: sum f_n, and sum r_n f_n^T with r_n
-  /// from the centroid to the node where the force acted (torque and Love-Weber stress).
-  std::vector<Eigen::Vector3d> rigid_force_;
-  std::vector<Eigen::Matrix3d> rigid_moment_;
+  /// Per grain, the contact and boundary forces on the rigid ones in the last step (ContactModel::rigid_loads).
+  std::vector<RigidLoad> rigid_loads_;
   std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
