@@ -674,6 +674,21 @@ TEST(ContactModel, RigidGrainsSearchedInTheirBodyFramesGiveTheWorldSearchsForces
   EXPECT_GT(contacts, 1000u);
 }
 
+TEST(RigidLoad, TorqueIsTheSumOfArmsCrossForces) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  RigidLoad load;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector3d r(u(rng), u(rng), u(rng)), f(u(rng), u(rng), u(rng));
+    load.add(r, f);
+    force += f;
+    torque += r.cross(f);
+  }
+  EXPECT_LT((load.force - force).norm(), 1e-15);
+  EXPECT_LT((load.torque() - torque).norm(), 1e-14);
+}
+
 TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheirForcesGoToTheirLoads) {
   // With poses, a rigid grain's nodes are placed by its pose: the node arrays may hold anything
   // (here NaN), the grain, platen, wall and ball forces must be those of nodes placed in the arrays,
