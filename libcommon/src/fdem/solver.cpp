@@ -178,7 +178,6 @@ const SolverState& Solver::state() const {
   return state_;
 }
 
-
 StepReport Solver::step(double dt) {
   const Model& m = *model_;
   const std::size_t grains = m.grains.size();
@@ -265,9 +264,9 @@ StepReport Solver::step(double dt) {
     b.velocity = V_new;
     b.angular_momentum = L_new;
     b.position += dt * V_new;
-    rigid_nodes_stale_ = true;
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
+  rigid_nodes_stale_ = true;  // rigid grains moved; state() places their nodes when read
 
   Energies& e = report.energies;
   for (std::size_t g = 0; g < grains; ++g) {
