@@ -164,6 +164,7 @@ struct ContactModel::State {
   std::vector<std::uint32_t> node_triangle_offset, node_triangles;  ///< CSR: triangles around a node
   std::vector<std::array<std::uint32_t, 3>> neighbour;  ///< triangle across edge 01, 12, 20
   std::vector<double> triangle_area;                    ///< reference, m^2
+  std::vector<Eigen::Vector3d> reference_normal;        ///< per triangle, twice its reference area long
   /// Parallel to node_triangles: each triangle's reference unit outward normal and a third of its
   /// reference area (rigid grains' facing_area).
   std::vector<Eigen::Vector4d> node_facets;
@@ -218,23 +219,33 @@ struct ContactModel::State {
 
   const Material& material_of(std::uint32_t grain) const { return materials[grains[grain].material]; }
 
-  /// Where node `node` of grain g is now: placed by a rigid grain's pose, else x[node].
+  /// Where a node is now, and for a rigid grain's node its arm from the centroid (else zero).
+  struct PlacedNode {
+    Eigen::Vector3d at, arm;
+  };
+  /// Node `node` of a grain posed `body` (reference position X): placed by a rigid pose, else x[node].
+  static PlacedNode place(std::uint32_t node, const RigidPose& body, const Eigen::Vector3d& X,
+                          std::span<const Eigen::Vector3d> x) {
+    if (!body.rigid) return {x[node], Eigen::Vector3d::Zero()};
+    const Eigen::Vector3d arm = body.arm(X);
+    return {body.centre + arm, arm};
+  }
+  /// Node `node` of grain g now.
+  PlacedNode place(std::uint32_t node, std::uint32_t g, std::span<const Eigen::Vector3d> x) const {
+    return place(node, pose[g], trees.reference_positions()[node], x);
+  }
   Eigen::Vector3d position(std::uint32_t node, std::uint32_t g, std::span<const Eigen::Vector3d> x) const {
-    const RigidPose& body = pose[g];
-    return body.rigid ? body.place(trees.reference_positions()[node]) : x[node];
+    return place(node, g, x).at;
   }
   /// How fast node `node` of grain g moves: by a rigid grain's pose, else v[node].
   Eigen::Vector3d velocity(std::uint32_t node, std::uint32_t g, std::span<const Eigen::Vector3d> v) const {
     const RigidPose& body = pose[g];
     return body.rigid ? body.velocity_of(trees.reference_positions()[node]) : v[node];
   }
-  /// Triangle t's normal now, twice its area long.
+  /// Triangle t's normal now, twice its area long: a rigid grain's reference one turned.
   Eigen::Vector3d normal_of(std::uint32_t t, std::span<const Eigen::Vector3d> x) const {
-    const std::uint32_t g = triangle_grain[t];
-    const auto& c = triangles[t];
-    if (!pose[g].rigid) return triangle_normal(c, x);
-    const Eigen::Vector3d a = position(c[0], g, x);
-    return (position(c[1], g, x) - a).cross(position(c[2], g, x) - a);
+    const RigidPose& body = pose[triangle_grain[t]];
+    return body.rigid ? Eigen::Vector3d(body.rotation * reference_normal[t]) : triangle_normal(triangles[t], x);
   }
   /// How fast the point with barycentric weights w on triangle t moves.
   Eigen::Vector3d surface_velocity(std::uint32_t t, const Eigen::Vector3d& w, std::span<const Eigen::Vector3d> v) const {
@@ -242,12 +253,12 @@ struct ContactModel::State {
     const auto& c = triangles[t];
     return w[0] * velocity(c[0], g, v) + w[1] * velocity(c[1], g, v) + w[2] * velocity(c[2], g, v);
   }
-  /// From rigid grain t's centroid to the point with barycentric weights w on triangle t.
+  /// From the centroid of triangle t's rigid grain to the point with barycentric weights w on it
+  /// (the arm is affine in the reference position and the weights sum to 1).
   Eigen::Vector3d surface_arm(std::uint32_t t, const Eigen::Vector3d& w) const {
-    const RigidPose& body = pose[triangle_grain[t]];
     const auto& c = triangles[t];
     const auto& X = trees.reference_positions();
-    return w[0] * body.arm(X[c[0]]) + w[1] * body.arm(X[c[1]]) + w[2] * body.arm(X[c[2]]);
+    return pose[triangle_grain[t]].arm(w[0] * X[c[0]] + w[1] * X[c[1]] + w[2] * X[c[2]]);
   }
 
   /// Candidate c's record, energies and rigid loads from its hits.
@@ -282,6 +293,7 @@ struct ContactModel::State {
     record.normal = nf > 0 ? Eigen::Vector3d(normal_force_on_b / nf) : Eigen::Vector3d::Zero();
     return sum;
   }
+
   std::span<const std::uint32_t> surface(std::uint32_t grain) const {
     return {surface_nodes.data() + surface_offset[grain], surface_offset[grain + 1] - surface_offset[grain]};
   }
@@ -564,11 +576,9 @@ struct ContactModel::State {
       if (listed.clearance > moved) break;
       ++checks.nodes;
       const std::uint32_t node = listed.node;
-      Eigen::Vector3d p, arm = Eigen::Vector3d::Zero();  // arm: from a rigid grain's centroid
-      const auto place_node = [&] {
-        if (body_from.rigid) arm = body_from.arm(listed.reference), p = body_from.centre + arm;
-        else p = x[node];
-      };
+      PlacedNode placed;
+      const Eigen::Vector3d& p = placed.at;
+      const auto place_node = [&] { placed = place(node, body_from, listed.reference, x); };
       // From the node out to the surface, and whether that leaves the node outside.
       const auto to_surface = [&](const SurfaceTrees::Nearest& n) -> Eigen::Vector3d { return n.closest.point - p; };
       const auto outside = [&](const SurfaceTrees::Nearest& n) {
@@ -609,7 +619,7 @@ struct ContactModel::State {
       hit.node = node;
       hit.triangle = near.triangle;
       hit.weights = w;
-      hit.arm = arm;
+      hit.arm = placed.arm;
       hit.point = 0.5 * (p + near.closest.point);
       out.push_back(hit);
     }
@@ -619,10 +629,8 @@ struct ContactModel::State {
                    std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const {
     const Material& m = material_of(key.a);
     checks.nodes += surface(key.a).size();
-    const RigidPose& body = pose[key.a];
     for (std::uint32_t node : surface(key.a)) {
-      const Eigen::Vector3d arm = body.rigid ? body.arm(trees.reference_positions()[node]) : Eigen::Vector3d::Zero();
-      const Eigen::Vector3d p = body.rigid ? Eigen::Vector3d(body.centre + arm) : x[node];
+      const auto [p, arm] = place(node, key.a, x);
       const double height = (p - platen.point).dot(platen.normal);
       if (!(height < 0)) continue;
       NodeHit hit;
@@ -720,6 +728,7 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
   // Reference triangle areas and edge neighbours (for edge pseudonormals): each grain's edges
   // sorted by their end nodes, so the two uses of an edge are adjacent.
   s.triangle_area.resize(s.triangles.size());
+  s.reference_normal.resize(s.triangles.size());
   s.neighbour.assign(s.triangles.size(), {kNoTriangle, kNoTriangle, kNoTriangle});
   struct EdgeUse {
     std::uint32_t low, high, triangle;
@@ -729,7 +738,8 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
   for (const Grain& g : model.grains) {
     edges.clear();
     for (std::uint32_t t = g.triangle_begin; t < g.triangle_end; ++t) {
-      s.triangle_area[t] = 0.5 * triangle_normal(s.triangles[t], model.nodes).norm();
+      s.reference_normal[t] = triangle_normal(s.triangles[t], model.nodes);
+      s.triangle_area[t] = 0.5 * s.reference_normal[t].norm();
       for (int e = 0; e < 3; ++e) {
         const auto [low, high] = std::minmax(s.triangles[t][e], s.triangles[t][(e + 1) % 3]);
         edges.push_back({low, high, t, e});
@@ -927,10 +937,8 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
     if ((s.sphere_centre[g].head<2>() - wall.axis_xy).norm() + s.sphere_radius[g] <= wall.radius) continue;
     const Material& m = s.material_of(static_cast<std::uint32_t>(g));
     const auto grain = static_cast<std::uint32_t>(g);
-    const RigidPose& body = s.pose[g];
     for (std::uint32_t node : s.surface(grain)) {
-      const Eigen::Vector3d arm = body.rigid ? body.arm(s.trees.reference_positions()[node]) : Eigen::Vector3d::Zero();
-      const Eigen::Vector3d p = body.rigid ? Eigen::Vector3d(body.centre + arm) : x[node];
+      const auto [p, arm] = s.place(node, grain, x);
       const Eigen::Vector3d radial(p.x() - wall.axis_xy.x(), p.y() - wall.axis_xy.y(), 0.0);
       const double rho = radial.norm();
       if (!(rho > wall.radius)) continue;

@@ -154,6 +154,12 @@ Eigen::Vector3d Solver::angular_velocity(std::size_t g, const Eigen::Quaterniond
   return R * (inverse_inertia_[g] * (R.transpose() * L));
 }
 
+RigidPose Solver::pose_of(std::size_t g) const {
+  const RigidBodyState& b = state_.bodies[g];
+  return RigidPose::of_body(b.orientation.toRotationMatrix(), b.position, bodies_[g].centroid, b.velocity,
+                            angular_velocity(g, b.orientation, b.angular_momentum));
+}
+
 void Solver::place_rigid_nodes() const {
   if (!rigid_nodes_stale_) return;
   const std::size_t grains = model_->grains.size();
@@ -161,13 +167,11 @@ void Solver::place_rigid_nodes() const {
   for (std::size_t g = 0; g < grains; ++g) {
     const Grain& grain = model_->grains[g];
     if (grain.kind != GrainKind::rigid) continue;
-    const RigidBodyState& b = state_.bodies[g];
-    const Eigen::Matrix3d R = b.orientation.toRotationMatrix();
-    const Eigen::Vector3d omega = angular_velocity(g, b.orientation, b.angular_momentum);
+    const RigidPose body = pose_of(g);
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
-      const Eigen::Vector3d r = R * (model_->nodes[i] - bodies_[g].centroid);
-      state_.x[i] = b.position + r;
-      state_.v[i] = b.velocity + omega.cross(r);
+      const Eigen::Vector3d r = body.arm(model_->nodes[i]);
+      state_.x[i] = body.centre + r;
+      state_.v[i] = body.velocity + body.angular_velocity.cross(r);
     }
   }
   rigid_nodes_stale_ = false;
@@ -203,11 +207,7 @@ StepReport Solver::step(double dt) {
     // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
     poses_.resize(grains);
     for (std::size_t g = 0; g < grains; ++g)
-      if (m.grains[g].kind == GrainKind::rigid) {
-        const RigidBodyState& b = state_.bodies[g];
-        poses_[g] = RigidPose::of_body(b.orientation.toRotationMatrix(), b.position, bodies_[g].centroid, b.velocity,
-                                       angular_velocity(g, b.orientation, b.angular_momentum));
-      }
+      if (m.grains[g].kind == GrainKind::rigid) poses_[g] = pose_of(g);
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
   }
   std::vector<ContactRecord> records;

@@ -64,8 +64,6 @@ struct RigidPose {
                            const Eigen::Vector3d& angular_velocity = Eigen::Vector3d::Zero()) {
     return {true, rotation, centre - rotation * reference_centre, centre, reference_centre, velocity, angular_velocity};
   }
-  /// Where the node with reference position X is now.
-  Eigen::Vector3d place(const Eigen::Vector3d& X) const { return centre + arm(X); }
   /// How fast the node with reference position X moves.
   Eigen::Vector3d velocity_of(const Eigen::Vector3d& X) const { return velocity + angular_velocity.cross(arm(X)); }
   /// From the centroid to the node with reference position X, now.

@@ -179,7 +179,9 @@ class Solver {
   void load(const io::H5File& file, const std::string& group);
 
  private:
-  /// Places every rigid grain's nodes (x, v) from its body, if a step moved them since.
+  /// Rigid grain g's pose and motion now, as contact places its nodes.
+  RigidPose pose_of(std::size_t grain) const;
+  /// Places every rigid grain's nodes (x, v) from its body (pose_of), if a step moved them since.
   void place_rigid_nodes() const;
   /// Mass-weighted mean of per-node `values` over grain g's nodes.
   Eigen::Vector3d mass_mean(std::size_t grain, const std::vector<Eigen::Vector3d>& values) const;
