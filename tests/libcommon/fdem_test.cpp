@@ -139,6 +139,34 @@ TEST_P(Kinds, LargeRigidRotationGivesZeroStress) {
   // A small-strain element would see a strain of 1 - cos(angle) here; this one must not.
 }
 
+TEST_P(Kinds, InternalForcesAreMinusTheStrainEnergyGradient) {
+  // A non-uniform large deformation, so every element is strained differently; the forces (the
+  // 4-node elements' own fast path) must be minus the central-difference gradient of the energy.
+  const Model m = box_model(GetParam());
+  const ElasticElements el(m);
+  std::vector<Eigen::Vector3d> x = m.nodes;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Eigen::Vector3d d = m.nodes[i] - Eigen::Vector3d(0.01, -0.02, 0.03);
+    x[i] += Eigen::Vector3d(0.05 * d[1] * d[2] / 1e-3, 0.03 * d[0] * d[0] / 1e-3, -0.04 * d[0] * d[1] / 1e-3) +
+            2e-6 * Eigen::Vector3d(std::sin(3.0 * i), std::cos(5.0 * i), std::sin(7.0 * i + 1));
+  }
+  std::vector<Eigen::Vector3d> f(m.nodes.size(), Eigen::Vector3d::Zero());
+  const double energy = el.add_internal_forces(x, 0, m.element_count(), f);
+  EXPECT_NEAR(energy, el.strain_energy(x, 0, m.element_count()), 1e-12 * energy);
+  double largest = 0;
+  for (const auto& fi : f) largest = std::max(largest, fi.norm());
+  const double step = 1e-9;
+  for (std::size_t i = 0; i < x.size(); i += 7)
+    for (int k = 0; k < 3; ++k) {
+      auto plus = x, minus = x;
+      plus[i][k] += step;
+      minus[i][k] -= step;
+      const double gradient =
+          (el.strain_energy(plus, 0, m.element_count()) - el.strain_energy(minus, 0, m.element_count())) / (2 * step);
+      EXPECT_NEAR(f[i][k], -gradient, 1e-6 * largest) << "node " << i << " axis " << k;
+    }
+}
+
 TEST(FdemMass, HrzTet10CornersPositiveAndTotalExact) {
   Model m;
   TetMesh one;

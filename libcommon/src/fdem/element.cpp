@@ -149,66 +149,114 @@ double element_min_altitude(const Model& model, std::size_t e) {
 ElasticElements::ElasticElements(const Model& model) : model_(&model) {
   for (const Material& m : model.materials) lame_.push_back(lame_constants(m));
   const std::size_t elements = model.element_count();
-  quad_begin_.resize(elements);
-  quad_end_.resize(elements);
+  slot_.assign(elements, kNoSlot);
   Gradients dN;
   for (std::size_t e = 0; e < elements; ++e) {
-    quad_begin_[e] = static_cast<std::uint32_t>(weight_.size());
     const Grain& grain = model.grains[model.element_grain[e]];
-    if (grain.kind != GrainKind::rigid) {
-      const int n = checked_node_count(model, e);
-      if ((n == 10) != (grain.kind == GrainKind::tet10))
-        throw DataError(element_name(model, e) + " has " + std::to_string(n) + " nodes but its grain is declared " +
-                        (grain.kind == GrainKind::tet10 ? "tet10" : "tet4") + "; rebuild the model with one element order per grain");
-      const TetRule& rule = stiffness_rule(n);
-      for (std::size_t q = 0; q < rule.points.size(); ++q) {
-        tet_shape_derivatives(n, rule.points[q], dN);
-        const Eigen::Matrix3d J = reference_jacobian(model, e, dN, n);
-        const double det = J.determinant();
-        if (!(det > 0))
-          throw DataError(element_name(model, e) + " is inverted or flat in the reference mesh (det J = " + std::to_string(det) +
-                          "); remesh the grain");
-        const Eigen::Matrix3d Jinv = J.inverse();
-        gradient_begin_.push_back(gradient_.size());
-        weight_.push_back(rule.weights[q] * det);
-        for (int a = 0; a < n; ++a) {
-          const Eigen::RowVector3d g = dN.row(a) * Jinv;
-          gradient_.insert(gradient_.end(), {g[0], g[1], g[2]});
-        }
+    if (grain.kind == GrainKind::rigid) continue;
+    const int n = checked_node_count(model, e);
+    if ((n == 10) != (grain.kind == GrainKind::tet10))
+      throw DataError(element_name(model, e) + " has " + std::to_string(n) + " nodes but its grain is declared " +
+                      (grain.kind == GrainKind::tet10 ? "tet10" : "tet4") + "; rebuild the model with one element order per grain");
+    const TetRule& rule = stiffness_rule(n);
+    slot_[e] = static_cast<std::uint32_t>(n == 4 ? linear_.size() : weight_.size());
+    for (std::size_t q = 0; q < rule.points.size(); ++q) {
+      tet_shape_derivatives(n, rule.points[q], dN);
+      const Eigen::Matrix3d J = reference_jacobian(model, e, dN, n);
+      const double det = J.determinant();
+      if (!(det > 0))
+        throw DataError(element_name(model, e) + " is inverted or flat in the reference mesh (det J = " + std::to_string(det) +
+                        "); remesh the grain");
+      const Eigen::Matrix3d Jinv = J.inverse();
+      if (n == 4) {
+        const std::uint32_t* c = element_nodes(model, e);
+        // dN_a/dxi of corners 1..3 are the unit rows, so their dN/dX rows are exactly J^-1's.
+        linear_.push_back({{c[0], c[1], c[2], c[3]}, grain.material, rule.weights[q] * det, Jinv});
+        continue;
+      }
+      weight_.push_back(rule.weights[q] * det);
+      for (int a = 0; a < n; ++a) {
+        const Eigen::RowVector3d g = dN.row(a) * Jinv;
+        gradient_.insert(gradient_.end(), {g[0], g[1], g[2]});
       }
     }
-    quad_end_[e] = static_cast<std::uint32_t>(weight_.size());
   }
 }
 
+namespace {
+
+/// Green-Lagrange strain E = (F^T F - I) / 2, St Venant-Kirchhoff stress S = lambda tr(E) I + 2 mu E
+/// and the energy density lambda tr(E)^2 / 2 + mu E:E, J/m^3.
+double saint_venant_kirchhoff(const Eigen::Matrix3d& F, const Lame& L, Eigen::Matrix3d& S) {
+  const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
+  const double trE = E.trace();
+  S = 2 * L.mu * E;
+  S.diagonal().array() += L.lambda * trE;
+  return 0.5 * L.lambda * trE * trE + L.mu * E.squaredNorm();
+}
+
+}  // namespace
+
 template <class Visit>
 void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::size_t e, Visit&& visit) const {
-  const std::uint32_t* nodes = element_nodes(*model_, e);
-  const int n = static_cast<int>(model_->nodes_of(e));
-  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
-  for (std::uint32_t q = quad_begin_[e]; q < quad_end_[e]; ++q) {
-    const double* G = gradient_.data() + gradient_begin_[q];
-    Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
-    for (int a = 0; a < n; ++a) F += x[nodes[a]] * Eigen::Map<const Eigen::RowVector3d>(G + 3 * a);
-    const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
-    const double trE = E.trace();
-    Eigen::Matrix3d S = 2 * L.mu * E;
-    S.diagonal().array() += L.lambda * trE;
-    const double energy_density = 0.5 * L.lambda * trE * trE + L.mu * E.squaredNorm();
-    visit(nodes, n, G, weight_[q], F, S, energy_density);
+  const std::uint32_t slot = slot_[e];
+  if (slot == kNoSlot) return;
+  Eigen::Matrix3d F, S;
+  if (model_->nodes_of(e) == 4) {
+    const LinearTet& t = linear_[slot];
+    double G[12];  // all four gradients, as the 10-node points give them
+    Eigen::Map<Eigen::Matrix<double, 4, 3, Eigen::RowMajor>> gradients(G);
+    gradients.row(0) = -t.gradients.colwise().sum();
+    gradients.bottomRows<3>() = t.gradients;
+    F.setZero();
+    for (int a = 1; a < 4; ++a) F += (x[t.nodes[a]] - x[t.nodes[0]]) * t.gradients.row(a - 1);
+    const double psi = saint_venant_kirchhoff(F, lame_[t.material], S);
+    visit(t.nodes.data(), 4, G, t.volume, F, S, psi);
+    return;
   }
+  const std::uint32_t* nodes = element_nodes(*model_, e);
+  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  const std::size_t points = stiffness_rule(10).points.size();
+  for (std::size_t q = slot; q < slot + points; ++q) {
+    const double* G = gradient_.data() + 3 * 10 * q;
+    F.setZero();
+    for (int a = 0; a < 10; ++a) F += x[nodes[a]] * Eigen::Map<const Eigen::RowVector3d>(G + 3 * a);
+    const double psi = saint_venant_kirchhoff(F, L, S);
+    visit(nodes, 10, G, weight_[q], F, S, psi);
+  }
+}
+
+void ElasticElements::add_linear_tet_forces(std::span<const Eigen::Vector3d> x, const LinearTet& t,
+                                            std::span<Eigen::Vector3d> f, double& energy) const {
+  const Eigen::Vector3d x0 = x[t.nodes[0]];
+  Eigen::Matrix3d D;
+  D << x[t.nodes[1]] - x0, x[t.nodes[2]] - x0, x[t.nodes[3]] - x0;
+  const Eigen::Matrix3d F = D * t.gradients;
+  Eigen::Matrix3d S;
+  energy += t.volume * saint_venant_kirchhoff(F, lame_[t.material], S);
+  // Column a - 1 is V P dN_a/dX, the force node a = 1..3 takes; node 0 takes minus their sum.
+  const Eigen::Matrix3d H = (t.volume * (F * S)) * t.gradients.transpose();
+  f[t.nodes[1]] -= H.col(0);
+  f[t.nodes[2]] -= H.col(1);
+  f[t.nodes[3]] -= H.col(2);
+  f[t.nodes[0]] += H.rowwise().sum();
 }
 
 double ElasticElements::add_internal_forces(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end,
                                             std::span<Eigen::Vector3d> f) const {
   double energy = 0;
-  for (std::size_t e = begin; e < end; ++e)
+  for (std::size_t e = begin; e < end; ++e) {
+    if (slot_[e] != kNoSlot && model_->nodes_of(e) == 4) {
+      add_linear_tet_forces(x, linear_[slot_[e]], f, energy);
+      continue;
+    }
     for_each_point(x, e, [&](const std::uint32_t* nodes, int n, const double* G, double w, const Eigen::Matrix3d& F,
                              const Eigen::Matrix3d& S, double psi) {
       const Eigen::Matrix3d P = w * (F * S);  // first Piola-Kirchhoff stress times the point's volume
       for (int a = 0; a < n; ++a) f[nodes[a]] -= P * Eigen::Map<const Eigen::Vector3d>(G + 3 * a);
       energy += w * psi;
     });
+  }
   return energy;
 }
 

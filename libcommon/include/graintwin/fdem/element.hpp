@@ -3,8 +3,10 @@
 // 4-node (one quadrature point) and 10-node (4-point degree-2 rule) tetrahedra. Reference shape-
 // function gradients dN/dX are precomputed per quadrature point, so a step needs only the current
 // node positions: F = sum_a x_a (dN_a/dX)^T, E = (F^T F - I) / 2, S = lambda tr(E) I + 2 mu E,
-// internal force f_a = sum_q w_q F S dN_a/dX. A rigid motion gives F = R, E = 0: no stress at any
-// rotation angle. Node order is gmsh's (model.hpp). Units: m, Pa, N, J.
+// internal force f_a = sum_q w_q F S dN_a/dX. A 4-node element is one record (nodes, volume, the
+// gradients of corners 1..3) and its forces come from F = [x1 - x0, x2 - x0, x3 - x0] G in one
+// pass; a 10-node element loops over its 4 points. A rigid motion gives F = R, E = 0: no stress at
+// any rotation angle. Node order is gmsh's (model.hpp). Units: m, Pa, N, J.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -72,18 +74,30 @@ class ElasticElements {
   /// positive, Pa): sum_q w_q F S F^T / sum_q w_q det F. Zero for rigid grains.
   Eigen::Matrix3d average_cauchy_stress(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const;
 
-  bool is_elastic(std::size_t element) const { return quad_end_[element] > quad_begin_[element]; }
+  bool is_elastic(std::size_t element) const { return slot_[element] != kNoSlot; }
 
  private:
+  static constexpr std::uint32_t kNoSlot = 0xffffffffu;
+  /// A 4-node element in one record, so the hot loop reads one stream: F = D G with
+  /// D = [x1 - x0, x2 - x0, x3 - x0] (differences keep the grain's distance from the origin out of F).
+  struct LinearTet {
+    std::array<std::uint32_t, 4> nodes;
+    std::uint32_t material;
+    double volume;              ///< reference volume, m^3 (the one quadrature weight)
+    Eigen::Matrix3d gradients;  ///< row a - 1 = dN_a/dX of node a = 1..3; node 0's is minus their sum, 1/m
+  };
+
   template <class Visit>
   void for_each_point(std::span<const Eigen::Vector3d> x, std::size_t element, Visit&& visit) const;
+  void add_linear_tet_forces(std::span<const Eigen::Vector3d> x, const LinearTet& tet, std::span<Eigen::Vector3d> f,
+                             double& energy) const;
 
   const Model* model_;
   std::vector<Lame> lame_;                   ///< per material
-  std::vector<std::uint32_t> quad_begin_, quad_end_;  ///< per element, range of quadrature points
-  std::vector<double> weight_;               ///< per quadrature point: w |det J| (reference volume share), m^3
-  std::vector<std::size_t> gradient_begin_;  ///< per quadrature point: offset into gradient_
-  std::vector<double> gradient_;             ///< dN_a/dX, 3 per node per quadrature point, 1/m
+  std::vector<std::uint32_t> slot_;          ///< per element: its LinearTet (4 nodes), its first quadrature point (10 nodes) or kNoSlot (rigid)
+  std::vector<LinearTet> linear_;            ///< 4-node elements
+  std::vector<double> weight_;               ///< 10-node elements, per quadrature point: w |det J| (reference volume share), m^3
+  std::vector<double> gradient_;             ///< 10-node elements, per quadrature point: dN_a/dX, 3 per node, 1/m
 };
 
 /// Lumped node masses, kg, one per model node: row sums (rho V / 4) for 4-node elements; HRZ
