@@ -195,7 +195,32 @@ double saint_venant_kirchhoff(const Eigen::Matrix3d& F, const Lame& L, Eigen::Ma
   return 0.5 * L.lambda * trE * trE + L.mu * E.squaredNorm();
 }
 
+using NodeColumns = Eigen::Matrix<double, 3, 10>;
+using PointGradients = Eigen::Map<const Eigen::Matrix<double, 10, 3, Eigen::RowMajor>>;
+
+/// A 10-node element's node positions relative to corner 0, one column each (the gradients sum to
+/// zero, so F = X G, without the grain's distance from the origin in the sum).
+NodeColumns relative_positions(std::span<const Eigen::Vector3d> x, const std::uint32_t* nodes) {
+  NodeColumns X;
+  for (int a = 0; a < 10; ++a) X.col(a) = x[nodes[a]] - x[nodes[0]];
+  return X;
+}
+
+/// dN_a/dX of quadrature point q of the 10-node elements, one row per node.
+PointGradients point_gradients(const std::vector<double>& gradients, std::size_t q) {
+  return PointGradients(gradients.data() + 3 * 10 * q);
+}
+
 }  // namespace
+
+Eigen::Matrix3d ElasticElements::linear_deformation_gradient(std::span<const Eigen::Vector3d> x, const LinearTet& t) {
+  const Eigen::Vector3d x0 = x[t.nodes[0]];
+  Eigen::Matrix3d D;
+  D << x[t.nodes[1]] - x0, x[t.nodes[2]] - x0, x[t.nodes[3]] - x0;
+  return D * t.gradients;
+}
+
+std::size_t ElasticElements::quadratic_points() { return stiffness_rule(10).points.size(); }
 
 template <class Visit>
 void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::size_t e, Visit&& visit) const {
@@ -204,34 +229,24 @@ void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::si
   Eigen::Matrix3d F, S;
   if (model_->nodes_of(e) == 4) {
     const LinearTet& t = linear_[slot];
-    double G[12];  // all four gradients, as the 10-node points give them
-    Eigen::Map<Eigen::Matrix<double, 4, 3, Eigen::RowMajor>> gradients(G);
-    gradients.row(0) = -t.gradients.colwise().sum();
-    gradients.bottomRows<3>() = t.gradients;
-    F.setZero();
-    for (int a = 1; a < 4; ++a) F += (x[t.nodes[a]] - x[t.nodes[0]]) * t.gradients.row(a - 1);
+    F = linear_deformation_gradient(x, t);
     const double psi = saint_venant_kirchhoff(F, lame_[t.material], S);
-    visit(t.nodes.data(), 4, G, t.volume, F, S, psi);
+    visit(t.volume, F, S, psi);
     return;
   }
   const std::uint32_t* nodes = element_nodes(*model_, e);
   const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
-  const std::size_t points = stiffness_rule(10).points.size();
-  for (std::size_t q = slot; q < slot + points; ++q) {
-    const double* G = gradient_.data() + 3 * 10 * q;
-    F.setZero();
-    for (int a = 0; a < 10; ++a) F += x[nodes[a]] * Eigen::Map<const Eigen::RowVector3d>(G + 3 * a);
+  const NodeColumns X = relative_positions(x, nodes);
+  for (std::size_t q = slot; q < slot + quadratic_points(); ++q) {
+    F = X * point_gradients(gradient_, q);
     const double psi = saint_venant_kirchhoff(F, L, S);
-    visit(nodes, 10, G, weight_[q], F, S, psi);
+    visit(weight_[q], F, S, psi);
   }
 }
 
 void ElasticElements::add_linear_tet_forces(std::span<const Eigen::Vector3d> x, const LinearTet& t,
                                             std::span<Eigen::Vector3d> f, double& energy) const {
-  const Eigen::Vector3d x0 = x[t.nodes[0]];
-  Eigen::Matrix3d D;
-  D << x[t.nodes[1]] - x0, x[t.nodes[2]] - x0, x[t.nodes[3]] - x0;
-  const Eigen::Matrix3d F = D * t.gradients;
+  const Eigen::Matrix3d F = linear_deformation_gradient(x, t);
   Eigen::Matrix3d S;
   energy += t.volume * saint_venant_kirchhoff(F, lame_[t.material], S);
   // Column a - 1 is V P dN_a/dX, the force node a = 1..3 takes; node 0 takes minus their sum.
@@ -242,20 +257,31 @@ void ElasticElements::add_linear_tet_forces(std::span<const Eigen::Vector3d> x, 
   f[t.nodes[0]] += H.rowwise().sum();
 }
 
+void ElasticElements::add_quadratic_tet_forces(std::span<const Eigen::Vector3d> x, std::size_t e,
+                                               std::span<Eigen::Vector3d> f, double& energy) const {
+  const std::uint32_t* nodes = element_nodes(*model_, e);
+  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  const NodeColumns X = relative_positions(x, nodes);  // gathered once for the 4 points
+  NodeColumns forces = NodeColumns::Zero();
+  for (std::size_t q = slot_[e]; q < slot_[e] + quadratic_points(); ++q) {
+    const PointGradients G = point_gradients(gradient_, q);
+    const Eigen::Matrix3d F = X * G;
+    Eigen::Matrix3d S;
+    energy += weight_[q] * saint_venant_kirchhoff(F, L, S);
+    forces.noalias() += (weight_[q] * (F * S)) * G.transpose();
+  }
+  for (int a = 0; a < 10; ++a) f[nodes[a]] -= forces.col(a);
+}
+
 double ElasticElements::add_internal_forces(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end,
                                             std::span<Eigen::Vector3d> f) const {
   double energy = 0;
   for (std::size_t e = begin; e < end; ++e) {
-    if (slot_[e] != kNoSlot && model_->nodes_of(e) == 4) {
+    if (slot_[e] == kNoSlot) continue;
+    if (model_->nodes_of(e) == 4)
       add_linear_tet_forces(x, linear_[slot_[e]], f, energy);
-      continue;
-    }
-    for_each_point(x, e, [&](const std::uint32_t* nodes, int n, const double* G, double w, const Eigen::Matrix3d& F,
-                             const Eigen::Matrix3d& S, double psi) {
-      const Eigen::Matrix3d P = w * (F * S);  // first Piola-Kirchhoff stress times the point's volume
-      for (int a = 0; a < n; ++a) f[nodes[a]] -= P * Eigen::Map<const Eigen::Vector3d>(G + 3 * a);
-      energy += w * psi;
-    });
+    else
+      add_quadratic_tet_forces(x, e, f, energy);
   }
   return energy;
 }
@@ -263,22 +289,21 @@ double ElasticElements::add_internal_forces(std::span<const Eigen::Vector3d> x, 
 double ElasticElements::strain_energy(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const {
   double energy = 0;
   for (std::size_t e = begin; e < end; ++e)
-    for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double w, const Eigen::Matrix3d&,
-                             const Eigen::Matrix3d&, double psi) { energy += w * psi; });
+    for_each_point(x, e, [&](double w, const Eigen::Matrix3d&, const Eigen::Matrix3d&, double psi) { energy += w * psi; });
   return energy;
 }
 
 std::vector<Eigen::Matrix3d> ElasticElements::cauchy_stress(std::span<const Eigen::Vector3d> x, std::size_t e) const {
   std::vector<Eigen::Matrix3d> out;
-  for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double, const Eigen::Matrix3d& F,
-                           const Eigen::Matrix3d& S, double) { out.push_back(F * S * F.transpose() / F.determinant()); });
+  for_each_point(x, e, [&](double, const Eigen::Matrix3d& F, const Eigen::Matrix3d& S, double) {
+    out.push_back(F * S * F.transpose() / F.determinant());
+  });
   return out;
 }
 
 std::vector<Eigen::Matrix3d> ElasticElements::deformation_gradient(std::span<const Eigen::Vector3d> x, std::size_t e) const {
   std::vector<Eigen::Matrix3d> out;
-  for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double, const Eigen::Matrix3d& F,
-                           const Eigen::Matrix3d&, double) { out.push_back(F); });
+  for_each_point(x, e, [&](double, const Eigen::Matrix3d& F, const Eigen::Matrix3d&, double) { out.push_back(F); });
   return out;
 }
 
@@ -287,8 +312,7 @@ Eigen::Matrix3d ElasticElements::average_cauchy_stress(std::span<const Eigen::Ve
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   double volume = 0;
   for (std::size_t e = begin; e < end; ++e)
-    for_each_point(x, e, [&](const std::uint32_t*, int, const double*, double w, const Eigen::Matrix3d& F,
-                             const Eigen::Matrix3d& S, double) {
+    for_each_point(x, e, [&](double w, const Eigen::Matrix3d& F, const Eigen::Matrix3d& S, double) {
       sum += w * (F * S * F.transpose());  // sigma J dV0 = sigma dv
       volume += w * F.determinant();
     });

@@ -5,7 +5,7 @@
 // node positions: F = sum_a x_a (dN_a/dX)^T, E = (F^T F - I) / 2, S = lambda tr(E) I + 2 mu E,
 // internal force f_a = sum_q w_q F S dN_a/dX. A 4-node element is one record (nodes, volume, the
 // gradients of corners 1..3) and its forces come from F = [x1 - x0, x2 - x0, x3 - x0] G in one
-// pass; a 10-node element loops over its 4 points. A rigid motion gives F = R, E = 0: no stress at
+// pass; a 10-node element gathers its nodes once for its 4 points. A rigid motion gives F = R, E = 0: no stress at
 // any rotation angle. Node order is gmsh's (model.hpp). Units: m, Pa, N, J.
 #include <Eigen/Core>
 #include <array>
@@ -87,10 +87,17 @@ class ElasticElements {
     Eigen::Matrix3d gradients;  ///< row a - 1 = dN_a/dX of node a = 1..3; node 0's is minus their sum, 1/m
   };
 
+  /// F = [x1 - x0, x2 - x0, x3 - x0] G of a 4-node element.
+  static Eigen::Matrix3d linear_deformation_gradient(std::span<const Eigen::Vector3d> x, const LinearTet& tet);
+  /// Quadrature points of a 10-node element.
+  static std::size_t quadratic_points();
+  /// visit(w, F, S, psi) at every quadrature point of the element (none for a rigid grain's).
   template <class Visit>
   void for_each_point(std::span<const Eigen::Vector3d> x, std::size_t element, Visit&& visit) const;
   void add_linear_tet_forces(std::span<const Eigen::Vector3d> x, const LinearTet& tet, std::span<Eigen::Vector3d> f,
                              double& energy) const;
+  void add_quadratic_tet_forces(std::span<const Eigen::Vector3d> x, std::size_t element, std::span<Eigen::Vector3d> f,
+                                double& energy) const;
 
   const Model* model_;
   std::vector<Lame> lame_;                   ///< per material
