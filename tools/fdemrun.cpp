@@ -110,7 +110,8 @@ int main(int argc, char** argv) {
       "at the contact against Hertz and Chung & Ooi (2011) tests 1, 2, 6, 7 and LIGGGHTS (docs/fdemrun.md); a scene "
       "grades a sphere's or ellipsoid's mesh towards points with refine_at, fine_element_size and size_growth. The "
       "SPEC's default penalty (100 E per metre) is far too soft for mm grains: about 10 E / h (h: element size at the "
-      "contact) reproduces Hertz. A scene with [triaxial] runs the triaxial test instead of [[stages]] (docs/fdem_triaxial.md): "
+      "contact) reproduces Hertz; a material's penalty_per_size = 10 sets that (h: penalty_element_size, or the median "
+      "surface edge of its grains). A scene with [triaxial] runs the triaxial test instead of [[stages]] (docs/fdem_triaxial.md): "
       "isotropic consolidation to sigma_3 inside a rigid servo wall, the membrane's forming procedure (bonded-ball "
       "membrane, clamped ends, confining pressure; or boundary = \"wall\" to keep the wall), then strain-controlled "
       "shearing to a target axial strain; its series adds sigma_1, sigma_3, sigma_1/sigma_3, the sample volume by eq. 27 "
@@ -160,6 +161,11 @@ int main(int argc, char** argv) {
     std::stringstream model_bytes;  // a restart needs the same model file too
     if (scene.model) model_bytes << std::ifstream(scene.model->path, std::ios::binary).rdbuf();
     const Model model = build_model(scene, append_ellipsoid_grain);
+    for (std::size_t k = 0; k < scene.size_penalties.size(); ++k)
+      if (scene.size_penalties[k].per_size > 0)
+        spdlog::info("material '{}': p_n = p_t = {:.4g} N/m^3 ({:g} E / h at h = {:.4g} mm)", model.materials[k].name,
+                     model.materials[k].normal_penalty, scene.size_penalties[k].per_size,
+                     1e3 * scene.size_penalties[k].per_size * model.materials[k].young / model.materials[k].normal_penalty);
     SolverOptions options;
     options.gravity = scene.gravity;
     options.damping = scene.damping;

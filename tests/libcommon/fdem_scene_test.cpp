@@ -200,6 +200,43 @@ TEST(FdemScene, BadModelAndShapeTablesFailWithTheFix) {
             std::string::npos);
 }
 
+TEST(FdemScene, PenaltyPerSizeIsResolvedOnTheBuiltMeshes) {
+  // Boxes meshed at h = 0.5 mm: two of a surface triangle's three edges are h, so the median edge
+  // is h, for 4-node grains and (doubled quarter faces) for 10-node ones.
+  test::TempDir dir;
+  const std::string materials =
+      "[[materials]]\nname = \"a\"\nyoung = 1e9\npenalty_per_size = 10\n"
+      "[[materials]]\nname = \"b\"\nyoung = 2e9\npenalty_per_size = 5\npenalty_element_size = 1e-4\n"
+      "[[materials]]\nname = \"c\"\nnormal_penalty = 7e12\n";
+  const std::string box = "[[grains]]\nsize = [2e-3, 1e-3, 1e-3]\nelement_size = 5e-4\n";
+  for (const char* kind : {"tet4", "tet10"}) {
+    const auto path = write_text(dir, "penalty.toml",
+                                 "[run]\nduration = 1e-6\n" + materials + box + "material = \"a\"\nkind = \"" + kind +
+                                     "\"\n" + box + "material = \"c\"\nposition = [0, 0, 5e-3]\n");
+    const Model m = build_model(read_scene(path));
+    EXPECT_NEAR(contact_element_size(m, 0), 5e-4, 1e-12) << kind;
+    EXPECT_NEAR(m.materials[0].normal_penalty, 10 * 1e9 / 5e-4, 1e3) << kind;
+    EXPECT_EQ(m.materials[0].tangential_penalty, m.materials[0].normal_penalty) << kind;
+    EXPECT_NEAR(m.materials[1].normal_penalty, 5 * 2e9 / 1e-4, 1e3) << kind;  // given size: no grain needed
+    EXPECT_EQ(m.materials[2].normal_penalty, 7e12) << kind;
+    EXPECT_EQ(m.materials[2].tangential_penalty, Material{}.tangential_penalty) << kind;
+  }
+  // A measured size needs a grain of that material; both ways of setting p_n at once are refused.
+  const auto unused = write_text(dir, "unused.toml", "[run]\nduration = 1e-6\n" + materials + box + "material = \"c\"\n");
+  try {
+    build_model(read_scene(unused));
+    FAIL() << "a per-size penalty of an unused material was accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(e.message().find("material 'a' sets penalty_per_size but no grain uses it"), std::string::npos) << e.message();
+  }
+  const auto scene = [&](const std::string& body) { return write_text(dir, "bad.toml", "[run]\nduration = 1e-6\n" + body); };
+  EXPECT_NE(error_of(scene("[[materials]]\npenalty_per_size = 10\nnormal_penalty = 1e12\n")).find("give one or the others"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene("[[materials]]\npenalty_element_size = 1e-4\n")).find("needs penalty_per_size"), std::string::npos);
+  EXPECT_NE(error_of(scene("[[materials]]\npenalty_per_size = -1\n")).find("penalty_per_size must be positive"),
+            std::string::npos);
+}
+
 TEST(FdemScene, AGradedSphereIsFineOnlyNearItsRefinePoint) {
   test::TempDir dir;
   const auto path = write_text(dir, "graded.toml",

@@ -256,7 +256,8 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   const std::size_t model_materials = s.materials.size();
   for (const toml::table* m : tables(root, "materials", file)) {
     const Table t(*m, file + ": [[materials]] " + std::to_string(s.materials.size() + 1),
-                  {"name", "density", "young", "poisson", "friction", "normal_penalty", "tangential_penalty", "damping_ratio"});
+                  {"name", "density", "young", "poisson", "friction", "normal_penalty", "tangential_penalty", "damping_ratio",
+                   "penalty_per_size", "penalty_element_size"});
     Material mat;
     mat.name = t.text("name", mat.name);
     mat.density = t.positive("density", mat.density);
@@ -268,18 +269,29 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     mat.tangential_penalty = t.positive("tangential_penalty", mat.tangential_penalty);
     mat.damping_ratio = t.non_negative("damping_ratio", mat.damping_ratio);
     if (mat.damping_ratio >= 1) t.fail("damping_ratio must be below 1 (a fraction of critical damping)");
+    SizePenalty size_penalty;
+    if (t.has("penalty_per_size")) size_penalty.per_size = t.positive("penalty_per_size", 0.0);
+    if (t.has("penalty_element_size")) size_penalty.element_size = t.positive("penalty_element_size", 0.0);
+    if (t.has("penalty_per_size") && (t.has("normal_penalty") || t.has("tangential_penalty")))
+      t.fail("penalty_per_size sets normal_penalty and tangential_penalty; give one or the others");
+    if (t.has("penalty_element_size") && !t.has("penalty_per_size"))
+      t.fail("penalty_element_size needs penalty_per_size (p = penalty_per_size x young / penalty_element_size)");
     const auto same = std::find(material_names.begin(), material_names.end(), mat.name);
     const auto index = static_cast<std::size_t>(same - material_names.begin());
     if (same != material_names.end() && index >= model_materials)
       t.fail("material name '" + mat.name + "' is used twice; give each material its own name");
+    s.size_penalties.resize(s.materials.size());
     if (same != material_names.end()) {
       s.materials[index] = mat;  // the scene's values replace the model file's material of that name
+      s.size_penalties[index] = size_penalty;
     } else {
       material_names.push_back(mat.name);
       s.materials.push_back(mat);
+      s.size_penalties.push_back(size_penalty);
     }
   }
   if (s.materials.empty()) s.materials.push_back(Material{}), material_names.push_back(Material{}.name);
+  s.size_penalties.resize(s.materials.size());
 
   std::uint32_t first_label = 1;  // primitives are numbered after the model file's labels
   if (s.model)
@@ -448,7 +460,33 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
   }
   for (const PlatenSpec& p : scene.platens) m.platens.push_back(p.platen);
   m.sample = scene.sample;
+  for (std::uint32_t k = 0; k < scene.size_penalties.size(); ++k) {
+    const SizePenalty& rule = scene.size_penalties[k];
+    if (!(rule.per_size > 0)) continue;
+    const double h = rule.element_size > 0 ? rule.element_size : contact_element_size(m, k);
+    if (!(h > 0))
+      throw UsageError("material '" + m.materials[k].name + "' sets penalty_per_size but no grain uses it; " +
+                       "give it penalty_element_size or drop the key");
+    m.materials[k].normal_penalty = m.materials[k].tangential_penalty = rule.per_size * m.materials[k].young / h;
+  }
   return m;
+}
+
+double contact_element_size(const Model& model, std::uint32_t material) {
+  std::vector<double> edges;
+  for (std::size_t t = 0; t < model.triangles.size(); ++t) {
+    const Grain& grain = model.grains[model.triangle_grain[t]];
+    if (grain.material != material) continue;
+    // A 10-node grain's surface triangles are quarters of its element faces.
+    const bool quadratic = grain.element_end > grain.element_begin && model.nodes_of(grain.element_begin) == 10;
+    const double split = quadratic ? 2.0 : 1.0;
+    const auto& c = model.triangles[t];
+    for (int i = 0; i < 3; ++i) edges.push_back(split * (model.nodes[c[i]] - model.nodes[c[(i + 1) % 3]]).norm());
+  }
+  if (edges.empty()) return 0;
+  const auto middle = edges.begin() + static_cast<std::ptrdiff_t>(edges.size() / 2);
+  std::nth_element(edges.begin(), middle, edges.end());
+  return *middle;
 }
 
 }  // namespace graintwin::fdem

@@ -74,10 +74,19 @@ struct TriaxialSpec {
   std::size_t pressure_ramp_steps = 2000;    ///< steps over which the membrane pressure is ramped up
 };
 
+/// A material's penalty set per element size at the contact (docs/fdemrun.md, sphere impacts):
+/// p_n = p_t = per_size x E / h, h = element_size, or when 0 contact_element_size() of the built
+/// model's grains of that material.
+struct SizePenalty {
+  double per_size = 0;      ///< 0: the material's own p_n and p_t stand
+  double element_size = 0;  ///< m; 0 = measured on the model
+};
+
 struct Scene {
   /// The model file's materials first (a [[materials]] table of the same name replaces one), then
   /// the scene's other materials.
   std::vector<Material> materials;
+  std::vector<SizePenalty> size_penalties;  ///< one per material
   std::optional<ModelSource> model;       ///< grains 0 .. model grains - 1 of the built model
   std::vector<GrainSpec> grains;          ///< primitives, after the model's grains
   /// The scene's [[platens]], or the model file's (at rest) when the scene has none.
@@ -109,8 +118,14 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
 using CurvedGrainMesher = std::function<void(Model&, const GrainSpec&)>;
 
 /// The model of the scene: the model file's grains, then the primitives in scene order (boxes
-/// meshed here, spheres and ellipsoids by `mesh_curved`), the platens and the sample cylinder.
-/// UsageError when the scene has curved grains and no mesher is given.
+/// meshed here, spheres and ellipsoids by `mesh_curved`), the platens and the sample cylinder;
+/// penalties set per element size are resolved on the built meshes. UsageError when the scene has
+/// curved grains and no mesher is given, or a per-size penalty names a material no grain uses.
 Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved = {});
+
+/// Median element edge at the surfaces of the grains of `material`, m: the surface triangles'
+/// median edge, doubled for 10-node grains (their curved faces are split through the mid-edge
+/// nodes). 0 when no grain uses the material.
+double contact_element_size(const Model& model, std::uint32_t material);
 
 }  // namespace graintwin::fdem
