@@ -221,14 +221,27 @@ TEST(FdemScene, PenaltyPerSizeIsResolvedOnTheBuiltMeshes) {
     EXPECT_EQ(m.materials[2].normal_penalty, 7e12) << kind;
     EXPECT_EQ(m.materials[2].tangential_penalty, Material{}.tangential_penalty) << kind;
   }
-  // A measured size needs a grain of that material; both ways of setting p_n at once are refused.
+  // A scene table replacing the model file's material of the same name keeps its index.
+  Model file_model;
+  file_model.materials = {Material{}, Material{}};
+  file_model.materials[0].name = "file_first";
+  file_model.materials[1].name = "file_second";
+  add_grain(file_model, box_mesh({1e-3, 1e-3, 1e-3}, 2.5e-4), Eigen::Vector3d::Zero(), GrainKind::rigid, 1, 1);
+  write_model_file(dir / "grains.h5", file_model, {"test"});
+  const auto merged = write_text(dir, "merged.toml",
+                                 "[run]\nduration = 1e-6\n[model]\nfile = \"grains.h5\"\n[[materials]]\nname = \"extra\"\n"
+                                 "penalty_per_size = 3\npenalty_element_size = 1e-3\n[[materials]]\nname = \"file_second\"\n"
+                                 "young = 4e9\npenalty_per_size = 2\n");
+  const Model with_file = build_model(read_scene(merged));
+  ASSERT_EQ(with_file.materials.size(), 3u);
+  EXPECT_EQ(with_file.materials[0].normal_penalty, Material{}.normal_penalty);
+  EXPECT_NEAR(with_file.materials[1].normal_penalty, 2 * 4e9 / 2.5e-4, 1e3);
+  EXPECT_NEAR(with_file.materials[2].normal_penalty, 3 * Material{}.young / 1e-3, 1e3);
+  // A measured size needs a grain of that material (refused before any meshing); both ways of
+  // setting p_n at once are refused.
   const auto unused = write_text(dir, "unused.toml", "[run]\nduration = 1e-6\n" + materials + box + "material = \"c\"\n");
-  try {
-    build_model(read_scene(unused));
-    FAIL() << "a per-size penalty of an unused material was accepted";
-  } catch (const UsageError& e) {
-    EXPECT_NE(e.message().find("material 'a' sets penalty_per_size but no grain uses it"), std::string::npos) << e.message();
-  }
+  EXPECT_NE(error_of(unused).find("material 'a' sets penalty_per_size but no grain uses it"), std::string::npos)
+      << error_of(unused);
   const auto scene = [&](const std::string& body) { return write_text(dir, "bad.toml", "[run]\nduration = 1e-6\n" + body); };
   EXPECT_NE(error_of(scene("[[materials]]\npenalty_per_size = 10\nnormal_penalty = 1e12\n")).find("give one or the others"),
             std::string::npos);

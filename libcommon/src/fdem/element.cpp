@@ -237,7 +237,7 @@ void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::si
   const std::uint32_t* nodes = element_nodes(*model_, e);
   const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
   const NodeColumns X = relative_positions(x, nodes);
-  for (std::size_t q = slot; q < slot + quadratic_points(); ++q) {
+  for (std::size_t q = slot, end = slot + quadratic_points(); q < end; ++q) {
     F = X * point_gradients(gradient_, q);
     const double psi = saint_venant_kirchhoff(F, L, S);
     visit(weight_[q], F, S, psi);
@@ -263,7 +263,7 @@ void ElasticElements::add_quadratic_tet_forces(std::span<const Eigen::Vector3d> 
   const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
   const NodeColumns X = relative_positions(x, nodes);  // gathered once for the 4 points
   NodeColumns forces = NodeColumns::Zero();
-  for (std::size_t q = slot_[e]; q < slot_[e] + quadratic_points(); ++q) {
+  for (std::size_t q = slot_[e], end = slot_[e] + quadratic_points(); q < end; ++q) {
     const PointGradients G = point_gradients(gradient_, q);
     const Eigen::Matrix3d F = X * G;
     Eigen::Matrix3d S;

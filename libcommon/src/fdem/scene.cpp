@@ -366,6 +366,15 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     if (!labels.insert(g.label).second)
       throw UsageError(file + ": grain label " + std::to_string(g.label) + " is used twice (the model file's labels " +
                        "count too); give each grain its own label");
+  // A penalty measured on its grains' meshes needs a grain; say so before any meshing.
+  std::vector<char> used(s.materials.size(), 0);
+  if (s.model)
+    for (const Grain& g : s.model->model->grains) used[g.material] = 1;
+  for (const GrainSpec& g : s.grains) used[g.material] = 1;
+  for (std::size_t k = 0; k < s.materials.size(); ++k)
+    if (s.size_penalties[k].per_size > 0 && !(s.size_penalties[k].element_size > 0) && !used[k])
+      throw UsageError(file + ": material '" + s.materials[k].name + "' sets penalty_per_size but no grain uses it; " +
+                       "give it penalty_element_size or drop the key");
 
   std::vector<std::string> platen_names;
   for (const toml::table* p : tables(root, "platens", file)) {
@@ -460,7 +469,7 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
   }
   for (const PlatenSpec& p : scene.platens) m.platens.push_back(p.platen);
   m.sample = scene.sample;
-  for (std::uint32_t k = 0; k < scene.size_penalties.size(); ++k) {
+  for (std::uint32_t k = 0; k < std::min(scene.size_penalties.size(), m.materials.size()); ++k) {
     const SizePenalty& rule = scene.size_penalties[k];
     if (!(rule.per_size > 0)) continue;
     const double h = rule.element_size > 0 ? rule.element_size : contact_element_size(m, k);
