@@ -1107,20 +1107,35 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
   const State& s = *state_;
   file.ensure_group(group);
   file.set_attr(group, "entries", static_cast<long long>(s.history.size()));
-  if (s.history.empty()) return;
-  std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
-  std::vector<double> spring(3 * s.history.size());
-  for (std::size_t i = 0; i < s.history.size(); ++i) {
-    const HistoryEntry& h = s.history[i];
-    pair[2 * i] = h.a;
-    pair[2 * i + 1] = h.b;
-    node[i] = h.node;
-    for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+  file.set_attr(group, "ball_entries", static_cast<long long>(s.ball_history.size()));
+  if (!s.history.empty()) {
+    std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
+    std::vector<double> spring(3 * s.history.size());
+    for (std::size_t i = 0; i < s.history.size(); ++i) {
+      const HistoryEntry& h = s.history[i];
+      pair[2 * i] = h.a;
+      pair[2 * i + 1] = h.b;
+      node[i] = h.node;
+      for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+    }
+    const hsize_t n = s.history.size();
+    file.write(group + "/pair", pair.data(), {n, 2});
+    file.write(group + "/node", node.data(), {n});
+    file.write(group + "/spring", spring.data(), {n, 3}, io::units("N"));
   }
-  const hsize_t n = s.history.size();
-  file.write(group + "/pair", pair.data(), {n, 2});
-  file.write(group + "/node", node.data(), {n});
-  file.write(group + "/spring", spring.data(), {n, 3}, io::units("N"));
+  if (!s.ball_history.empty()) {  // membrane balls' friction springs
+    std::vector<std::uint32_t> ball_grain(2 * s.ball_history.size());
+    std::vector<double> spring(3 * s.ball_history.size());
+    for (std::size_t i = 0; i < s.ball_history.size(); ++i) {
+      const BallHistoryEntry& h = s.ball_history[i];
+      ball_grain[2 * i] = h.ball;
+      ball_grain[2 * i + 1] = h.grain;
+      for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+    }
+    const hsize_t n = s.ball_history.size();
+    file.write(group + "/ball_grain", ball_grain.data(), {n, 2});
+    file.write(group + "/ball_spring", spring.data(), {n, 3}, io::units("N"));
+  }
 }
 
 void ContactModel::load(const io::H5File& file, const std::string& group) {
@@ -1151,7 +1166,26 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
                             h.b, h.node, s.grains.size(), s.node_count));
     if (i > 0 && !key_less(history[i - 1], h.a, h.b, h.node)) throw bad("is not sorted by pair and node");
   }
+  const auto ball_entries = file.attr_int(group, "ball_entries").value_or(0);
+  if (ball_entries < 0) throw bad("has a negative 'ball_entries' count");
+  std::vector<BallHistoryEntry> ball_history(static_cast<std::size_t>(ball_entries));
+  if (!ball_history.empty()) {
+    std::vector<hsize_t> pair_dims, spring_dims;
+    const auto ball_grain = file.read<std::uint32_t>(group + "/ball_grain", &pair_dims);
+    const auto spring = file.read<double>(group + "/ball_spring", &spring_dims);
+    const hsize_t n = ball_history.size();
+    if (pair_dims != std::vector<hsize_t>{n, 2} || spring_dims != std::vector<hsize_t>{n, 3})
+      throw bad(fmt::format("does not hold {} ball entries in ball_grain (n x 2) and ball_spring (n x 3)", n));
+    for (std::size_t i = 0; i < ball_history.size(); ++i) {
+      ball_history[i] = {ball_grain[2 * i], ball_grain[2 * i + 1], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
+      const BallHistoryEntry& h = ball_history[i];
+      if (h.grain >= s.grains.size()) throw bad(fmt::format("names grain {} of a model of {} grains", h.grain, s.grains.size()));
+      if (i > 0 && std::make_pair(ball_history[i - 1].ball, ball_history[i - 1].grain) >= std::make_pair(h.ball, h.grain))
+        throw bad("is not sorted by ball and grain");
+    }
+  }
   s.history = std::move(history);
+  s.ball_history = std::move(ball_history);
   s.records.clear();
   s.need_rebuild = true;
 }

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
 
 namespace graintwin::fdem {
@@ -31,19 +32,6 @@ Eigen::Quaterniond rotation_by(const Eigen::Vector3d& theta) {
 }
 
 bool finite(const Eigen::Vector3d& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
-
-std::vector<double> flatten(const std::vector<Eigen::Vector3d>& v) {
-  std::vector<double> out;
-  out.reserve(3 * v.size());
-  for (const auto& p : v) out.insert(out.end(), {p[0], p[1], p[2]});
-  return out;
-}
-
-std::vector<Eigen::Vector3d> unflatten(const std::vector<double>& d) {
-  std::vector<Eigen::Vector3d> out(d.size() / 3);
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Eigen::Vector3d(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
-  return out;
-}
 
 /// The node masses contact uses for its dashpots and its stable step: a deformable grain's lumped
 /// node masses; for a rigid grain, the body's effective mass at the node in its stiffest direction,
@@ -364,20 +352,17 @@ std::vector<ContactRecord> Solver::contacts() const { return contact_ ? contact_
 Eigen::Vector3d Solver::platen_force(std::size_t p) const { return platen_force_.at(p); }
 
 void Solver::save(io::H5File& f, const std::string& group) const {
-  if (boundary_)
-    throw UsageError("checkpoints do not hold a sample boundary's state (wall, membrane) yet; run the triaxial test "
-                     "without --checkpoint");
+  place_rigid_nodes();  // the file's node positions are the placed ones
   f.ensure_group(group);
   f.set_attr(group, "step", static_cast<long long>(state_.step));
   f.set_attr(group, "time", state_.time);
   f.set_attr(group, "dissipated", state_.dissipated);
   f.set_attr(group, "external_work", state_.external_work);
   f.set_attr(group, "energy_input", state_.energy_input);
-  const hsize_t n = state_.x.size();
   io::DatasetOptions exact;
   exact.compress = false;
-  f.write(group + "/x", flatten(state_.x).data(), {n, 3}, exact);
-  f.write(group + "/v", flatten(state_.v).data(), {n, 3}, exact);
+  write_vectors(f, group + "/x", state_.x);
+  write_vectors(f, group + "/v", state_.v);
   std::vector<double> bodies;
   for (const RigidBodyState& b : state_.bodies) {
     const auto& q = b.orientation.coeffs();  // x, y, z, w
@@ -391,7 +376,10 @@ void Solver::save(io::H5File& f, const std::string& group) const {
     platens.insert(platens.end(), {p.point[0], p.point[1], p.point[2], p.normal[0], p.normal[1], p.normal[2], p.velocity[0],
                                    p.velocity[1], p.velocity[2], p.friction});
   f.write(group + "/platens", platens.data(), {state_.platens.size(), 10}, exact);
+  // A servo reads the last step's platen forces before the next step.
+  write_vectors(f, group + "/platen_force", platen_force_);
   if (contact_) contact_->save(f, group + "/contact");
+  if (boundary_) boundary_->save(f, group + "/boundary");
 }
 
 void Solver::load(const io::H5File& f, const std::string& group) {
@@ -408,8 +396,8 @@ void Solver::load(const io::H5File& f, const std::string& group) {
   s.dissipated = f.attr_doubles(group, "dissipated").at(0);
   s.external_work = f.attr_doubles(group, "external_work").at(0);
   s.energy_input = f.attr_doubles(group, "energy_input").at(0);
-  s.x = unflatten(need("x", 3 * state_.x.size()));
-  s.v = unflatten(need("v", 3 * state_.v.size()));
+  s.x = read_vectors(f, group + "/x", state_.x.size());
+  s.v = read_vectors(f, group + "/v", state_.v.size());
   const auto bodies = need("bodies", 13 * state_.bodies.size());
   for (std::size_t g = 0; g < state_.bodies.size(); ++g) {
     const double* d = bodies.data() + 13 * g;
@@ -421,8 +409,19 @@ void Solver::load(const io::H5File& f, const std::string& group) {
     const double* d = platens.data() + 10 * p;
     s.platens.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Vector3d(d[3], d[4], d[5]), Eigen::Vector3d(d[6], d[7], d[8]), d[9]});
   }
+  const bool has_boundary = f.exists(group + "/boundary");
+  if (has_boundary != (boundary_ != nullptr))
+    throw DataError(f.path().string() + ": checkpoint " + group + (has_boundary ? " holds a sample boundary (wall, membrane)"
+                                                                                : " holds no sample boundary") +
+                    " and this run " + (boundary_ ? "has one" : "has none") + "; restart with the scene that wrote it");
+  const auto platen_force = f.exists(group + "/platen_force")
+                                ? read_vectors(f, group + "/platen_force", platen_force_.size())
+                                : std::vector<Eigen::Vector3d>(platen_force_.size(), Eigen::Vector3d::Zero());
   if (contact_) contact_->load(f, group + "/contact");
+  if (boundary_) boundary_->load(f, group + "/boundary");
   state_ = std::move(s);
+  platen_force_ = platen_force;
+  rigid_nodes_stale_ = true;
 }
 
 }  // namespace graintwin::fdem

@@ -7,6 +7,8 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/vector_io.hpp"
+#include "graintwin/io/h5file.hpp"
 
 namespace graintwin::fdem {
 namespace {
@@ -78,30 +80,36 @@ void TriaxialBoundary::set_platens(double z_bottom, double z_top, double v_botto
 
 double TriaxialBoundary::wall_stress() const { return wall_force_ / (2 * kPi * wall_.radius * (z_top_ - z_bottom_)); }
 
-void TriaxialBoundary::install_membrane(const ContactModel& contact, double dt) {
-  if (membrane_) return;
-  const double r = ball_radius_;
-  const double ring_step = std::sqrt(3.0) * r;  // about: the lattice fixes it from the circumference
-  membrane_ = build_membrane(options_.membrane, wall_.axis_xy, wall_.radius + r, z_bottom_ - (kClampedRings + 0.5) * ring_step,
-                             z_top_ + (kClampedRings + 0.5) * ring_step, r);
-  // Bond and ball-contact limits both scale with sqrt(ball mass): one factor lifts both to dt.
-  const double own_step = stable_time_step(contact);
-  density_scaling_ = own_step < dt ? 1.0001 * (dt / own_step) * (dt / own_step) : 1.0;
-  membrane_->material.density *= density_scaling_;
-  membrane_->ball_mass *= density_scaling_;
-  membrane_->ball_inertia *= density_scaling_;
+void TriaxialBoundary::build_membrane_lattice(double centre_radius, double z_min, double z_max, double density_scaling) {
+  membrane_ = build_membrane(options_.membrane, wall_.axis_xy, centre_radius, z_min, z_max, ball_radius_);
+  membrane_frame_ = {centre_radius, z_min, z_max};
+  density_scaling_ = density_scaling;
+  membrane_->material.density *= density_scaling;
+  membrane_->ball_mass *= density_scaling;
+  membrane_->ball_inertia *= density_scaling;
   membrane_state_ = rest_state(*membrane_);
   const std::size_t n = membrane_->balls();
   motion_.assign(n, BallMotion::free);
   clamp_group_.assign(n, 0);
-  for (std::size_t b = 0; b < n; ++b) {
+  ball_force_.assign(n, Eigen::Vector3d::Zero());
+  ball_moment_.assign(n, Eigen::Vector3d::Zero());
+  pressure_force_.assign(n, Eigen::Vector3d::Zero());
+}
+
+void TriaxialBoundary::install_membrane(const ContactModel& contact, double dt) {
+  if (membrane_) return;
+  const double r = ball_radius_;
+  const double ring_step = std::sqrt(3.0) * r;  // about: the lattice fixes it from the circumference
+  const double z_min = z_bottom_ - (kClampedRings + 0.5) * ring_step, z_max = z_top_ + (kClampedRings + 0.5) * ring_step;
+  build_membrane_lattice(wall_.radius + r, z_min, z_max, 1.0);
+  // Bond and ball-contact limits both scale with sqrt(ball mass): one factor lifts both to dt.
+  const double own_step = stable_time_step(contact);
+  if (own_step < dt) build_membrane_lattice(wall_.radius + r, z_min, z_max, 1.0001 * (dt / own_step) * (dt / own_step));
+  for (std::size_t b = 0; b < membrane_->balls(); ++b) {
     const double z = membrane_->reference[b].z();
     if (z < z_bottom_) motion_[b] = BallMotion::clamped, clamp_group_[b] = 0;
     if (z > z_top_) motion_[b] = BallMotion::clamped, clamp_group_[b] = 1;
   }
-  ball_force_.assign(n, Eigen::Vector3d::Zero());
-  ball_moment_.assign(n, Eigen::Vector3d::Zero());
-  pressure_force_.assign(n, Eigen::Vector3d::Zero());
   wall_force_ = 0;
   membrane_started_ = false;
 }
@@ -167,6 +175,66 @@ double TriaxialBoundary::stable_time_step(const ContactModel& contact) const {
   if (!membrane_) return std::numeric_limits<double>::infinity();
   return std::min(membrane_stable_time_step(*membrane_),
                   contact.ball_stable_time_step({membrane_->ball_radius, membrane_->ball_mass, options_.membrane_friction}));
+}
+
+void TriaxialBoundary::save(io::H5File& file, const std::string& group) const {
+  file.ensure_group(group);
+  file.set_attr(group, "wall", std::vector<double>{wall_.radius, wall_.radial_velocity, wall_force_});
+  file.set_attr(group, "platens", std::vector<double>{z_bottom_, z_top_, v_bottom_, v_top_});
+  file.set_attr(group, "pressure", pressure_);
+  file.set_attr(group, "ball_radius", ball_radius_);
+  if (!membrane_) return;
+  file.set_attr(group, "membrane_frame", std::vector<double>{membrane_frame_[0], membrane_frame_[1], membrane_frame_[2],
+                                                             density_scaling_, membrane_started_ ? 1.0 : 0.0});
+  write_vectors(file, group + "/ball_x", membrane_state_.x);
+  write_vectors(file, group + "/ball_v", membrane_state_.v);
+  write_vectors(file, group + "/ball_spin", membrane_state_.spin);
+  write_vectors(file, group + "/bond_shear", membrane_state_.shear);
+  std::vector<std::uint8_t> motion(motion_.size());
+  for (std::size_t b = 0; b < motion_.size(); ++b) motion[b] = static_cast<std::uint8_t>(motion_[b]);
+  file.write(group + "/ball_motion", motion);
+  file.write(group + "/ball_clamp_group", clamp_group_);
+}
+
+void TriaxialBoundary::load(const io::H5File& file, const std::string& group) {
+  const auto values = [&](const char* name, std::size_t count) {
+    std::vector<double> v = file.attr_doubles(group, name);
+    if (v.size() != count)
+      throw DataError(file.path().string() + ": checkpoint " + group + " has no '" + name +
+                      "' of the sample boundary; restart with the scene that wrote it");
+    return v;
+  };
+  if (values("ball_radius", 1)[0] != ball_radius_)
+    throw DataError(file.path().string() + ": checkpoint " + group + " was written with another membrane ball radius; " +
+                    "restart with the scene that wrote it");
+  const auto wall = values("wall", 3), platens = values("platens", 4);
+  wall_.radius = wall[0];
+  wall_.radial_velocity = wall[1];
+  wall_force_ = wall[2];
+  set_platens(platens[0], platens[1], platens[2], platens[3]);
+  pressure_ = values("pressure", 1)[0];
+  membrane_.reset();
+  last_contact_ = {};
+  if (!file.has_attr(group, "membrane_frame")) return;
+  const auto frame = values("membrane_frame", 5);
+  build_membrane_lattice(frame[0], frame[1], frame[2], frame[3]);
+  membrane_started_ = frame[4] != 0;
+  const std::size_t balls = membrane_->balls();
+  membrane_state_.x = read_vectors(file, group + "/ball_x", balls);
+  membrane_state_.v = read_vectors(file, group + "/ball_v", balls);
+  membrane_state_.spin = read_vectors(file, group + "/ball_spin", balls);
+  membrane_state_.shear = read_vectors(file, group + "/bond_shear", membrane_->bonds.size());
+  const auto motion = file.read<std::uint8_t>(group + "/ball_motion");
+  clamp_group_ = file.read<std::uint8_t>(group + "/ball_clamp_group");
+  if (motion.size() != balls || clamp_group_.size() != balls)
+    throw DataError(file.path().string() + ": checkpoint " + group + " does not hold the clamps of " + std::to_string(balls) +
+                    " membrane balls; restart with the scene that wrote it");
+  for (std::size_t b = 0; b < balls; ++b) {
+    if (motion[b] > static_cast<std::uint8_t>(BallMotion::clamped) || clamp_group_[b] > 2)
+      throw DataError(file.path().string() + ": checkpoint " + group + " has an unknown clamp of membrane ball " +
+                      std::to_string(b) + "; restart with the scene that wrote it");
+    motion_[b] = static_cast<BallMotion>(motion[b]);
+  }
 }
 
 TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens) {

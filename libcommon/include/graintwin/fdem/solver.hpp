@@ -107,6 +107,10 @@ class Boundary {
                              std::span<Eigen::Vector3d> f) = 0;
   /// The boundary's own stable time step, s (infinity if it sets none).
   virtual double stable_time_step(const ContactModel& contact) const = 0;
+  /// Checkpoint of the boundary's own state under `group` (Solver::save calls it), and its restore
+  /// into a boundary built the same way (DataError when it does not fit).
+  virtual void save(io::H5File& file, const std::string& group) const = 0;
+  virtual void load(const io::H5File& file, const std::string& group) = 0;
 };
 
 class Solver {
@@ -172,10 +176,11 @@ class Solver {
   Eigen::Vector3d platen_force(std::size_t platen) const;
   bool has_contact() const { return contact_ != nullptr; }
 
-  /// Checkpoint: the state and the contact history under `group`. UsageError while a Boundary is
-  /// set: its state (membrane balls, wall, ball friction history) is not saved yet.
+  /// Checkpoint: the state, the last step's platen forces, the contact history (membrane balls'
+  /// included) and the boundary's state when one is set, under `group`.
   void save(io::H5File& file, const std::string& group) const;
-  /// Restores what save() wrote for the same model; DataError when sizes disagree.
+  /// Restores what save() wrote for the same model (and a boundary built the same way, set before);
+  /// DataError when sizes disagree or the checkpoint's boundary does not match the one set.
   void load(const io::H5File& file, const std::string& group);
 
  private:

@@ -6,6 +6,7 @@
 // eq. 27 and eq. 28, log strains). The model must have platens named "bottom" and "top" (normals
 // +z and -z) and a sample cylinder (shapes2mesh writes both).
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <optional>
 
@@ -74,8 +75,17 @@ class TriaxialBoundary final : public Boundary {
   BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                      double dt, double damping, bool first, std::span<Eigen::Vector3d> f) override;
   double stable_time_step(const ContactModel& contact) const override;
+  /// The wall, the platen heights, the pressure and the membrane (where it was built, its density
+  /// scaling, its balls' state, clamps and bond shear); the balls' friction springs are in the
+  /// contact history.
+  void save(io::H5File& file, const std::string& group) const override;
+  void load(const io::H5File& file, const std::string& group) override;
 
  private:
+  /// Builds the membrane's lattice with ball centres on `centre_radius` from z_min to z_max, its
+  /// density times `density_scaling`, at rest; sizes the per-ball arrays.
+  void build_membrane_lattice(double centre_radius, double z_min, double z_max, double density_scaling);
+
   TriaxialOptions options_;
   CylinderWallState wall_;
   double wall_force_ = 0;  ///< N, last step
@@ -91,6 +101,7 @@ class TriaxialBoundary final : public Boundary {
   std::vector<Eigen::Vector3d> pressure_force_, before_;   ///< per ball, scratch: the pressure's work
   bool membrane_started_ = false;
   double density_scaling_ = 1;
+  std::array<double, 3> membrane_frame_{};  ///< centre radius, z_min, z_max the membrane was built with
 };
 
 /// One row of the triaxial time series.
