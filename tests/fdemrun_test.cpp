@@ -3,7 +3,8 @@
 // file with a gmsh sphere beside them and VTK frames read back by VTK; a run split by --stop-step,
 // --checkpoint and --restart reproducing the uninterrupted run bit for bit; a triaxial test of 27
 // rigid cubes in the servo wall and in the membrane (stages, triaxial columns, frames at the asked
-// strains, membrane positions); bad scenes and options failing cleanly.
+// strains, membrane positions), and the membrane test split over five processes, stopped in each of
+// its four phases, matching the whole run bit for bit; bad scenes and options failing cleanly.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -188,6 +189,22 @@ velocity = [0, 0, -2]
   EXPECT_NEAR(volumes[1] / (4.0 / 3.0 * std::numbers::pi * 0.125e-9), 1.0, 0.01);
 }
 
+namespace {
+
+/// The last frames of two results files agree bit for bit.
+void expect_same_last_frame(const std::filesystem::path& a, const std::filesystem::path& b) {
+  const auto x = fdem::read_results_frame(a, fdem::results_frame_count(a) - 1);
+  const auto y = fdem::read_results_frame(b, fdem::results_frame_count(b) - 1);
+  EXPECT_EQ(x.step, y.step);
+  EXPECT_EQ(x.time, y.time);
+  EXPECT_EQ(x.centroid, y.centroid);
+  EXPECT_EQ(x.rotation, y.rotation);
+  EXPECT_EQ(x.stress, y.stress);
+  EXPECT_EQ(x.velocity, y.velocity);
+}
+
+}  // namespace
+
 TEST(Fdemrun, RestartFromCheckpointReproducesTheRunBitForBit) {
   test::TempDir dir;
   const auto scene = write_scene(dir, "scene.toml", kScene);
@@ -197,14 +214,7 @@ TEST(Fdemrun, RestartFromCheckpointReproducesTheRunBitForBit) {
   ASSERT_EQ(a.exit_code, 0) << a.err;
   const auto b = run_tool("fdemrun", {scene.string(), second.string(), "-q", "--restart", ckpt.string()});
   ASSERT_EQ(b.exit_code, 0) << b.err;
-  const auto full = fdem::read_results_frame(whole, fdem::results_frame_count(whole) - 1);
-  const auto resumed = fdem::read_results_frame(second, fdem::results_frame_count(second) - 1);
-  EXPECT_EQ(full.step, resumed.step);
-  EXPECT_EQ(full.time, resumed.time);
-  EXPECT_EQ(full.centroid, resumed.centroid);
-  EXPECT_EQ(full.rotation, resumed.rotation);
-  EXPECT_EQ(full.stress, resumed.stress);
-  EXPECT_EQ(full.velocity, resumed.velocity);
+  expect_same_last_frame(whole, second);
   const auto sw = fdem::read_results_series(whole), sr = fdem::read_results_series(second);
   ASSERT_FALSE(sr.step.empty());
   const std::size_t offset = sw.step.size() - sr.step.size();
@@ -344,6 +354,77 @@ TEST(Fdemrun, BadTriaxialScenesFailBeforeAnyStep) {
   bad("kind.toml", "boundary = \"wall\"", "boundary = \"latex\"", "use membrane or wall");
   bad("both.toml", "strain_rate = 5", "strain_rate = 5\nshear_inertial_number = 1e-3", "keep one");
   bad("ramp.toml", "shear_ramp_strain = 1e-3", "shear_ramp_strain = 0.01", "below target_axial_strain");
-  test::expect_clean_failure("fdemrun", dir, {scene.string(), out, "--checkpoint", (dir / "c.h5").string()}, 2,
-                             "checkpoints");
+  // A triaxial run restarts only from a triaxial checkpoint of the same scene.
+  const auto plain = write_scene(dir, "plain.toml", kScene), plain_ckpt = dir / "plain_ckpt.h5";
+  ASSERT_EQ(run_tool("fdemrun", {plain.string(), (dir / "plain.h5").string(), "-q", "--stop-step", "3", "--checkpoint",
+                                 plain_ckpt.string()})
+                .exit_code,
+            0);
+  test::expect_clean_failure("fdemrun", dir, {scene.string(), out, "--restart", plain_ckpt.string()}, 2,
+                             "written for another scene");
+}
+
+TEST(Fdemrun, TriaxialRunSplitInEveryPhaseIsTheWholeRunBitForBit) {
+  test::TempDir dir;
+  const auto scene = triaxial_scene(dir, "membrane");
+  const auto whole = dir / "whole.h5";
+  const std::vector<std::string> common{"-q", "-j", "1"};
+  const auto run = [&](std::vector<std::string> args) {
+    args.insert(args.end(), common.begin(), common.end());
+    const auto r = run_tool("fdemrun", args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.exit_code == 0;
+  };
+  ASSERT_TRUE(run({scene.string(), whole.string()}));
+  const auto parameters = [](const std::filesystem::path& results) {
+    return nlohmann::json::parse(io::H5File::open(results).read_strings(schema::fdem_results::parameters).at(0));
+  };
+  const auto summary = parameters(whole)["triaxial"];
+  const auto wall = summary["consolidation_steps"].get<std::uint64_t>();
+  const auto membrane = summary["membrane_steps"].get<std::uint64_t>();
+  const auto shearing = summary["shear_steps"].get<std::uint64_t>();
+  const auto whole_series = fdem::read_results_series(whole);
+  const auto stages_of = [](const std::filesystem::path& results) {
+    return io::H5File::open(results).read<std::uint32_t>(schema::fdem_results::series_stage);
+  };
+  const auto whole_stage = stages_of(whole);
+  // One run in five processes, each restarting from the previous one's checkpoint: stops in the
+  // wall's consolidation, while the membrane is held (it is for at least 100 steps), while its
+  // pressure ramps up (the first row past 30 % of sigma_3), and while shearing.
+  const auto lateral = io::H5File::open(whole).read<double>(schema::fdem_results::series_lateral_stress);
+  std::size_t ramping = 0;
+  while (ramping < lateral.size() && !(whole_stage[ramping] == 1 && lateral[ramping] > 0.3 * 300e3)) ++ramping;
+  ASSERT_LT(ramping, lateral.size());
+  std::filesystem::path restart_from;
+  std::size_t rows = 0;
+  const std::vector<std::uint64_t> stops{wall / 2, wall + 50, whole_series.step[ramping], wall + membrane + shearing / 2, 0};
+  for (std::size_t part = 0; part < stops.size(); ++part) {
+    SCOPED_TRACE("part " + std::to_string(part));
+    const auto results = dir / fmt::format("part{}.h5", part), ckpt = dir / fmt::format("ckpt{}.h5", part);
+    std::vector<std::string> args{scene.string(), results.string()};
+    if (stops[part] > 0) args.insert(args.end(), {"--stop-step", std::to_string(stops[part]), "--checkpoint", ckpt.string()});
+    if (!restart_from.empty()) args.insert(args.end(), {"--restart", restart_from.string()});
+    ASSERT_TRUE(run(args));
+    restart_from = ckpt;
+    // Each part's rows are the whole run's rows of its steps, bit for bit.
+    const auto series = fdem::read_results_series(results);
+    const auto stage = stages_of(results);
+    ASSERT_FALSE(series.step.empty());
+    for (std::size_t k = 0; k < series.step.size(); ++k) {
+      ASSERT_EQ(whole_series.step[rows + k], series.step[k]) << "row " << k;
+      EXPECT_EQ(whole_series.kinetic[rows + k], series.kinetic[k]) << "row " << k;
+      EXPECT_EQ(whole_stage[rows + k], stage[k]) << "row " << k;
+    }
+    rows += series.step.size();
+    if (stops[part] > 0) {
+      EXPECT_EQ(parameters(results)["stopped_at_step"].get<std::uint64_t>(), stops[part]);
+      continue;
+    }
+    expect_same_last_frame(whole, results);
+    // The summary counts the steps before the restarts too.
+    const auto resumed_summary = parameters(results)["triaxial"];
+    for (const char* key : {"consolidation_steps", "membrane_steps", "shear_steps", "max_kinetic_ratio"})
+      EXPECT_EQ(resumed_summary[key], summary[key]) << key;
+  }
+  EXPECT_EQ(rows, whole_series.step.size());
 }

@@ -34,12 +34,14 @@ std::string digest_of(const std::string& text) { return fmt::format("{:016x}", s
 
 /// Runs the scene's triaxial test: progress per phase, a status line every few thousand steps of a
 /// consolidation (whose length is not known in advance), a warning when shearing was not quasi-static.
+/// A run that ended at --stop-step (its checkpoint written), to be continued with --restart.
+struct StoppedAtStep {};
+
 TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const TriaxialSpec& spec, double dt,
-                                     std::uint64_t row_every, ResultsWriter& writer, const std::function<void()>& on_frame) {
+                                     std::uint64_t row_every, ResultsWriter& writer, TriaxialRunHooks hooks) {
   std::unique_ptr<cli::Progress> progress;
   std::string phase;
   std::size_t taken = 0;
-  TriaxialRunHooks hooks;
   hooks.phase = [&](const std::string& name, std::size_t steps) {
     if (progress) progress->done();
     progress = steps ? ctx.progress(name + " steps", steps) : nullptr;
@@ -47,7 +49,8 @@ TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const
     taken = 0;
     spdlog::info("{} begins at step {}{}", name, solver.step_count(), steps ? fmt::format(" ({} steps)", steps) : "");
   };
-  hooks.step = [&](const TriaxialMeasure& m, const StepReport& r) {
+  hooks.step = [&, checkpoint = hooks.step](const TriaxialMeasure& m, const StepReport& r, const TriaxialRunProgress& at) {
+    if (checkpoint) checkpoint(m, r, at);
     ++taken;
     if (progress) progress->advance();
     if (!progress && taken % 1000 == 0)
@@ -58,7 +61,6 @@ TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const
                    solver.contact_model()->rebuild_count());
     cli::throw_if_interrupted();
   };
-  hooks.frame = on_frame;
   const TriaxialRunSummary s = run_triaxial(solver, spec, dt, row_every, writer, hooks);
   if (progress) progress->done();
   spdlog::info("consolidated in {} + {} steps; sheared {} steps at {:.4g} /s (inertial number {:.2g}) to eps_1 = {:.4g}: "
@@ -116,8 +118,8 @@ int main(int argc, char** argv) {
       "membrane, clamped ends, confining pressure; or boundary = \"wall\" to keep the wall), then strain-controlled "
       "shearing to a target axial strain; its series adds sigma_1, sigma_3, sigma_1/sigma_3, the sample volume by eq. 27 "
       "and eq. 28, the log strains eps_1 and eps_v from the start of shearing, the kinetic/elastic energy ratio and the "
-      "inertial number, and frames are saved at the start of shearing, at the frame_strains and at the end. Triaxial "
-      "runs cannot be checkpointed yet. "
+      "inertial number, and frames are saved at the start of shearing, at the frame_strains and at the end; its "
+      "checkpoints also hold the wall, the membrane and where the procedure stands, so --restart resumes it mid-phase. "
       "The scene format is in docs/fdemrun.md.");
   fs::path scene_path, output, checkpoint, restart, model_path;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
@@ -153,9 +155,6 @@ int main(int argc, char** argv) {
     std::optional<io::AtomicOutput> vtk_out;
     if (!vtk_folder.empty()) vtk_out.emplace(vtk_folder, ctx.force());
     const Scene scene = read_scene(scene_path, model_path);
-    if (scene.triaxial && (!checkpoint.empty() || !restart.empty() || stop_step > 0))
-      throw UsageError(scene_path.string() + " is a triaxial test, whose membrane state checkpoints do not hold yet; "
-                       "run it without --checkpoint, --restart and --stop-step");
     std::stringstream text;
     text << std::ifstream(scene_path).rdbuf();
     std::stringstream model_bytes;  // a restart needs the same model file too
@@ -197,10 +196,10 @@ int main(int argc, char** argv) {
 
     const std::string digest = digest_of(text.str() + model_bytes.str() + fmt::format("|dt={:a}", dt));
     io::AtomicOutput out(output, ctx.force());
-    if (!restart.empty()) {
+    if (!restart.empty() && !scene.triaxial) {
       read_checkpoint(restart, solver, digest);
       spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.step_count(), solver.time());
-    } else {
+    } else if (restart.empty()) {
       for (std::size_t g = 0; g < scene.grains.size(); ++g)
         solver.set_grain_velocity(scene.primitive_grain(g), scene.grains[g].velocity, scene.grains[g].angular_velocity);
     }
@@ -210,12 +209,53 @@ int main(int argc, char** argv) {
     ResultsWriter writer(out.temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());
-    if (scene.triaxial) {
-      const TriaxialRunSummary summary = run_triaxial_test(ctx, solver, *scene.triaxial, dt, row_every, writer, [&] {
-        if (frames) frames->add(solver);
+    const auto save_checkpoint = [&](const TriaxialRunProgress* triaxial) {
+      if (checkpoint.empty()) return;
+      io::AtomicOutput ckpt(checkpoint, true);
+      write_checkpoint(ckpt.temp_path(), solver, digest, [&](io::H5File& f) {
+        if (triaxial) save_progress(f, *triaxial);
       });
+      ckpt.commit();
+    };
+    const auto with_checkpoint_context = [&](Error& e) {
+      e.add_context(checkpoint.empty() ? std::string("no checkpoint was written (use --checkpoint)")
+                                       : "last checkpoint: " + checkpoint.string());
+    };
+    if (scene.triaxial) {
+      TriaxialRunHooks hooks;
+      hooks.frame = [&] {
+        if (frames) frames->add(solver);
+      };
+      if (!restart.empty())
+        hooks.restore = [&](TriaxialRunProgress& at) {
+          read_checkpoint(restart, solver, digest, [&](const io::H5File& f) { at = load_progress(f); });
+          spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.step_count(), solver.time());
+        };
+      // A triaxial test's length is known only as it settles: checkpoints every interval, at a
+      // --stop-step and at the end.
+      const std::uint64_t every = scene.checkpoint_interval > 0 ? steps_of(scene.checkpoint_interval, dt) : 0;
+      TriaxialRunProgress last_progress;
+      hooks.step = [&](const TriaxialMeasure&, const StepReport&, const TriaxialRunProgress& at) {
+        last_progress = at;
+        if (every > 0 && solver.step_count() % every == 0) save_checkpoint(&at);
+        if (stop_step > 0 && solver.step_count() >= stop_step) {
+          save_checkpoint(&at);
+          throw StoppedAtStep{};
+        }
+      };
+      try {
+        const TriaxialRunSummary summary = run_triaxial_test(ctx, solver, *scene.triaxial, dt, row_every, writer, hooks);
+        p["triaxial"] = summary_json(summary);
+        save_checkpoint(&last_progress);
+      } catch (const StoppedAtStep&) {
+        spdlog::info("stopped at step {} (--stop-step){}", solver.step_count(),
+                     checkpoint.empty() ? std::string() : "; continue with --restart " + checkpoint.string());
+        p["stopped_at_step"] = solver.step_count();
+      } catch (Error& e) {
+        with_checkpoint_context(e);
+        throw;
+      }
       p["steps"] = solver.step_count();
-      p["triaxial"] = summary_json(summary);
       writer.set_parameters(p.dump());
       writer.finish(ctx.history());
       if (frames) frames->finish(), vtk_out->commit();
@@ -228,12 +268,6 @@ int main(int argc, char** argv) {
     const auto add_frame = [&] {
       writer.add_frame(solver);
       if (frames) frames->add(solver);
-    };
-    const auto save_checkpoint = [&] {
-      if (checkpoint.empty()) return;
-      io::AtomicOutput ckpt(checkpoint, true);
-      write_checkpoint(ckpt.temp_path(), solver, digest);
-      ckpt.commit();
     };
     const std::uint64_t last = stop_step > 0 ? std::min(stop_step, total) : total;
     auto progress = ctx.progress("steps", last - std::min(last, solver.step_count()));
@@ -250,12 +284,11 @@ int main(int argc, char** argv) {
       try {
         report = solver.step(dt);
       } catch (Error& e) {
-        e.add_context(checkpoint.empty() ? std::string("no checkpoint was written (use --checkpoint)")
-                                         : "last checkpoint: " + checkpoint.string());
+        with_checkpoint_context(e);
         throw;
       }
       if (n % row_every == 0) writer.add_row(solver, report, stage, dt);
-      if (solver.step_count() % checkpoint_every == 0 || solver.step_count() == last) save_checkpoint();
+      if (solver.step_count() % checkpoint_every == 0 || solver.step_count() == last) save_checkpoint(nullptr);
       progress->advance();
       cli::throw_if_interrupted();
     }

@@ -277,100 +277,117 @@ double servo_rate(const Solver& solver, const TriaxialOptions& options) {
                         options.confining_pressure);
 }
 
-/// Steps once and tells the observer.
-StepReport observed_step(Solver& solver, const TriaxialBoundary& boundary, const PlatenPair& platens, double dt,
-                         const TriaxialObserver& on_step) {
-  const StepReport r = solver.step(dt);
-  if (on_step) on_step(measure(solver, boundary, platens), r);
-  return r;
-}
+/// The caller's progress, or `local` when it passes none.
+TriaxialProgress& progress_or(TriaxialProgress* progress, TriaxialProgress& local) { return progress ? *progress : local; }
 
 }  // namespace
 
 std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options, double dt,
-                                std::size_t max_steps, const TriaxialObserver& on_step) {
+                                std::size_t max_steps, const TriaxialObserver& on_step, TriaxialProgress* progress) {
   if (boundary.has_membrane()) throw UsageError("consolidation in the wall must come before the membrane is installed");
+  TriaxialProgress local;
+  TriaxialProgress& p = progress_or(progress, local);
+  if (p.phase != TriaxialProgress::Phase::wall) p = {};
   const PlatenPair platens = find_platens(solver.model());
   const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
-  std::size_t settled = 0, step = 0;
-  for (; step < max_steps && settled < kSettledSteps; ++step) {
+  while (p.step < max_steps && p.settled < kSettledSteps) {
     const TriaxialMeasure m = measure(solver, boundary, platens);
     const double radial = servo_velocity(boundary.wall_stress(), sigma, rate * boundary.wall().radius);
     drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
     boundary.set_wall_velocity(radial);
-    const StepReport r = observed_step(solver, boundary, platens, dt, on_step);
+    const StepReport r = solver.step(dt);
     const bool stresses = std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance &&
                           std::abs(boundary.wall_stress() / sigma - 1) < options.stress_tolerance;
-    settled = stresses && quasi_static(r) ? settled + 1 : 0;
+    ++p.step;
+    p.settled = stresses && quasi_static(r) ? p.settled + 1 : 0;
+    if (on_step) on_step(measure(solver, boundary, platens), r);
   }
   drive_platens(solver, boundary, platens, 0.0);
   boundary.set_wall_velocity(0);
-  if (settled < kSettledSteps)
+  if (p.settled < kSettledSteps)
     throw DataError(fmt::format("isotropic consolidation to {:.4g} kPa did not settle in {} steps (axial {:.4g} kPa, "
                                 "lateral {:.4g} kPa); allow more steps or a larger servo inertial number",
                                 1e-3 * sigma, max_steps, 1e-3 * measure(solver, boundary, platens).axial_stress,
                                 1e-3 * boundary.wall_stress()));
-  return step;
+  return p.step;
 }
-
 
 std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
                                     double dt, std::size_t ramp_steps, std::size_t max_steps,
-                                    const TriaxialObserver& on_step) {
+                                    const TriaxialObserver& on_step, TriaxialProgress* progress) {
   if (!solver.contact_model()) throw UsageError("the membrane acts through contact; run with contact on");
+  using Phase = TriaxialProgress::Phase;
+  TriaxialProgress local;
+  TriaxialProgress& p = progress_or(progress, local);
   const PlatenPair platens = find_platens(solver.model());
   const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
-  solver.stop_grains();
-  drive_platens(solver, boundary, platens, 0.0);
-  boundary.install_membrane(*solver.contact_model(), dt);
-  boundary.set_membrane_fixed(true);
-  boundary.set_pressure(0);
-  std::size_t step = 0, settled = 0;
-  // The grains settle against the fixed membrane (the wall's load is gone: they relax a little).
-  for (; step < max_steps && settled < kSettledSteps; ++step) {
-    settled = quasi_static(observed_step(solver, boundary, platens, dt, on_step)) ? settled + 1 : 0;
+  if (p.phase != Phase::membrane_fixed && p.phase != Phase::membrane_released) {
+    p = {Phase::membrane_fixed};
+    solver.stop_grains();
+    drive_platens(solver, boundary, platens, 0.0);
+    boundary.install_membrane(*solver.contact_model(), dt);
+    boundary.set_membrane_fixed(true);
+    boundary.set_pressure(0);
   }
-  boundary.set_membrane_fixed(false);
-  settled = 0;
-  const std::size_t released = step;
-  for (; step < max_steps && settled < kSettledSteps; ++step) {
-    const double ramp = ramp_steps ? std::min(1.0, static_cast<double>(step - released + 1) / static_cast<double>(ramp_steps)) : 1.0;
+  // The grains settle against the fixed membrane (the wall's load is gone: they relax a little).
+  if (p.phase == Phase::membrane_fixed) {
+    while (p.step < max_steps && p.settled < kSettledSteps) {
+      const StepReport r = solver.step(dt);
+      ++p.step;
+      p.settled = quasi_static(r) ? p.settled + 1 : 0;
+      if (on_step) on_step(measure(solver, boundary, platens), r);
+    }
+    boundary.set_membrane_fixed(false);
+    p.phase = Phase::membrane_released;
+    p.settled = 0;
+    p.released = p.step;
+  }
+  while (p.step < max_steps && p.settled < kSettledSteps) {
+    const double ramp =
+        ramp_steps ? std::min(1.0, static_cast<double>(p.step - p.released + 1) / static_cast<double>(ramp_steps)) : 1.0;
     boundary.set_pressure(ramp * sigma);
     const TriaxialMeasure m = measure(solver, boundary, platens);
     drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
-    const StepReport r = observed_step(solver, boundary, platens, dt, on_step);
+    const StepReport r = solver.step(dt);
     const bool stress = ramp == 1.0 && std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance;
-    settled = stress && quasi_static(r) ? settled + 1 : 0;
+    ++p.step;
+    p.settled = stress && quasi_static(r) ? p.settled + 1 : 0;
+    if (on_step) on_step(measure(solver, boundary, platens), r);
   }
   drive_platens(solver, boundary, platens, 0.0);
-  if (settled < kSettledSteps)
+  if (p.settled < kSettledSteps)
     throw DataError(fmt::format("consolidation in the membrane to {:.4g} kPa did not settle in {} steps (axial {:.4g} kPa); "
                                 "allow more steps or a larger servo inertial number",
                                 1e-3 * sigma, max_steps, 1e-3 * measure(solver, boundary, platens).axial_stress));
-  return step;
+  return p.step;
 }
 
 std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
-                  const ShearOptions& shearing, double dt, const TriaxialObserver& on_step) {
+                  const ShearOptions& shearing, double dt, const TriaxialObserver& on_step, TriaxialProgress* progress) {
   if (!(shearing.strain_rate > 0) || !(shearing.target_axial_strain > 0))
     throw UsageError("shearing needs a positive strain rate and target axial strain");
+  TriaxialProgress local;
+  TriaxialProgress& p = progress_or(progress, local);
   const PlatenPair platens = find_platens(solver.model());
-  const double h0 = measure(solver, boundary, platens).height, wall_rate = servo_rate(solver, options);
+  if (p.phase != TriaxialProgress::Phase::shearing)
+    p = {TriaxialProgress::Phase::shearing, 0, 0, 0, measure(solver, boundary, platens).height};
+  const double h0 = p.h0, wall_rate = servo_rate(solver, options);
   const double ramp_steps = std::ceil(shearing.ramp_strain / (shearing.strain_rate * dt));
-  std::size_t step = 0;
-  for (;; ++step) {
+  for (;;) {
     const TriaxialMeasure m = measure(solver, boundary, platens);
     if (std::log(h0 / m.height) >= shearing.target_axial_strain) break;
-    const double speed = ramp_steps > 0 ? std::min(1.0, double(step + 1) / ramp_steps) : 1.0;
+    const double speed = ramp_steps > 0 ? std::min(1.0, double(p.step + 1) / ramp_steps) : 1.0;
     drive_platens(solver, boundary, platens, -speed * shearing.strain_rate * h0);
     if (!boundary.has_membrane())
       boundary.set_wall_velocity(servo_velocity(boundary.wall_stress(), options.confining_pressure,
                                                 wall_rate * boundary.wall().radius));
-    observed_step(solver, boundary, platens, dt, on_step);
+    const StepReport r = solver.step(dt);
+    ++p.step;
+    if (on_step) on_step(measure(solver, boundary, platens), r);
   }
   drive_platens(solver, boundary, platens, 0.0);
   boundary.set_wall_velocity(0);
-  return step;
+  return p.step;
 }
 
 }  // namespace graintwin::fdem

@@ -4,12 +4,58 @@
 #include <cmath>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/io/h5file.hpp"
 
 namespace graintwin::fdem {
+namespace {
+
+constexpr const char* kProgressGroup = "/triaxial";
+
+std::vector<double> measure_values(const TriaxialMeasure& m) {
+  return {m.axial_stress, m.lateral_stress, m.height, m.volume, m.volume_radial};
+}
+
+}  // namespace
+
+void save_progress(io::H5File& file, const TriaxialRunProgress& p) {
+  file.ensure_group(kProgressGroup);
+  const TriaxialProgress& q = p.procedure;
+  // Counters as doubles: exact below 2^53 steps.
+  file.set_attr(kProgressGroup, "procedure",
+                std::vector<double>{static_cast<double>(q.phase), static_cast<double>(q.step), static_cast<double>(q.settled),
+                                    static_cast<double>(q.released), q.h0});
+  file.set_attr(kProgressGroup, "run",
+                std::vector<double>{static_cast<double>(p.consolidation_steps), static_cast<double>(p.membrane_steps),
+                                    static_cast<double>(p.next_frame), p.max_kinetic_ratio});
+  file.set_attr(kProgressGroup, "start", measure_values(p.start));
+}
+
+TriaxialRunProgress load_progress(const io::H5File& file) {
+  const auto values = [&](const char* name, std::size_t count) {
+    std::vector<double> v = file.exists(kProgressGroup) ? file.attr_doubles(kProgressGroup, name) : std::vector<double>{};
+    if (v.size() != count)
+      throw DataError(file.path().string() + " holds no triaxial test's progress (" + kProgressGroup + " " + name +
+                      "); restart a triaxial scene from a checkpoint that fdemrun wrote for it");
+    return v;
+  };
+  const auto q = values("procedure", 5), r = values("run", 4), s = values("start", 5);
+  if (!(q[0] >= 0 && q[0] <= static_cast<double>(TriaxialProgress::Phase::shearing)))
+    throw DataError(file.path().string() + ": " + kProgressGroup + " names an unknown phase of the triaxial test");
+  TriaxialRunProgress p;
+  p.procedure = {static_cast<TriaxialProgress::Phase>(q[0]), static_cast<std::uint64_t>(q[1]),
+                 static_cast<std::uint64_t>(q[2]), static_cast<std::uint64_t>(q[3]), q[4]};
+  p.consolidation_steps = static_cast<std::uint64_t>(r[0]);
+  p.membrane_steps = static_cast<std::uint64_t>(r[1]);
+  p.next_frame = static_cast<std::uint64_t>(r[2]);
+  p.max_kinetic_ratio = r[3];
+  p.start = {s[0], s[1], s[2], s[3], s[4]};
+  return p;
+}
 
 TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double dt, std::uint64_t row_every,
                                 ResultsWriter& writer, const TriaxialRunHooks& hooks) {
   if (!solver.has_contact()) throw UsageError("a triaxial test acts through contact; remove [run] contact = false");
+  using Phase = TriaxialProgress::Phase;
   const PlatenPair platens = find_platens(solver.model());
   const TriaxialOptions& options = spec.options;
   TriaxialRunSummary summary;
@@ -26,8 +72,15 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
     Solver& s;
     ~Detach() { s.set_boundary(nullptr); }
   } detach{solver};
+  TriaxialRunProgress run;
+  if (hooks.restore) hooks.restore(run);
+  TriaxialProgress& procedure = run.procedure;
 
-  std::uint32_t stage = 0;
+  // Series stages: consolidation, membrane (when it replaces the wall), shearing.
+  const auto stage = [&]() -> std::uint32_t {
+    if (procedure.phase == Phase::shearing) return spec.membrane ? 2 : 1;
+    return procedure.phase == Phase::wall ? 0 : 1;
+  };
   double shearing_rate = std::numeric_limits<double>::quiet_NaN();
   const auto book = [&](const TriaxialMeasure& m, const StepReport& r) {
     if ((solver.step_count() - 1) % row_every == 0) {
@@ -35,10 +88,13 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
       if (std::isfinite(shearing_rate))
         row.inertial_number = inertial_number(shearing_rate, summary.d50, density,
                                               (m.axial_stress + 2 * m.lateral_stress) / 3);
-      writer.add_row(solver, r, stage, dt, row);
+      writer.add_row(solver, r, stage(), dt, row);
     }
-    if (hooks.step) hooks.step(m, r);
   };
+  const auto after_step = [&](const TriaxialMeasure& m, const StepReport& r) {
+    if (hooks.step) hooks.step(m, r, run);
+  };
+  const auto consolidation_step = [&](const TriaxialMeasure& m, const StepReport& r) { book(m, r), after_step(m, r); };
   const auto take_frame = [&](double axial_strain) {
     writer.add_frame(solver, &boundary, axial_strain);
     if (hooks.frame) hooks.frame();
@@ -48,38 +104,50 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
     if (hooks.phase) hooks.phase(name, steps);
   };
 
-  begin("consolidation", 0);
-  summary.consolidation_steps = consolidate_in_wall(solver, boundary, options, dt, spec.consolidation_steps, book);
+  if (procedure.phase == Phase::wall) {
+    begin("consolidation", 0);
+    run.consolidation_steps =
+        consolidate_in_wall(solver, boundary, options, dt, spec.consolidation_steps, consolidation_step, &procedure);
+  }
+  summary.consolidation_steps = run.consolidation_steps;
   if (spec.membrane) {
-    ++stage;
-    begin("membrane", 0);
-    summary.membrane_steps = consolidate_in_membrane(solver, boundary, options, dt, spec.pressure_ramp_steps,
-                                                     spec.consolidation_steps, book);
+    if (procedure.phase != Phase::shearing) {
+      begin("membrane", 0);
+      run.membrane_steps = consolidate_in_membrane(solver, boundary, options, dt, spec.pressure_ramp_steps,
+                                                   spec.consolidation_steps, consolidation_step, &procedure);
+    }
+    summary.membrane_steps = run.membrane_steps;
     summary.membrane_balls = boundary.membrane()->balls();
     summary.ball_radius = boundary.ball_radius();
     summary.density_scaling = boundary.density_scaling();
   }
 
-  ++stage;
-  summary.start = measure(solver, boundary, platens);
-  writer.set_strain_reference(summary.start.height, summary.start.volume);
+  const bool fresh_shearing = procedure.phase != Phase::shearing;
+  if (fresh_shearing) run.start = measure(solver, boundary, platens);
+  summary.start = run.start;
+  writer.set_strain_reference(run.start.height, run.start.volume);
   // H = H0 (1 - rate t) at constant platen speed, and eps_1 = ln(H0 / H).
   // Plus half the ramp's steps, which cover half the distance of full speed.
   const auto expected = static_cast<std::size_t>(std::ceil(
       ((1 - std::exp(-spec.target_axial_strain)) + 0.5 * spec.shear_ramp_strain) / (summary.strain_rate * dt)));
-  begin("shearing", expected);
-  take_frame(0.0);
+  begin("shearing", expected - std::min<std::size_t>(expected, fresh_shearing ? 0 : procedure.step));
   shearing_rate = summary.strain_rate;
-  std::size_t next_frame = 0;
+  if (fresh_shearing) {
+    procedure = {Phase::shearing, 0, 0, 0, run.start.height};
+    take_frame(0.0);
+  }
   summary.shear_steps = shear(solver, boundary, options, ShearOptions{summary.strain_rate, spec.target_axial_strain, spec.shear_ramp_strain}, dt,
                               [&](const TriaxialMeasure& m, const StepReport& r) {
                                 book(m, r);
                                 const Energies& e = r.energies;
-                                summary.max_kinetic_ratio = std::max(summary.max_kinetic_ratio, e.kinetic / (e.strain + e.contact_elastic));
-                                const double strain = std::log(summary.start.height / m.height);
-                                for (; next_frame < spec.frame_strains.size() && strain >= spec.frame_strains[next_frame]; ++next_frame)
+                                run.max_kinetic_ratio = std::max(run.max_kinetic_ratio, e.kinetic / (e.strain + e.contact_elastic));
+                                const double strain = std::log(run.start.height / m.height);
+                                for (; run.next_frame < spec.frame_strains.size() && strain >= spec.frame_strains[run.next_frame]; ++run.next_frame)
                                   take_frame(strain);
-                              });
+                                after_step(m, r);
+                              },
+                              &procedure);
+  summary.max_kinetic_ratio = run.max_kinetic_ratio;
   summary.end = measure(solver, boundary, platens);
   take_frame(std::log(summary.start.height / summary.end.height));
   return summary;

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -88,9 +89,13 @@ ResultsSeries read_results_series(const std::filesystem::path& path);
 std::size_t results_frame_count(const std::filesystem::path& path);
 ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t frame);
 
-/// Writes a checkpoint (solver state, contact history, `scene_digest`) to `path`.
-void write_checkpoint(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest);
-/// Restores a checkpoint into `solver`; UsageError when it was written for another scene.
-void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest);
+/// Writes a checkpoint (solver state, contact history, `scene_digest`) to `path`; `also` adds more
+/// (a triaxial test's progress).
+void write_checkpoint(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest,
+                      const std::function<void(io::H5File&)>& also = {});
+/// Restores a checkpoint into `solver` and hands the file to `also`; UsageError when it was written
+/// for another scene.
+void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest,
+                     const std::function<void(const io::H5File&)>& also = {});
 
 }  // namespace graintwin::fdem

@@ -7,6 +7,7 @@
 // +z and -z) and a sample cylinder (shapes2mesh writes both).
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <optional>
 
@@ -127,6 +128,18 @@ double inertial_number(double strain_rate, double d50, double density, double me
 /// The strain rate of a given inertial number (inverse of inertial_number), 1/s.
 double strain_rate_of(double inertial_number, double d50, double density, double mean_stress);
 
+/// Where a procedure below stands after a step, so a checkpoint taken in an observer can resume it
+/// there (fdemrun --restart). Each procedure starts afresh unless `progress` is in one of its own
+/// phases, and updates it before it calls its observer.
+struct TriaxialProgress {
+  enum class Phase : std::uint8_t { wall = 0, membrane_fixed, membrane_released, shearing };
+  Phase phase = Phase::wall;
+  std::uint64_t step = 0;      ///< steps taken in the current procedure
+  std::uint64_t settled = 0;   ///< consecutive settled steps (consolidations)
+  std::uint64_t released = 0;  ///< consolidate_in_membrane: its step count when the membrane was released
+  double h0 = 0;               ///< shear: the platen gap at its start, m
+};
+
 /// Servo velocity for a stress error: the fastest speed while the error is above 10 % of the
 /// target, proportional below (m/s, positive = the boundary should open).
 double servo_velocity(double stress, double target, double fastest);
@@ -139,7 +152,7 @@ double servo_velocity(double stress, double target, double fastest);
 /// (DataError). Returns the steps taken.
 std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
                                     double dt, std::size_t ramp_steps, std::size_t max_steps,
-                                    const TriaxialObserver& on_step = {});
+                                    const TriaxialObserver& on_step = {}, TriaxialProgress* progress = nullptr);
 
 /// Strain-controlled shearing (SPEC section 8): both platens move towards each other at
 /// strain_rate x H0 / 2 each, under the membrane pressure (or inside the wall, which servos to
@@ -153,12 +166,14 @@ struct ShearOptions {
   double ramp_strain = 0;
 };
 std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
-                  const ShearOptions& shearing, double dt, const TriaxialObserver& on_step);
+                  const ShearOptions& shearing, double dt, const TriaxialObserver& on_step,
+                  TriaxialProgress* progress = nullptr);
 
 /// Isotropic consolidation inside the wall: the wall and both platens servo to sigma_3 until all
 /// three stresses are within options.stress_tolerance of it and the kinetic energy is below 5 % of
 /// the contact elastic energy for 100 consecutive steps, or `max_steps`. Returns the steps taken.
 std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, const TriaxialOptions& options,
-                                double dt, std::size_t max_steps, const TriaxialObserver& on_step = {});
+                                double dt, std::size_t max_steps, const TriaxialObserver& on_step = {},
+                                TriaxialProgress* progress = nullptr);
 
 }  // namespace graintwin::fdem

@@ -10,16 +10,34 @@
 
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/fdem/scene.hpp"
+#include "graintwin/fdem/triaxial.hpp"
 
 namespace graintwin::fdem {
+
+/// Where the whole test stands after a step: the running procedure's progress and what the run
+/// has gathered, so a checkpoint can resume it (with the solver's and the boundary's state).
+struct TriaxialRunProgress {
+  TriaxialProgress procedure;
+  std::uint64_t consolidation_steps = 0, membrane_steps = 0;
+  TriaxialMeasure start;          ///< at the start of shearing (the strains' reference)
+  std::uint64_t next_frame = 0;   ///< first of TriaxialSpec::frame_strains not yet saved
+  double max_kinetic_ratio = 0;   ///< while shearing
+};
+/// A checkpoint's /triaxial group: what save_progress wrote; DataError when it is missing or bad.
+void save_progress(io::H5File& file, const TriaxialRunProgress& progress);
+TriaxialRunProgress load_progress(const io::H5File& file);
 
 struct TriaxialRunHooks {
   /// A phase begins: its name and the steps it will take (0 when it runs until it has settled).
   std::function<void(const std::string& phase, std::size_t steps)> phase;
-  /// After every step, with its measurement and report (progress display, interrupts: it may throw).
-  std::function<void(const TriaxialMeasure&, const StepReport&)> step;
+  /// After every step, with its measurement, report and the test's progress (progress display,
+  /// checkpoints, interrupts: it may throw).
+  std::function<void(const TriaxialMeasure&, const StepReport&, const TriaxialRunProgress&)> step;
   /// After every frame written to the results (e.g. to write it as VTK too).
   std::function<void()> frame;
+  /// A restart: called once the boundary is set, to load the solver's (and so the boundary's) state
+  /// and the progress from a checkpoint; the test then resumes where that checkpoint was taken.
+  std::function<void(TriaxialRunProgress&)> restore;
 };
 
 /// What the run did, for the log and the results' parameters.
