@@ -246,6 +246,10 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   const auto other = write_scene(dir, "other.toml", replaced(kScene, "angular_velocity = [0, 0, 2000]", "angular_velocity = [0, 0, 1000]"));
   test::expect_clean_failure("fdemrun", dir, {other.string(), (dir / "o.h5").string(), "--restart", ckpt.string()}, 2,
                              "written for another scene");
+  // A --stop-step at or before the checkpoint's step is refused rather than run one step too far.
+  test::expect_clean_failure("fdemrun", dir,
+                             {good.string(), (dir / "s.h5").string(), "--restart", ckpt.string(), "--stop-step", "3"}, 2,
+                             "--stop-step 3 is not beyond step 3");
   // An existing output (results or VTK folder) is refused without --force.
   test::expect_clean_failure("fdemrun", dir, {good.string(), out}, 2, "out.h5");
   std::filesystem::create_directory(dir / "old_frames");

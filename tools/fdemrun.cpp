@@ -32,11 +32,18 @@ std::uint64_t steps_of(double interval, double dt) {
 
 std::string digest_of(const std::string& text) { return fmt::format("{:016x}", std::hash<std::string>{}(text)); }
 
-/// Runs the scene's triaxial test: progress per phase, a status line every few thousand steps of a
-/// consolidation (whose length is not known in advance), a warning when shearing was not quasi-static.
 /// A run that ended at --stop-step (its checkpoint written), to be continued with --restart.
 struct StoppedAtStep {};
 
+/// A --stop-step must lie beyond the step a restart begins at.
+void check_stop_step(std::uint64_t stop_step, const Solver& solver, const fs::path& restart) {
+  if (stop_step > 0 && stop_step <= solver.step_count())
+    throw UsageError("--stop-step " + std::to_string(stop_step) + " is not beyond step " +
+                     std::to_string(solver.step_count()) + " of " + restart.string() + "; give a later step");
+}
+
+/// Runs the scene's triaxial test: progress per phase, a status line every few thousand steps of a
+/// consolidation (whose length is not known in advance), a warning when shearing was not quasi-static.
 TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const TriaxialSpec& spec, double dt,
                                      std::uint64_t row_every, ResultsWriter& writer, TriaxialRunHooks hooks) {
   std::unique_ptr<cli::Progress> progress;
@@ -198,6 +205,7 @@ int main(int argc, char** argv) {
     io::AtomicOutput out(output, ctx.force());
     if (!restart.empty() && !scene.triaxial) {
       read_checkpoint(restart, solver, digest);
+      check_stop_step(stop_step, solver, restart);
       spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.step_count(), solver.time());
     } else if (restart.empty()) {
       for (std::size_t g = 0; g < scene.grains.size(); ++g)
@@ -229,6 +237,7 @@ int main(int argc, char** argv) {
       if (!restart.empty())
         hooks.restore = [&](TriaxialRunProgress& at) {
           read_checkpoint(restart, solver, digest, [&](const io::H5File& f) { at = load_progress(f); });
+          check_stop_step(stop_step, solver, restart);
           spdlog::info("restarted from {} at step {} (t = {:.6g} s)", restart.string(), solver.step_count(), solver.time());
         };
       // A triaxial test's length is known only as it settles: checkpoints every interval, at a

@@ -200,6 +200,15 @@ TEST(Triaxial, ACheckpointWithTheWallOrTheMembraneContinuesBitForBit) {
     restarted.load(io::H5File::open(dir / "checkpoint.h5"), "/state");
     EXPECT_EQ(measure(restarted, restored, platens).axial_stress, measure(run, boundary, platens).axial_stress);
     EXPECT_EQ(restored.wall_stress(), boundary.wall_stress());
+    // A frame written before the next step sees the same contacts and grain stresses.
+    const auto before = run.contacts(), after = restarted.contacts();
+    ASSERT_EQ(before.size(), after.size());
+    for (std::size_t k = 0; k < before.size(); ++k) {
+      EXPECT_EQ(before[k].b, after[k].b);
+      EXPECT_EQ(before[k].force, after[k].force);
+      EXPECT_EQ(before[k].point, after[k].point);
+    }
+    for (std::size_t g = 0; g < model.grains.size(); ++g) EXPECT_EQ(run.grain_stress(g), restarted.grain_stress(g)) << g;
     for (int k = 0; k < 200; ++k) {
       drive(run, boundary), run.step(dt);
       drive(restarted, restored), restarted.step(dt);

@@ -1108,6 +1108,24 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
   file.ensure_group(group);
   file.set_attr(group, "entries", static_cast<long long>(s.history.size()));
   file.set_attr(group, "ball_entries", static_cast<long long>(s.ball_history.size()));
+  file.set_attr(group, "record_entries", static_cast<long long>(s.records.size()));
+  if (!s.records.empty()) {  // the last step's contacts, for a frame written before the next step
+    std::vector<std::uint32_t> pair(2 * s.records.size());
+    std::vector<double> values;
+    values.reserve(10 * s.records.size());
+    for (std::size_t i = 0; i < s.records.size(); ++i) {
+      const ContactRecord& r = s.records[i];
+      pair[2 * i] = r.a;
+      pair[2 * i + 1] = r.b;
+      values.insert(values.end(), {r.point[0], r.point[1], r.point[2], r.normal[0], r.normal[1], r.normal[2], r.force[0],
+                                   r.force[1], r.force[2], r.overlap});
+    }
+    const hsize_t n = s.records.size();
+    io::DatasetOptions exact;
+    exact.compress = false;
+    file.write(group + "/record_pair", pair.data(), {n, 2});
+    file.write(group + "/record_values", values.data(), {n, 10}, exact);
+  }
   if (!s.history.empty()) {
     std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
     std::vector<double> spring(3 * s.history.size());
@@ -1184,9 +1202,24 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
         throw bad("is not sorted by ball and grain");
     }
   }
+  const auto record_entries = file.attr_int(group, "record_entries").value_or(0);
+  if (record_entries < 0) throw bad("has a negative 'record_entries' count");
+  std::vector<ContactRecord> records(static_cast<std::size_t>(record_entries));
+  if (!records.empty()) {
+    std::vector<hsize_t> pair_dims, value_dims;
+    const auto pair = file.read<std::uint32_t>(group + "/record_pair", &pair_dims);
+    const auto values = file.read<double>(group + "/record_values", &value_dims);
+    const hsize_t n = records.size();
+    if (pair_dims != std::vector<hsize_t>{n, 2} || value_dims != std::vector<hsize_t>{n, 10})
+      throw bad(fmt::format("does not hold {} contact records in record_pair (n x 2) and record_values (n x 10)", n));
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      const double* v = values.data() + 10 * i;
+      records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9]};
+    }
+  }
   s.history = std::move(history);
   s.ball_history = std::move(ball_history);
-  s.records.clear();
+  s.records = std::move(records);
   s.need_rebuild = true;
 }
 

@@ -376,8 +376,15 @@ void Solver::save(io::H5File& f, const std::string& group) const {
     platens.insert(platens.end(), {p.point[0], p.point[1], p.point[2], p.normal[0], p.normal[1], p.normal[2], p.velocity[0],
                                    p.velocity[1], p.velocity[2], p.friction});
   f.write(group + "/platens", platens.data(), {state_.platens.size(), 10}, exact);
-  // A servo reads the last step's platen forces before the next step.
+  // A servo reads the last step's platen forces before the next step, and a frame written then
+  // reads the rigid grains' loads (their Love-Weber stress).
   write_vectors(f, group + "/platen_force", platen_force_);
+  std::vector<double> loads;
+  for (const RigidLoad& l : rigid_loads_) {
+    loads.insert(loads.end(), {l.force[0], l.force[1], l.force[2]});
+    for (int r = 0; r < 3; ++r) loads.insert(loads.end(), {l.moment(r, 0), l.moment(r, 1), l.moment(r, 2)});
+  }
+  f.write(group + "/rigid_loads", loads.data(), {rigid_loads_.size(), 12}, exact);
   if (contact_) contact_->save(f, group + "/contact");
   if (boundary_) boundary_->save(f, group + "/boundary");
 }
@@ -417,10 +424,20 @@ void Solver::load(const io::H5File& f, const std::string& group) {
   const auto platen_force = f.exists(group + "/platen_force")
                                 ? read_vectors(f, group + "/platen_force", platen_force_.size())
                                 : std::vector<Eigen::Vector3d>(platen_force_.size(), Eigen::Vector3d::Zero());
+  std::vector<RigidLoad> rigid_loads(rigid_loads_.size());
+  if (f.exists(group + "/rigid_loads")) {
+    const auto loads = need("rigid_loads", 12 * rigid_loads_.size());
+    for (std::size_t g = 0; g < rigid_loads.size(); ++g) {
+      const double* d = loads.data() + 12 * g;
+      rigid_loads[g].force = Eigen::Vector3d(d[0], d[1], d[2]);
+      rigid_loads[g].moment = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d + 3);
+    }
+  }
   if (contact_) contact_->load(f, group + "/contact");
   if (boundary_) boundary_->load(f, group + "/boundary");
   state_ = std::move(s);
   platen_force_ = platen_force;
+  rigid_loads_ = std::move(rigid_loads);
   rigid_nodes_stale_ = true;
 }
 
