@@ -4,11 +4,13 @@
 // entering the grains, and eq. 27 = eq. 28; strain-controlled shearing reaches its log strain at
 // the set rate with sigma_1 > sigma_3; bad input is refused.
 #include "graintwin/fdem/triaxial.hpp"
+#include "graintwin/fdem/triaxial_run.hpp"
 
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
@@ -215,4 +217,36 @@ TEST(Triaxial, ACheckpointWithTheWallOrTheMembraneContinuesBitForBit) {
     }
     expect_same_state(run, boundary, restarted, restored);
   }
+}
+
+TEST(Triaxial, TheRunsProgressRoundTripsAndADamagedOneIsRefused) {
+  test::TempDir dir;
+  TriaxialRunProgress p;
+  p.procedure = {TriaxialProgress::Phase::membrane_released, 1234, 17, 900, 3.5e-3};
+  p.consolidation_steps = 1106;
+  p.membrane_steps = 7;
+  p.next_frame = 2;
+  p.max_kinetic_ratio = 0.031;
+  p.start = {3.1e5, 3e5, 3.5e-3, 1.2e-7, 1.19e-7};
+  {
+    io::H5File f = io::H5File::create(dir / "progress.h5");
+    save_progress(f, p);
+  }
+  const TriaxialRunProgress q = load_progress(io::H5File::open(dir / "progress.h5"));
+  EXPECT_EQ(q.procedure.phase, p.procedure.phase);
+  EXPECT_EQ(q.procedure.step, 1234u);
+  EXPECT_EQ(q.procedure.released, 900u);
+  EXPECT_EQ(q.procedure.h0, 3.5e-3);
+  EXPECT_EQ(q.next_frame, 2u);
+  EXPECT_EQ(q.start.volume_radial, 1.19e-7);
+  for (const double bad : {std::numeric_limits<double>::quiet_NaN(), -1.0, 2.5}) {
+    {
+      io::H5File f = io::H5File::create(dir / "damaged.h5");
+      save_progress(f, p);
+      f.set_attr("/triaxial", "procedure", std::vector<double>{2, bad, 17, 900, 3.5e-3});
+    }
+    EXPECT_THROW(load_progress(io::H5File::open(dir / "damaged.h5")), DataError) << bad;
+  }
+  io::H5File::create(dir / "plain.h5");  // a checkpoint of a run without a triaxial test
+  EXPECT_THROW(load_progress(io::H5File::open(dir / "plain.h5")), DataError);
 }

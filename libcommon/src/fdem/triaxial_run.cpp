@@ -39,8 +39,12 @@ TriaxialRunProgress load_progress(const io::H5File& file) {
     return v;
   };
   const auto q = values("procedure", 5), r = values("run", 4), s = values("start", 5);
-  if (!(q[0] >= 0 && q[0] <= static_cast<double>(TriaxialProgress::Phase::shearing)))
-    throw DataError(file.path().string() + ": " + kProgressGroup + " names an unknown phase of the triaxial test");
+  const auto count = [](double v) { return v >= 0 && v < 9007199254740992.0 && v == std::floor(v); };  // below 2^53
+  if (!(q[0] >= 0 && q[0] <= static_cast<double>(TriaxialProgress::Phase::shearing)) || !count(q[0]) || !count(q[1]) ||
+      !count(q[2]) || !count(q[3]) || !count(r[0]) || !count(r[1]) || !count(r[2]))
+    throw DataError(file.path().string() + ": " + kProgressGroup +
+                    " holds a phase or step count that is not a whole number in range; the checkpoint is damaged, "
+                    "restart from an earlier one");
   TriaxialRunProgress p;
   p.procedure = {static_cast<TriaxialProgress::Phase>(q[0]), static_cast<std::uint64_t>(q[1]),
                  static_cast<std::uint64_t>(q[2]), static_cast<std::uint64_t>(q[3]), q[4]};
