@@ -45,7 +45,7 @@ TEST(Ctsynth, MakesAConsistentSeries) {
   const auto r = run_tool("ctsynth", {(dir / "scene.toml").string(), (dir / "out").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(test::list_dir(dir / "out"),
-            (std::vector<std::string>{"scan_000.h5", "scan_001.h5", "scene.toml", "series.json", "truth_000.h5",
+            (std::vector<std::string>{".graintwin-output", "scan_000.h5", "scan_001.h5", "scene.toml", "series.json", "truth_000.h5",
                                       "truth_001.h5"}));
   const auto series = nlohmann::json::parse(std::ifstream(dir / "out" / "series.json"));
   const std::size_t n = series["grains"];

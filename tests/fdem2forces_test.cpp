@@ -207,4 +207,35 @@ TEST(Fdem2forces, BadInputsFailCleanly) {
 
   // An existing output without --force.
   test::expect_clean_failure("fdem2forces", dir, {results.string(), (dir / "made.h5").string()}, 2, "made.h5");
+
+  // Its own input, by another spelling, even with --force: the input stays as it was.
+  const auto size_before = std::filesystem::file_size(results);
+  test::expect_clean_failure("fdem2forces", dir,
+                             {results.string(), (dir / "." / results.filename()).string(), "--force"}, 2,
+                             "is an input of this run");
+  EXPECT_EQ(std::filesystem::file_size(results), size_before);
+}
+
+TEST(Fdem2forces, ChainsNeverReplaceAFolderItDidNotWrite) {
+  // `--chains . --force` once emptied the current folder: a folder no tool wrote is refused, and
+  // every file in it stays.
+  test::TempDir dir;
+  const auto results = known_results(dir);
+  std::filesystem::create_directory(dir / "mine");
+  std::ofstream(dir / "mine" / "notes.txt") << "mine";
+  test::expect_clean_failure("fdem2forces", dir,
+                             {results.string(), (dir / "forces.h5").string(), "--chains", (dir / "mine").string(), "--force"},
+                             2, "no GrainTwin tool wrote");
+  EXPECT_TRUE(std::filesystem::exists(dir / "mine" / "notes.txt"));
+  // The folder holding the input (there: the current folder) is refused for that reason first.
+  test::expect_clean_failure("fdem2forces", dir,
+                             {results.string(), (dir / "forces.h5").string(), "--chains", dir.path().string(), "--force"},
+                             2, "holding the input");
+  // Its own chains folder is replaced with --force.
+  const std::vector<std::string> args{results.string(), (dir / "forces.h5").string(), "--chains", (dir / "chains").string()};
+  ASSERT_EQ(run_tool("fdem2forces", args).exit_code, 0);
+  std::vector<std::string> again = args;
+  again.push_back("--force");
+  EXPECT_EQ(run_tool("fdem2forces", again).exit_code, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "chains" / "chains.pvd"));
 }

@@ -11,6 +11,7 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -220,7 +221,7 @@ int main(int argc, char** argv) {
       current = step;
       started = now;
       progress->advance(1);
-      cli::throw_if_interrupted();
+      throw_if_interrupted();
     };
     SegmentResult r;
     try {
@@ -263,7 +264,6 @@ int main(int argc, char** argv) {
     LabelsFile content{std::move(r.labels), std::move(r.grains), {r.region, r.void_ratio}, std::move(parameters)};
     write_labels_file(out.temp_path(), content, ctx.history());
     if (preview) write_preview(preview->temp_path(), in, content.labels, r.threshold);
-    out.commit();
-    if (preview) preview->commit();
+    io::commit_outputs({&out, preview ? &*preview : nullptr});
   });
 }

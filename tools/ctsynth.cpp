@@ -9,6 +9,7 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -218,7 +219,7 @@ int main(int argc, char** argv) {
     gp.voxel_size = voxel;
     gp.seed = o.seed;
     const GrainSet grains = make_grains(gp, diameters, ctx.progress_callback("grain shapes"));
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
     const auto tables = grains.table_pointers();
     double grain_volume = 0.0;
     for (const auto& t : grains.tables) grain_volume += t.volume();
@@ -247,7 +248,7 @@ int main(int argc, char** argv) {
                  "pairs, {} stages, {} sweeps, {:.1f} s",
                  report.solid_fraction, shells[0], shells[1], shells[2], shells[3], report.max_overlap * 1e6,
                  report.tolerance * 1e6, report.touching_pairs, stages.size(), report.sweeps, report.seconds);
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
 
     // --- loading states ---
     LoadingParams lp;
@@ -314,7 +315,7 @@ int main(int argc, char** argv) {
         placed[i] = {tables[i], poses[i].position, poses[i].orientation, static_cast<std::uint32_t>(i + 1)};
       GrainImages images = render_grains(placed, shape, vs, origin, RenderParams{o.supersample},
                                          ctx.progress_callback("render scan " + std::to_string(k)));
-      cli::throw_if_interrupted();
+      throw_if_interrupted();
       Volume<float> membrane;
       ScannerParams sp;
       sp.grey_void = o.grey_void;
@@ -396,7 +397,7 @@ int main(int argc, char** argv) {
                                  {"touching_contacts", touching},
                                  {"near_contacts", truth.contacts.size() - touching},
                                  {"max_overlap_m", relax_report.max_overlap}});
-      cli::throw_if_interrupted();
+      throw_if_interrupted();
     }
     series["packing"] = {{"solid_fraction", report.solid_fraction},
                          {"shell_edges_m", std::vector<double>(shell_edges.begin(), shell_edges.end() - 1)},
@@ -411,6 +412,6 @@ int main(int argc, char** argv) {
     std::ofstream(out.temp_path() / "series.json") << series.dump(2) << "\n";
     std::ofstream(out.temp_path() / "scene.toml") << "# effective scene of this series (ctsynth " << graintwin::version
                                                   << ")\n" << app.config_to_str(true, false);
-    out.commit();
+    io::commit_outputs({&out});
   });
 }

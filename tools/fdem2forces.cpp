@@ -207,7 +207,6 @@ int main(int argc, char** argv) {
     content.parameters_json = p.dump();
     write_forces_file(out.temp_path(), content, ctx.history());
     if (chains_out) write_pvd(chains_out->temp_path() / "chains.pvd", chain_files, chain_times);
-    out.commit();
-    if (chains_out) chains_out->commit();
+    io::commit_outputs({&out, chains_out ? &*chains_out : nullptr});
   });
 }

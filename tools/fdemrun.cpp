@@ -11,6 +11,7 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/fdem/ellipsoid_grain.hpp"
 #include "graintwin/fdem/frames_vtk.hpp"
 #include "graintwin/fdem/results_file.hpp"
@@ -66,7 +67,7 @@ TriaxialRunSummary run_triaxial_test(cli::RunContext& ctx, Solver& solver, const
                    phase, taken, 1e-3 * m.axial_stress, 1e-3 * m.lateral_stress,
                    r.energies.kinetic / (r.energies.strain + r.energies.contact_elastic),
                    solver.contact_model()->rebuild_count());
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
   };
   const TriaxialRunSummary s = run_triaxial(solver, spec, dt, row_every, writer, hooks);
   if (progress) progress->done();
@@ -159,9 +160,13 @@ int main(int argc, char** argv) {
       throw UsageError("--checkpoint " + checkpoint.string() + " must end in .h5");
     if (!checkpoint.empty() && !restart.empty() && fs::weakly_canonical(checkpoint) == fs::weakly_canonical(restart))
       throw UsageError("--checkpoint and --restart name the same file; write the new checkpoint elsewhere");
+    for (const fs::path& in : {model_path, restart})
+      if (!in.empty()) io::declare_input(in);
+    if (!checkpoint.empty()) io::check_output_allowed(checkpoint, ctx.force());  // replaced as the run goes
     std::optional<io::AtomicOutput> vtk_out;
     if (!vtk_folder.empty()) vtk_out.emplace(vtk_folder, ctx.force());
     const Scene scene = read_scene(scene_path, model_path);
+    if (scene.model) io::declare_input(scene.model->path);
     std::stringstream text;
     text << std::ifstream(scene_path).rdbuf();
     std::stringstream model_bytes;  // a restart needs the same model file too
@@ -223,7 +228,7 @@ int main(int argc, char** argv) {
       write_checkpoint(ckpt.temp_path(), solver, digest, [&](io::H5File& f) {
         if (triaxial) save_progress(f, *triaxial);
       });
-      ckpt.commit();
+      ckpt.replace_now();
     };
     const auto with_checkpoint_context = [&](Error& e) {
       e.add_context(checkpoint.empty() ? std::string("no checkpoint was written (use --checkpoint)")
@@ -267,8 +272,8 @@ int main(int argc, char** argv) {
       p["steps"] = solver.step_count();
       writer.set_parameters(p.dump());
       writer.finish(ctx.history());
-      if (frames) frames->finish(), vtk_out->commit();
-      out.commit();
+      if (frames) frames->finish();
+      io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
       log_end(writer, solver);
       return;
     }
@@ -299,13 +304,13 @@ int main(int argc, char** argv) {
       if (n % row_every == 0) writer.add_row(solver, report, stage, dt);
       if (solver.step_count() % checkpoint_every == 0 || solver.step_count() == last) save_checkpoint(nullptr);
       progress->advance();
-      cli::throw_if_interrupted();
+      throw_if_interrupted();
     }
     progress->done();
     add_frame();
     writer.finish(ctx.history());
-    if (frames) frames->finish(), vtk_out->commit();
-    out.commit();
+    if (frames) frames->finish();
+    io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
     log_end(writer, solver);
   });
 }

@@ -16,6 +16,7 @@
 #include "graintwin/contacts/network.hpp"
 #include "graintwin/contacts/refine.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -182,7 +183,7 @@ int main(int argc, char** argv) {
     segment::LabelsFile lab = segment::read_labels_file(labels_path);
     if (lab.grains.empty())
       throw DataError(labels_path.string() + " holds no grains; check its segmentation (ct2labels threshold and markers)");
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
     AnyVolume grey;
     if (refine) {
       grey = io::read_volume_file(volume_path);
@@ -200,7 +201,7 @@ int main(int argc, char** argv) {
     } catch (Error& e) {
       throw e.add_context("in " + labels_path.string() + "; its grain table does not match its label image");
     }
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
     const std::size_t m = found.size();
     if (m == 0) spdlog::warn("no contacts: the grains of {} do not touch", labels_path.string());
 
@@ -212,7 +213,7 @@ int main(int argc, char** argv) {
       std::visit([&](const auto& g) {
         fits = contacts::refine_contacts(g, lab.labels, found, lab.grains, rp, ctx.progress_callback("refine normals"));
       }, grey);
-      cli::throw_if_interrupted();
+      throw_if_interrupted();
       std::map<std::string, std::size_t> status;
       for (const auto& f : fits) ++status[contacts::status_name(f.status)];
       std::string summary;
@@ -325,8 +326,7 @@ int main(int argc, char** argv) {
                     {"accepted", std::vector<double>(accepted.begin(), accepted.end())}};
       io::write_vtp(vtk_out->temp_path(), contacts::network_polydata(net));
     }
-    cli::throw_if_interrupted();
-    out.commit();
-    if (vtk_out) vtk_out->commit();
+    throw_if_interrupted();
+    io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
   });
 }

@@ -220,7 +220,6 @@ int main(int argc, char** argv) {
                  count_flag(g, shape_flag::tolerance_not_met));
     write_shapes_file(out.temp_path(), content, ctx.history());
     if (surfaces) write_surfaces(surfaces->temp_path(), o.surfaces.extension() == ".stl", g, content.degree, o.surface_subdivisions);
-    out.commit();
-    if (surfaces) surfaces->commit();
+    io::commit_outputs({&out, surfaces ? &*surfaces : nullptr});
   });
 }

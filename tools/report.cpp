@@ -150,7 +150,6 @@ int main(int argc, char** argv) {
       for (const Side* side : {&p.experiment, &p.simulation}) (side->chart ? shown : absent) += 1;
     spdlog::info("{} panels: {} charts drawn, {} sides without data (the page says why); {} benchmark charts", page.panels.size(), shown,
                  absent, bench.size());
-    html_out.commit();
-    img_out.commit();
+    io::commit_outputs({&html_out, &img_out});
   });
 }

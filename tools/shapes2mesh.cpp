@@ -11,6 +11,7 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -258,7 +259,7 @@ int main(int argc, char** argv) {
                                     "cylinders a few d50 across)",
                                     po.solid_fraction, e.message()));
       }
-      cli::throw_if_interrupted();
+      throw_if_interrupted();
       for (std::size_t i = 0; i < sample->source.size(); ++i) {
         members.push_back(*grains[sample->source[i]]);
         members.back().centroid.setZero();
@@ -282,7 +283,7 @@ int main(int argc, char** argv) {
     const Volume<std::uint32_t>* label_volume = labels && !sample ? &labels->labels : nullptr;
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::size_t i = 0; i < count; ++i) {
-      if (cli::interrupted()) continue;
+      if (interrupted()) continue;
       const auto box = label_volume ? bbox.at(grain(i).label) : std::array<std::size_t, 6>{};
       try {
         results[i] = mesh::mesh_grain(grain(i), basis, label_volume, box, mo);
@@ -293,7 +294,7 @@ int main(int argc, char** argv) {
       progress->advance(1);
     }
     progress.reset();
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
     for (std::size_t i = 0; i < count; ++i)
       if (!failures[i].empty())
         throw DataError("grain " + std::to_string(source_label(i)) + " could not be meshed: " + failures[i]);
@@ -363,8 +364,6 @@ int main(int argc, char** argv) {
     fdem::write_model_file(out.temp_path(), model, ctx.history(), [&](io::H5File& f) { report.write(f, parameters.dump()); });
     if (vtu_out) io::write_vtu(vtu_out->temp_path(), fdem::model_grid(model));
     if (msh_out) fdem::write_model_msh(msh_out->temp_path(), model);
-    out.commit();
-    if (vtu_out) vtu_out->commit();
-    if (msh_out) msh_out->commit();
+    io::commit_outputs({&out, vtu_out ? &*vtu_out : nullptr, msh_out ? &*msh_out : nullptr});
   });
 }

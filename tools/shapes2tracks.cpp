@@ -165,8 +165,7 @@ int main(int argc, char** argv) {
     content.parameters_json = p.dump();
     write_tracks_file(out.temp_path(), content, ctx.history());
     if (vtk_out) write_tracks_vtp(vtk_out->temp_path(), content);
-    out.commit();
-    if (vtk_out) vtk_out->commit();
+    io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
     spdlog::info("{} tracks over {} scans", tr.size(), tr.scans);
   });
 }

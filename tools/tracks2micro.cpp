@@ -256,7 +256,6 @@ int main(int argc, char** argv) {
     content.parameters_json = p.dump();
     write_micro_file(out.temp_path(), content, ctx.history());
     if (vtk_out) write_micro_vtp(vtk_out->temp_path(), content);
-    out.commit();
-    if (vtk_out) vtk_out->commit();
+    io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
   });
 }

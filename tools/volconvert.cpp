@@ -7,6 +7,7 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -134,7 +135,7 @@ int main(int argc, char** argv) {
       case InputFormat::metaimage: vol = io::read_metaimage(input); break;
       case InputFormat::raw: vol = io::read_raw(input, raw); break;
     }
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
 
     const Shape3 s = shape_of_any(vol);
     if (s[0] * s[1] * s[2] == 0) throw DataError("input " + input.string() + " holds an empty volume");
@@ -162,7 +163,7 @@ int main(int argc, char** argv) {
 
     if (out_tiff) io::write_tiff(out.temp_path(), vol);
     else io::write_volume_file(out.temp_path(), vol, ctx.history());
-    cli::throw_if_interrupted();
-    out.commit();
+    throw_if_interrupted();
+    io::commit_outputs({&out});
   });
 }

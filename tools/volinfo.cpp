@@ -8,6 +8,7 @@
 
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
@@ -44,7 +45,7 @@ ValueRange slab_range(const io::H5File& f, const std::string& path, const io::Im
     finite += n;
     total.non_finite += r.non_finite;
     progress->advance(nz);
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
   }
   total.mean = finite ? sum / static_cast<double>(finite) : 0.0;
   return total;

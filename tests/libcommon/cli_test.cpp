@@ -5,6 +5,7 @@
 
 #include "graintwin/cli/progress.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 
 using namespace graintwin;
 
@@ -30,12 +31,12 @@ TEST(Progress, SilentWhenDisabled) {
 }
 
 TEST(Interrupt, SignalBecomesInterruptedErrorAtTheNextSafePoint) {
-  cli::install_interrupt_handlers();
-  EXPECT_NO_THROW(cli::throw_if_interrupted());
+  install_interrupt_handlers();
+  EXPECT_NO_THROW(throw_if_interrupted());
   std::raise(SIGINT);
-  EXPECT_TRUE(cli::interrupted());
+  EXPECT_TRUE(interrupted());
   try {
-    cli::throw_if_interrupted();
+    throw_if_interrupted();
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.exit_code(), ExitCode::interrupted);

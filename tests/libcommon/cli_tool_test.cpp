@@ -2,9 +2,12 @@
 // leaves the process-wide interrupted flag set).
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <fstream>
+#include <functional>
 
 #include "graintwin/cli/tool.hpp"
+#include "graintwin/io/atomic_output.hpp"
 #include "support/run_tool.hpp"
 
 using namespace graintwin;
@@ -46,4 +49,107 @@ TEST(Tool, OptionalInputBeforeTheOutputTakesAnArgumentOnlyWhenOneIsLeft) {
   EXPECT_EQ(out, o);
   EXPECT_EQ(run_optional_middle({l}, volume, out), 2);                              // no output
   EXPECT_EQ(run_optional_middle({l, (dir / "none.h5").string(), o}, volume, out), 2);  // the volume must exist
+}
+
+namespace {
+
+/// Runs a tool named "t" with an output and the options --grain-shape and --downsample on `args`;
+/// `body` runs as the tool's body. Returns the exit code; `err` gets what it printed on stderr.
+int run_small_tool(const std::vector<std::string>& args, std::string& err,
+                   const std::function<void(cli::RunContext&, const std::filesystem::path&)>& body = {}) {
+  cli::Tool tool("t", "test");
+  std::filesystem::path o;
+  std::string shape;
+  int downsample = 1;
+  tool.add_output("out", o, "output");
+  tool.cli().add_option("--grain-shape", shape, "shape");
+  tool.cli().add_option("--downsample", downsample, "factor")->check(CLI::Range(1, 8));
+  std::vector<std::string> all{"t"};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  testing::internal::CaptureStderr();
+  const int rc = tool.run(static_cast<int>(argv.size()), argv.data(), [&](cli::RunContext& ctx) {
+    if (body) body(ctx, o);
+  });
+  err = testing::internal::GetCapturedStderr();
+  return rc;
+}
+
+/// A body that writes its output and commits it, raising `signal` before or after the commit point.
+auto write_and_signal(bool after_commit) {
+  return [after_commit](cli::RunContext& ctx, const std::filesystem::path& o) {
+    io::AtomicOutput out(o, ctx.force());
+    std::ofstream(out.temp_path()) << "whole";
+    if (!after_commit) std::raise(SIGINT);
+    io::commit_outputs({&out});
+    if (after_commit) std::raise(SIGTERM);
+  };
+}
+
+}  // namespace
+
+TEST(Tool, OptionErrorsNameTheToolAndTheHelp) {
+  test::TempDir dir;
+  std::string err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--downsample", "9"}, err), 2);
+  EXPECT_EQ(err.rfind("t: --downsample", 0), 0u) << err;
+  EXPECT_NE(err.find("t: run 't --help' for the options"), std::string::npos) << err;
+}
+
+TEST(Tool, AConfigFileWithBrokenSyntaxIsNamedWithItsLine) {
+  test::TempDir dir;
+  std::ofstream(dir / "bad.toml") << "grain-shape = \"sand\"\ndownsample = \n";
+  std::string err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--config", (dir / "bad.toml").string()}, err), 2);
+  EXPECT_NE(err.find("bad.toml line 2"), std::string::npos) << err;
+  EXPECT_NE(err.find("fix the TOML syntax"), std::string::npos) << err;
+  EXPECT_EQ(err.find("not in range"), std::string::npos) << "CLI11's misleading message leaked: " << err;
+}
+
+TEST(Tool, AnUnknownConfigKeyGetsTheClosestOptionName) {
+  test::TempDir dir;
+  std::ofstream(dir / "typo.toml") << "grain-shpae = \"sand\"\n";
+  std::string err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--config", (dir / "typo.toml").string()}, err), 2);
+  EXPECT_NE(err.find("typo.toml: key 'grain-shpae' is not an option of t; did you mean 'grain-shape'?"),
+            std::string::npos)
+      << err;
+  std::ofstream(dir / "far.toml") << "colour = \"blue\"\n";
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--config", (dir / "far.toml").string()}, err), 2);
+  EXPECT_NE(err.find("see t --help for the option names"), std::string::npos) << err;
+}
+
+TEST(Tool, AThreadCountBeyondTheCapIsRefused) {
+  test::TempDir dir;
+  std::string err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--threads", "100000"}, err), 2);
+  EXPECT_NE(err.find("--threads"), std::string::npos) << err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--threads", std::to_string(cli::kMaxThreads), "-q"}, err), 0);
+}
+
+TEST(Tool, ASignalBeforeTheCommitPointLeavesNoOutputAndSaysSo) {
+  test::TempDir dir;
+  std::string err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string()}, err, write_and_signal(false)), 130);
+  EXPECT_NE(err.find("no output was written"), std::string::npos) << err;
+  EXPECT_TRUE(test::list_dir(dir.path()).empty());
+}
+
+TEST(Tool, ASignalAfterTheCommitPointIsIgnoredAndTheRunSucceeds) {
+  test::TempDir dir;
+  std::string err;
+  EXPECT_EQ(run_small_tool({(dir / "o").string()}, err, write_and_signal(true)), 0) << err;
+  EXPECT_EQ(test::list_dir(dir.path()), (std::vector<std::string>{"o"}));
+  // The next run listens to signals again.
+  EXPECT_EQ(run_small_tool({(dir / "p").string()}, err, write_and_signal(false)), 130);
+}
+
+TEST(Tool, AnOutputThatIsAnInputIsRefusedBeforeTheBody) {
+  test::TempDir dir;
+  const std::string l = (dir / "l.h5").string();
+  std::ofstream(l) << "input";
+  std::string volume, out;
+  EXPECT_EQ(run_optional_middle({l, l, "--force"}, volume, out), 2);
+  EXPECT_EQ(out, "") << "the body ran";
 }

@@ -1,10 +1,9 @@
-// HDF5 layer: datasets, attributes, compression, strings, provenance, kind checks, atomic output.
+// HDF5 layer: datasets, attributes, compression, strings, provenance, kind checks.
 #include <gtest/gtest.h>
 
 #include <fstream>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -117,40 +116,3 @@ TEST(Provenance, MergeSkipsLinesAlreadyPresent) {
   EXPECT_EQ(h, (std::vector<std::string>{"a", "b", "c"}));
 }
 
-TEST(AtomicOutput, RenamesOnCommitOnly) {
-  test::TempDir dir;
-  const auto final_path = dir / "out.h5";
-  {
-    AtomicOutput out(final_path, false);
-    std::ofstream(out.temp_path()) << "partial";
-    EXPECT_FALSE(std::filesystem::exists(final_path));
-  }  // not committed: the temporary disappears
-  EXPECT_TRUE(test::list_dir(dir.path()).empty());
-  {
-    AtomicOutput out(final_path, false);
-    std::ofstream(out.temp_path()) << "complete";
-    out.commit();
-  }
-  EXPECT_EQ(test::list_dir(dir.path()), (std::vector<std::string>{"out.h5"}));
-  EXPECT_THROW(AtomicOutput(final_path, false), UsageError);
-  EXPECT_NO_THROW(AtomicOutput(final_path, true));
-}
-
-TEST(AtomicOutput, WorksForDirectories) {
-  test::TempDir dir;
-  const auto final_path = dir / "series";
-  std::filesystem::create_directory(final_path);
-  std::ofstream(final_path / "old.txt") << "old";
-  {
-    AtomicOutput out(final_path, true);
-    std::filesystem::create_directory(out.temp_path());
-    std::ofstream(out.temp_path() / "new.txt") << "new";
-    out.commit();
-  }
-  EXPECT_EQ(test::list_dir(final_path), (std::vector<std::string>{"new.txt"}));
-}
-
-TEST(AtomicOutput, RefusesAMissingFolder) {
-  test::TempDir dir;
-  EXPECT_THROW(AtomicOutput(dir / "no" / "such" / "out.h5", false), UsageError);
-}

@@ -1,32 +1,12 @@
 #include "graintwin/cli/progress.hpp"
+#include "graintwin/core/interrupt.hpp"
 
 #include <unistd.h>
 
-#include <csignal>
 #include <cstdio>
 
-#include "graintwin/core/error.hpp"
 
 namespace graintwin::cli {
-
-namespace {
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_signal(int sig) {
-  g_interrupted = 1;
-  std::signal(sig, SIG_DFL);  // a second signal ends the process at once
-}
-}  // namespace
-
-bool interrupted() { return g_interrupted != 0; }
-
-void throw_if_interrupted() {
-  if (interrupted()) throw InterruptedError();
-}
-
-void install_interrupt_handlers() {
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-}
 
 Progress::Progress(std::string label, std::size_t total, bool enabled)
     : label_(std::move(label)), total_(total), enabled_(enabled), tty_(::isatty(STDERR_FILENO) != 0) {}

@@ -1,6 +1,7 @@
 #include "graintwin/cli/tool.hpp"
 
 #include <omp.h>
+#include <toml++/toml.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <iostream>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -36,6 +38,7 @@ std::function<void(double)> RunContext::progress_callback(const std::string& lab
 }
 
 void RunContext::add_input_history(const io::H5File& input) {
+  io::declare_input(input.path());  // an input read by name from an option is no output either
   io::merge_history(inputs_history_, io::read_history(input));
 }
 
@@ -53,7 +56,7 @@ Tool::Tool(std::string name, std::string description) : name_(std::move(name)), 
   app_.add_flag("-v,--verbose", verbosity_, "More messages (repeat for debug output)");
   app_.add_flag("-f,--force", force_, "Overwrite existing outputs");
   app_.add_option("-j,--threads", threads_, "Worker threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   app_.set_config("--config", "", "Read options from a TOML file (keys = long option names)");
   app_.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key must not pass silently
@@ -62,7 +65,7 @@ Tool::Tool(std::string name, std::string description) : name_(std::move(name)), 
 
 CLI::Option* Tool::add_input(const std::string& name, fs::path& target, const std::string& description,
                              bool must_exist) {
-  if (must_exist) inputs_.push_back(&target);
+  (must_exist ? inputs_ : unchecked_inputs_).push_back(&target);
   return app_.add_option(name, target, description)->required();
 }
 
@@ -93,6 +96,40 @@ void Tool::set_examples(const std::vector<std::string>& examples) {
   app_.footer(footer);
 }
 
+std::string Tool::config_file_problem(int argc, char** argv) const {
+  fs::path file;
+  for (int i = 1; i + 1 < argc && file.empty(); ++i)
+    if (std::string(argv[i]) == "--config") file = argv[i + 1];
+  for (int i = 1; i < argc && file.empty(); ++i)
+    if (std::string(argv[i]).starts_with("--config=")) file = std::string(argv[i]).substr(9);
+  for (int i = 1; i < argc && file.empty() && config_positional_; ++i) {
+    std::error_code ec;
+    if (argv[i][0] != '-' && fs::is_regular_file(argv[i], ec)) file = argv[i];
+  }
+  if (file.empty()) return {};
+  toml::table root;
+  try {
+    root = toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    return file.string() + " line " + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
+           "; fix the TOML syntax";
+  }
+  std::vector<std::string> names;
+  for (const CLI::Option* o : app_.get_options())
+    if (o->get_lnames().empty())
+      names.push_back(o->get_single_name());  // a positional, by its name
+    else
+      for (const std::string& n : o->get_lnames()) names.push_back(n);
+  for (auto&& [k, v] : root) {
+    const std::string key(k.str());
+    if (std::find(names.begin(), names.end(), key) != names.end()) continue;
+    const std::string hint = closest_name(key, names);
+    return file.string() + ": key '" + key + "' is not an option of " + name_ +
+           (hint.empty() ? "; see " + name_ + " --help for the option names" : "; did you mean '" + hint + "'?");
+  }
+  return {};
+}
+
 namespace {
 void print_error(spdlog::logger& log, const Error& e) {
   log.error("{}", e.message());
@@ -110,8 +147,12 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
   try {
     app_.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app_.exit(e);  // prints help/version to stdout, errors to stderr
-    return rc == 0 ? 0 : static_cast<int>(ExitCode::usage_error);
+    if (e.get_exit_code() == 0) return app_.exit(e);  // --help and --version print to stdout
+    // A broken configuration file explains more than the option error it caused.
+    const std::string config_error = config_file_problem(argc, argv);
+    std::cerr << name_ << ": " << (config_error.empty() ? std::string(e.what()) : config_error) << "\n"
+              << name_ << ": run '" << name_ << " --help' for the options\n";
+    return static_cast<int>(ExitCode::usage_error);
   }
   if (config_positional_) *config_target_ = config_positional_->as<std::string>();
   if (optional_input_) {
@@ -145,15 +186,17 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
   install_interrupt_handlers();
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    // Validate before heavy work (PDAL style): inputs exist, outputs may be written.
+    // Validate before heavy work (PDAL style): inputs exist, outputs may be written and are no input.
     for (const fs::path* in : inputs_) {
       std::error_code ec;
       if (!fs::exists(*in, ec)) throw UsageError("input " + in->string() + " does not exist; check the path");
+      io::declare_input(*in);
     }
+    for (const fs::path* in : unchecked_inputs_) io::declare_input(*in);
     for (const fs::path* out : outputs_) io::check_output_allowed(*out, force_);
     log->info("{}", ctx.line_);
     body(ctx);
-    throw_if_interrupted();
+    if (!commit_point_passed()) throw_if_interrupted();  // after it, a signal is ignored
   } catch (const InterruptedError& e) {
     log->error("interrupted; no output was written");
     return static_cast<int>(e.exit_code());
@@ -164,7 +207,11 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
     log->error("{}", e.what());
     return static_cast<int>(ExitCode::usage_error);
   } catch (const std::bad_alloc&) {
-    log->error("out of memory; process a smaller crop (volconvert --crop) or a downsampled volume");
+    log->error("out of memory; give a smaller input or lower the option that sets the size of the work");
+    return static_cast<int>(ExitCode::data_error);
+  } catch (const std::length_error& e) {
+    log->error("a size too large to hold in memory came from the input or options ({}); check the sizes given",
+               e.what());
     return static_cast<int>(ExitCode::data_error);
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -16,8 +16,8 @@
 
 #include <fmt/format.h>
 
-#include "graintwin/cli/progress.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "gmsh_request.hpp"
 
 namespace graintwin::mesh {
@@ -305,7 +305,7 @@ TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report) 
     for (pollfd p{fd, POLLIN, 0};;) {
       const int ready = ::poll(&p, 1, 100);
       if (ready > 0 || (ready < 0 && errno != EINTR)) return;  // recv reports errors
-      if (cli::interrupted()) {
+      if (interrupted()) {
         std::lock_guard lock(mutex_);
         stop(slot, true);
         throw InterruptedError();

@@ -11,8 +11,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "graintwin/cli/progress.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 
 extern char** environ;
 
@@ -208,7 +208,7 @@ void run_chart_script(const fs::path& python, const fs::path& script, const fs::
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  cli::throw_if_interrupted();
+  throw_if_interrupted();
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::string text = read_binary_file(log), tail;
     std::istringstream lines(text);

@@ -34,11 +34,4 @@ class Progress {
   bool finished_ = false;
 };
 
-/// True once SIGINT or SIGTERM arrived (handlers installed by Tool::run).
-bool interrupted();
-/// Throws InterruptedError if interrupted(); call it at safe points outside parallel regions.
-void throw_if_interrupted();
-/// Installs the SIGINT/SIGTERM handlers (a second signal kills the process the usual way).
-void install_interrupt_handlers();
-
 }  // namespace graintwin::cli

@@ -16,6 +16,10 @@
 
 namespace graintwin::cli {
 
+/// The most worker threads -j/--threads takes: far beyond any core count this toolkit is used on,
+/// low enough that per-thread buffers cannot exhaust memory.
+inline constexpr int kMaxThreads = 1024;
+
 /// What a tool's body sees: the standard options' values, progress, and provenance.
 class RunContext {
  public:
@@ -30,7 +34,8 @@ class RunContext {
   /// progress that way; the display ends when the last copy of the callback is destroyed.
   std::function<void(double)> progress_callback(const std::string& label) const;
 
-  /// Merges an input file's /provenance/history into this run's history.
+  /// Merges an input file's /provenance/history into this run's history, and declares the file an
+  /// input (io::declare_input), so that no output of the run can replace it.
   void add_input_history(const io::H5File& input);
   /// Input histories followed by this run's own line.
   std::vector<std::string> history() const;
@@ -76,6 +81,10 @@ class Tool {
   int run(int argc, char** argv, const std::function<void(RunContext&)>& body);
 
  private:
+  /// What is wrong with the run's configuration file (TOML syntax, a key that names no option,
+  /// with the closest option name), as one sentence naming the file; empty when nothing is.
+  std::string config_file_problem(int argc, char** argv) const;
+
   std::string name_;
   CLI::App app_;
   int verbosity_ = 0;
@@ -83,6 +92,7 @@ class Tool {
   bool force_ = false;
   int threads_ = 0;
   std::vector<std::filesystem::path*> inputs_;
+  std::vector<std::filesystem::path*> unchecked_inputs_;  // add_input(..., must_exist = false)
   std::vector<std::filesystem::path*> outputs_;
   std::vector<std::string> output_names_;
   std::filesystem::path* optional_input_ = nullptr;

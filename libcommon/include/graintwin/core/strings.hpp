@@ -14,6 +14,9 @@ bool natural_less(const std::string& a, const std::string& b);
 /// Parses a length with an optional unit suffix: "27.5um", "0.0607mm", "6e-5" (metres when bare).
 /// Throws UsageError naming `what` when it is not a positive finite length.
 double parse_length_m(const std::string& text, const std::string& what);
+/// The candidate closest to `word` by edit distance, when close enough to be a likely misspelling
+/// (at most a third of its letters, and at least 2, differ); empty otherwise.
+std::string closest_name(const std::string& word, const std::vector<std::string>& candidates);
 /// Shell-style quoting of one argument for command lines recorded in provenance.
 std::string shell_quote(const std::string& arg);
 /// Current UTC time as ISO-8601, e.g. 2026-11-22T10:04:05Z.
