@@ -67,30 +67,33 @@ KIND_TEXT = {
 
 RULES = """\
 A case is **handled** when all of these hold:
-- no crash: the tool was not ended by a signal (other than a SIGKILL the harness sent) and printed no
-  sanitizer report;
-- no hang: it finished within the per-case timeout ({timeout:g} s, or three times the tool's valid run
-  when that is longer) under an address-space cap of {memory:g} GB (RLIMIT_AS), so absurd memory or
-  time must be refused up front;
+- no crash: the tool was not ended by a signal (other than a SIGKILL the harness sent) and printed
+  no sanitizer report;
+- no hang: it finished within the per-case timeout ({timeout:g} s, or three times the tool's valid
+  run when that is longer) under an address-space cap of {memory:g} GB (RLIMIT_AS), so absurd memory
+  or time must be refused up front;
 - the right exit code: 1 or 2 for bad input (2 where the contract says usage error: an existing
-  output without --force, the loser of a race), 0 only where the input is legitimately acceptable
-  (such cases accept either a clean refusal or a complete run), 130 or a complete run after
-  SIGINT/SIGTERM;
+  output without --force, an unknown option, the loser of a race); 0 only where the input is
+  legitimately acceptable (such cases accept either a clean refusal or a complete run);
 - a message: on failure, stderr's first error line starts with the tool's name (`tool: ...`), the
-  message names the file or the option at fault, and prints no number longer than 20 digits;
+  message names the file or the option at fault, and it prints no number longer than 20 digits;
 - no debris: no new or changed file in the case's folder besides the committed outputs (no
   temporaries, no half-written output), nothing left in TMPDIR, no child process still running
-  after the tool has exited (after a SIGKILL of the tool: 1 s later);
-- inputs unchanged: the checksum of every input file and every user file is the same before and after;
-- signals: afterwards either no output exists and the exit code is 130, or every output exists and
-  the exit code is 0; after a SIGKILL the next run of the same command succeeds and leaves no
-  stale temporary of the killed run;
-- races: of two runs to the same output without --force exactly one exits 0 and the other 2, and the
-  outputs are one run's whole set of files.
+  once the tool has exited (after a SIGKILL of the tool: 1 s later);
+- inputs unchanged: every input file and every user file has the same checksum before and after;
+- signals, sent early (as soon as the tool catches SIGINT, i.e. once its handlers are installed),
+  mid and late (at half and four fifths of its valid run's time): afterwards either no output
+  exists and the tool said it was interrupted with exit 130, or every output exists and the exit
+  is 0; SIGINT goes to the process group (as a terminal's Ctrl-C), SIGTERM to the tool (as kill);
+- SIGKILL mid-run: no child still running 1 s later, and the next run of the same command succeeds
+  and leaves no stale temporary of the killed run;
+- races: of two runs to the same output without --force, started together, exactly one exits 0 and
+  the other 2, and the outputs are the winner's whole set of files.
+
 Unreadable inputs (chmod 000) are tried with the tool run as the user nobody when the harness runs
-as root (root reads any file). A signal case whose run finished before the signal is skipped
-with a note. A case can only see
-what these rules see: a run that exits 0 with plausible but wrong numbers is beyond it."""
+as root (root reads any file). A signal case whose run ended before the signal is skipped with a
+note. A case sees only what these rules see: a run that exits 0 with plausible but wrong numbers
+is beyond it."""
 
 # About 60 small sand grains in a 1.4 mm cylinder at 35 um voxels (as tests/ctsynth_test.cpp): two scans
 # in a second or two.
@@ -574,7 +577,7 @@ def bad_file_cases(tool, argv, outputs, slot, what, quick_first, label=None):
     case("flipped_header", lambda s, d, i: flip_bytes(s, d, [0]))
     case("flipped_middle", lambda s, d, i: flip_bytes(s, d, [0.3, 0.5, 0.7]), expect="either")
     case("wrong_kind", lambda s, d, i: copy(i[WRONG_OF[what]], d),
-         expect="either" if tool in ACCEPTS_ANY_KIND or tool == "volconvert" else "refuse", quick=True)
+         expect="either" if tool in ACCEPTS_ANY_KIND else "refuse", quick=True)
     case("unreadable", unreadable)
     if what in SHRINK_OF:
         case("table_length", lambda s, d, i: h5_shrink(copy(s, d), SHRINK_OF[what]),
@@ -681,9 +684,10 @@ def option_cases(tool, options):
              outputs, std=False),
         Case(f"{tool}.option.threads=nan", tool, "option", argv + ["-j", "nan"], "refuse", ["--threads", "-j"],
              outputs, std=False),
-        Case(f"{tool}.option.missing_value", tool, "option", argv + [options[0]] if options else argv + ["--config"],
-             "usage", [options[0] if options else "--config"], outputs),
     ]
+    if options:  # the option last, so nothing after it can be taken for its value
+        cases.append(Case(f"{tool}.option.missing_value", tool, "option", argv + ["-q", "-j", "1", options[0]], "usage",
+                          [options[0]], outputs, std=False))
     return cases
 
 
@@ -928,7 +932,7 @@ def signal_cases(tool):
     std = "-j" not in argv
     C = []
     for sig in ("SIGINT", "SIGTERM"):
-        for moment, fraction in (("early", 0.1), ("mid", 0.5), ("late", 0.9)):
+        for moment, fraction in (("early", 0.0), ("mid", 0.5), ("late", 0.8)):
             C.append(Case(f"{tool}.signal.{sig}_{moment}", tool, "signal", argv, "interrupted",
                           ["interrupt"], outputs, special="signal", std=std,
                           params={"signal": sig, "fraction": fraction}, quick=(sig == "SIGINT" and moment == "mid")))
@@ -1112,7 +1116,25 @@ class Harness:
         base = self.baseline.get(case.tool)
         if base is None:
             return None
-        return max(0.08, case.params["fraction"] * base)
+        return case.params["fraction"] * base
+
+    @staticmethod
+    def wait_for(p, at, fraction):
+        """Sleeps until `at` s after the start; the early moment is instead as soon as the tool catches
+        SIGINT (its handlers are installed once its options are parsed: before that the default action
+        ends any program, which no tool can change)."""
+        t0 = p.graintwin[2]
+        if fraction <= 0.1:
+            while p.poll() is None and time.monotonic() - t0 < at + 5.0:
+                try:
+                    caught = next(ln for ln in open(f"/proc/{p.pid}/status") if ln.startswith("SigCgt:"))
+                except (OSError, StopIteration):
+                    break
+                if int(caught.split()[1], 16) & (1 << (signal.SIGINT - 1)):
+                    return
+                time.sleep(0.002)
+        else:
+            time.sleep(max(0.0, at - (time.monotonic() - t0)))
 
     def signal_case(self, case, box, tmp, logs, before, inputs_before):
         at = self.moment(case)
@@ -1120,7 +1142,8 @@ class Harness:
             return Result(case, None, [], 0.0, note="no baseline: the valid run of this tool failed or was not run")
         sig = getattr(signal, case.params["signal"])
         p = self.runner.start(case.tool, self.args(case), box, tmp, os.path.join(logs, "run"))
-        time.sleep(at)
+        self.wait_for(p, at, case.params["fraction"])
+        at = time.monotonic() - p.graintwin[2]
         if p.poll() is not None:
             r = self.runner.finish(p)
             return Result(case, None, [], r.seconds, note=f"finished in {r.seconds:.2f} s, before the signal at {at:.2f} s")
@@ -1150,7 +1173,7 @@ class Harness:
         if at is None:
             return Result(case, None, [], 0.0, note="no baseline: the valid run of this tool failed or was not run")
         p = self.runner.start(case.tool, self.args(case), box, tmp, os.path.join(logs, "run"))
-        time.sleep(at)
+        self.wait_for(p, at, case.params["fraction"])
         if p.poll() is not None:
             r = self.runner.finish(p)
             return Result(case, None, [], r.seconds, note=f"finished in {r.seconds:.2f} s, before SIGKILL at {at:.2f} s")
@@ -1275,6 +1298,23 @@ def tables(results, quick_or_subset):
     return "\n".join(lines), "\n".join(by_tool)
 
 
+def section_text(results, failing, by_kind, by_tool, elapsed, build, timeout, memory_gb):
+    """The `reliability` section of docs/benchmarks.md: what ran, the rules, the tables, what failed."""
+    text = (f"## Reliability: hostile inputs, options, outputs, signals and races\n\n"
+            f"`bench/reliability.py` ran {len(results)} cases against the twelve tools ({build}; "
+            f"{date.today().isoformat()}, {elapsed:.0f} s on {os.cpu_count()} cores). It makes its own small "
+            f"inputs (a ctsynth series of two scans and the chain on it), runs each case in a folder of its own "
+            f"and judges it by these rules:\n\n" + RULES.format(timeout=timeout, memory=memory_gb) + "\n\n"
+            f"### Cases tried and handled, by kind\n\n{by_kind}\n\n### By tool (handled / tried)\n\n{by_tool}\n\n")
+    if failing:
+        shown = failing[:MAX_LISTED]
+        text += "### Not handled\n\n" + "\n".join(f"- `{r.case.id}`: {'; '.join(r.problems)}" for r in shown)
+        if len(failing) > len(shown):
+            text += f"\n- and {len(failing) - len(shown)} more (`bench/reliability.py --verbose` lists them)"
+        text += "\n\n"
+    return text
+
+
 def version(bin_dir):
     try:
         return subprocess.run([os.path.join(bin_dir, "volinfo"), "--version"], capture_output=True, text=True,
@@ -1341,19 +1381,7 @@ def main():
     if subset or a.no_publish:
         print("not published (" + ("a subset" if subset else "--no-publish") + ")")
     else:
-        text = (f"## Reliability: hostile inputs, options, outputs, signals and races\n\n"
-                f"`bench/reliability.py` ran {len(results)} cases against the twelve tools "
-                f"({version(bin_dir)}; {date.today().isoformat()}, {elapsed:.0f} s on {os.cpu_count()} cores). "
-                f"It makes its own small inputs (a ctsynth series of two scans and the chain on it), runs each case "
-                f"in a folder of its own and judges it by these rules:\n\n"
-                + RULES.format(timeout=a.timeout, memory=a.memory_gb) + "\n\n"
-                f"### Cases tried and handled, by kind\n\n{by_kind}\n\n### By tool (handled / tried)\n\n{by_tool}\n\n")
-        if failing:
-            shown = failing[:MAX_LISTED]
-            text += "### Not handled\n\n" + "\n".join(f"- `{r.case.id}`: {'; '.join(r.problems)}" for r in shown)
-            if len(failing) > len(shown):
-                text += f"\n- and {len(failing) - len(shown)} more (`bench/reliability.py --verbose` lists them)"
-            text += "\n\n"
+        text = section_text(results, failing, by_kind, by_tool, elapsed, version(bin_dir), a.timeout, a.memory_gb)
         publish("reliability", text)
     if not a.work and not a.keep:
         shutil.rmtree(work, ignore_errors=True)
