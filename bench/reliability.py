@@ -31,6 +31,7 @@ import dataclasses
 import hashlib
 import json
 import os
+import pwd
 import re
 import resource
 import shutil
@@ -74,17 +75,20 @@ A case is **handled** when all of these hold:
   or time must be refused up front;
 - the right exit code: 1 or 2 for bad input (2 where the contract says usage error: an existing
   output without --force, an unknown option, the loser of a race); 0 only where the input is
-  legitimately acceptable (such cases accept either a clean refusal or a complete run);
+  legitimately acceptable (such cases accept either a clean refusal or a complete run): every
+  numeric option must refuse nan, inf, -inf, a malformed number and 1e308, and may accept -1, 0,
+  1e6 and 1e12 when they make sense for it;
 - a message: on failure, stderr's first error line starts with the tool's name (`tool: ...`), the
   message names the file or the option at fault, and it prints no number longer than 20 digits;
 - no debris: no new or changed file in the case's folder besides the committed outputs (no
   temporaries, no half-written output), nothing left in TMPDIR, no child process still running
   once the tool has exited (after a SIGKILL of the tool: 1 s later);
 - inputs unchanged: every input file and every user file has the same checksum before and after;
-- signals, sent early (as soon as the tool catches SIGINT, i.e. once its handlers are installed),
-  mid and late (at half and four fifths of its valid run's time): afterwards either no output
-  exists and the tool said it was interrupted with exit 130, or every output exists and the exit
-  is 0; SIGINT goes to the process group (as a terminal's Ctrl-C), SIGTERM to the tool (as kill);
+- signals, sent once the tool catches SIGINT (its handlers are installed after option parsing):
+  early (at once), mid and late (at half and four fifths of its valid run's time, if later):
+  afterwards either no output exists and the tool said it was interrupted with exit 130, or every
+  output exists and the exit is 0; SIGINT goes to the process group (as a terminal's Ctrl-C),
+  SIGTERM to the tool (as kill);
 - SIGKILL mid-run: no child still running 1 s later, and the next run of the same command succeeds
   and leaves no stale temporary of the killed run;
 - races: of two runs to the same output without --force, started together, exactly one exits 0 and
@@ -129,7 +133,7 @@ FDEM_DURATION = 2e-5
 SANITIZER = re.compile(r"AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer|runtime error:|ThreadSanitizer")
 NOISE_LINE = re.compile(r"^\S+: \[(info|debug|trace)\]|^Run with --help for more information\.?$")
 LONG_NUMBER = re.compile(r"\d{21,}")
-NOBODY = 65534
+NOBODY = "nobody"  # unprivileged user for the unreadable-input cases when the harness is root
 MAX_LISTED = 60  # cases not handled listed in docs/benchmarks.md
 
 
@@ -288,7 +292,8 @@ class Runner:
         env = dict(os.environ, TMPDIR=tmpdir, NO_COLOR="1", MPLCONFIGDIR=self.mpl)
         who = {}
         if unprivileged and os.geteuid() == 0:
-            who = dict(user=NOBODY, group=NOBODY, extra_groups=[])
+            nobody = pwd.getpwnam(NOBODY)
+            who = dict(user=nobody.pw_uid, group=nobody.pw_gid, extra_groups=[])
             for d in (cwd, tmpdir):
                 os.chmod(d, 0o777)
         memory = self.memory
@@ -506,18 +511,20 @@ WRONG_OF = {"volume": "labels0", "labels": "scan0", "contacts": "labels0", "shap
             "tracks": "shapes0", "fdem_model": "shapes0", "fdem_results": "tracks", "micro": "forces",
             "forces": "micro"}
 # One column of a table per kind, shortened by a row (its table's columns then disagree)
-SHRINK_OF = {"labels": "grains/volume", "contacts": "contacts/normal", "shapes": "grains/volume",
-             "tracks": "tracks/centroid", "fdem_model": "element_grain", "fdem_results": "grains/mass",
+SHRINK_OF = {"labels": "grains/volume", "contacts": "contacts/pair", "shapes": "grains/volume",
+             "tracks": "tracks/centroid", "fdem_model": "element_grain", "fdem_results": "grains/label",
              "micro": "grains/d2min", "forces": "grains/q"}
 # Values that are never legitimately NaN or infinite (docs/formats.md), per kind
 NONFINITE_OF = {"labels": [("grains/centroid", "nan")], "contacts": [("contacts/normal", "nan")],
                 "shapes": [("grains/centroid", "nan"), ("sh/coeffs", "inf")],
-                "tracks": [("tracks/displacement", "inf")],
+                "tracks": [("tracks/centroid", "inf")],  # NaN there means missing
                 "fdem_model": [("nodes", "nan"), ("materials/young", "inf")],
-                "fdem_results": [("grains/mass", "nan")], "micro": [("increments/d50", "inf")],
+                "fdem_results": [("frames/000001/grains/centroid", "nan")], "micro": [("increments/d50", "inf")],
                 "forces": [("frames/mean_normal_force", "inf")]}
 # For these tools an input of another GrainTwin kind is legitimate
 ACCEPTS_ANY_KIND = {"volinfo"}
+# Inputs of which the tool reads no floating-point column (tracks2micro takes only the contact pairs)
+READS_NO_FLOATS = {("tracks2micro", "contacts")}
 
 
 def bad_file_cases(tool, argv, outputs, slot, what, quick_first, label=None):
@@ -585,7 +592,7 @@ def bad_file_cases(tool, argv, outputs, slot, what, quick_first, label=None):
     for dataset, value in NONFINITE_OF.get(what, []):
         case(f"{value}_{dataset.replace('/', '_')}",
              lambda s, d, i, ds=dataset, v=value: h5_set(copy(s, d), ds, float(v)),
-             expect="either" if tool == "volinfo" else "refuse")
+             expect="either" if tool == "volinfo" or (tool, what) in READS_NO_FLOATS else "refuse")
     if what == "volume":
         case("nan_voxels", lambda s, d, i: h5_set(h5_float_volume(copy(s, d)), "volume", float("nan"), rows=3),
              expect="either" if tool in ("volinfo", "volconvert") else "refuse")
@@ -647,8 +654,10 @@ OPTION_CONTEXT = {("ct2labels", "--min-distance-vox"): ["--markers", "peaks"],
                   ("shapes2mesh", "--aspect"): ["--packing", "equivalent"],
                   ("shapes2mesh", "--seed"): ["--packing", "equivalent"],
                   ("tracks2micro", "--to"): ["--from", "0"], ("tracks2micro", "--from"): ["--to", "1"]}
-REFUSED_VALUES = ["nan", "inf", "-inf", "1.5.2"]
-EITHER_VALUES = ["-1", "0", "1e6", "1e12", "1e308"]
+# Never a value of any option (1e308 is beyond every physical range and every integer type); the
+# others may be legitimate for some options (negative volume-tol: no filter; seed 0; stop-step 1e12)
+REFUSED_VALUES = ["nan", "inf", "-inf", "1.5.2", "1e308"]
+EITHER_VALUES = ["-1", "0", "1e6", "1e12"]
 QUICK_VALUES = {"nan", "1e308"}
 
 
@@ -670,7 +679,7 @@ def option_cases(tool, options):
         unit = "mm" if opt in LENGTH_OPTIONS.get(tool, []) else ""
         context = OPTION_CONTEXT.get((tool, opt), [])
         for v in REFUSED_VALUES + EITHER_VALUES:
-            value = v + unit if v not in ("nan", "inf", "-inf", "1.5.2") else v
+            value = v + unit if v not in ("nan", "inf", "-inf", "1.5.2") else v  # 1e308mm: a length
             args = without(argv, [opt] + context[::2])
             cases.append(Case(f"{tool}.option.{opt}={value}", tool, "option", args + context + [f"{opt}={value}"],
                               "refuse" if v in REFUSED_VALUES else "either", [opt], outputs,
@@ -694,7 +703,8 @@ def option_cases(tool, options):
 def config_cases(tool, options):
     argv, outputs, _ = BASE[tool]
     cases = []
-    first = options[0] if options else None
+    # a key the command line does not set as well (the command line wins over the config file)
+    first = next((o for o in options if o not in argv), None)
 
     def cfg(name, text, names, expect="refuse", quick=False):
         path = f"cfg_{name}.toml"
@@ -1119,22 +1129,20 @@ class Harness:
         return case.params["fraction"] * base
 
     @staticmethod
-    def wait_for(p, at, fraction):
-        """Sleeps until `at` s after the start; the early moment is instead as soon as the tool catches
-        SIGINT (its handlers are installed once its options are parsed: before that the default action
-        ends any program, which no tool can change)."""
+    def wait_for(p, at):
+        """Waits until the tool catches SIGINT (its handlers are installed once its options are parsed;
+        before that the default action ends any program, which no tool can change), then until `at` s
+        after its start."""
         t0 = p.graintwin[2]
-        if fraction <= 0.1:
-            while p.poll() is None and time.monotonic() - t0 < at + 5.0:
-                try:
-                    caught = next(ln for ln in open(f"/proc/{p.pid}/status") if ln.startswith("SigCgt:"))
-                except (OSError, StopIteration):
-                    break
-                if int(caught.split()[1], 16) & (1 << (signal.SIGINT - 1)):
-                    return
-                time.sleep(0.002)
-        else:
-            time.sleep(max(0.0, at - (time.monotonic() - t0)))
+        while p.poll() is None and time.monotonic() - t0 < at + 10.0:
+            try:
+                caught = next(ln for ln in open(f"/proc/{p.pid}/status") if ln.startswith("SigCgt:"))
+            except (OSError, StopIteration):
+                break
+            if int(caught.split()[1], 16) & (1 << (signal.SIGINT - 1)):
+                break
+            time.sleep(0.002)
+        time.sleep(max(0.0, at - (time.monotonic() - t0)))
 
     def signal_case(self, case, box, tmp, logs, before, inputs_before):
         at = self.moment(case)
@@ -1142,7 +1150,7 @@ class Harness:
             return Result(case, None, [], 0.0, note="no baseline: the valid run of this tool failed or was not run")
         sig = getattr(signal, case.params["signal"])
         p = self.runner.start(case.tool, self.args(case), box, tmp, os.path.join(logs, "run"))
-        self.wait_for(p, at, case.params["fraction"])
+        self.wait_for(p, at)
         at = time.monotonic() - p.graintwin[2]
         if p.poll() is not None:
             r = self.runner.finish(p)
@@ -1173,7 +1181,7 @@ class Harness:
         if at is None:
             return Result(case, None, [], 0.0, note="no baseline: the valid run of this tool failed or was not run")
         p = self.runner.start(case.tool, self.args(case), box, tmp, os.path.join(logs, "run"))
-        self.wait_for(p, at, case.params["fraction"])
+        self.wait_for(p, at)
         if p.poll() is not None:
             r = self.runner.finish(p)
             return Result(case, None, [], r.seconds, note=f"finished in {r.seconds:.2f} s, before SIGKILL at {at:.2f} s")
