@@ -450,7 +450,6 @@ class Case:
     quick: bool = False
     special: Optional[str] = None     # signal / kill / race runners
     params: Dict = dataclasses.field(default_factory=dict)
-    skip: Optional[str] = None        # why it cannot be tried here
     std: bool = True                  # append -q and -j 1
 
 
@@ -533,7 +532,7 @@ def bad_file_cases(tool, argv, outputs, slot, what, quick_first, label=None):
     key = re.fullmatch(r"\{(\w+)\}", argv[slot]).group(1)
     label = label or key
 
-    def case(name, make, expect="refuse", quick=False, skip=None, ext=".h5"):
+    def case(name, make, expect="refuse", quick=False, ext=".h5"):
         bad = "bad_" + name + ext
         args = list(argv)
         args[slot] = bad
@@ -541,10 +540,9 @@ def bad_file_cases(tool, argv, outputs, slot, what, quick_first, label=None):
         def prepare(sandbox, inputs, make=make, bad=bad):
             make(inputs[key], os.path.join(sandbox, bad), inputs)
         cases.append(Case(f"{tool}.input.{label}.{name}", tool, "input", args, expect, [bad], outputs, prepare,
-                          quick=quick and quick_first, skip=skip))
+                          quick=quick and quick_first))
 
-    is_h5 = what in VALID_OF
-    ext = ".h5" if is_h5 else (".toml" if what.endswith("scene") else ".json" if what == "series_json" else "")
+    ext = ".h5" if what in VALID_OF else (".toml" if what.endswith("scene") else ".json" if what == "series_json" else "")
     args = list(argv)
     args[slot] = "missing" + ext
     cases.append(Case(f"{tool}.input.{label}.missing", tool, "input", args, "refuse", ["missing" + ext], outputs,
@@ -553,6 +551,7 @@ def bad_file_cases(tool, argv, outputs, slot, what, quick_first, label=None):
     args[slot] = "folder" + ext
     cases.append(Case(f"{tool}.input.{label}.folder", tool, "input", args, "refuse", ["folder" + ext], outputs,
                       lambda s, i: os.makedirs(os.path.join(s, "folder" + ext))))
+
     def unreadable(src, dst, inputs):
         copy(src, dst)
         os.chmod(dst, 0)
@@ -1080,8 +1079,6 @@ class Harness:
         return a + (["-q", "-j", "1"] if case.std else [])
 
     def run_case(self, case):
-        if case.skip:
-            return Result(case, None, [], 0.0, note=case.skip)
         base, box, tmp, logs = self.sandbox(case)
         if case.prepare:
             case.prepare(box, self.inputs)
@@ -1362,7 +1359,7 @@ def main():
         cases = [c for c in cases if c.quick]
     if a.list:
         for c in cases:
-            print(f"{c.id:70s} {c.kind:12s} {c.tool}{'  (skipped: ' + c.skip + ')' if c.skip else ''}")
+            print(f"{c.id:70s} {c.kind:12s} {c.tool}")
         print(f"{len(cases)} cases")
         return 0
     inputs = Inputs(work, runner)
