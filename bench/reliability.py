@@ -1081,7 +1081,10 @@ class Harness:
     def run_case(self, case):
         base, box, tmp, logs = self.sandbox(case)
         if case.prepare:
-            case.prepare(box, self.inputs)
+            try:
+                case.prepare(box, self.inputs)
+            except (OSError, KeyError, ValueError) as e:  # e.g. a dataset the inputs no longer have
+                return Result(case, None, [], 0.0, note=f"could not make the case's files: {e!r}")
         inputs_before = snapshot(self.inputs.dir)
         before = snapshot(box)
         special = {"signal": self.signal_case, "kill": self.kill_case, "race": self.race_case}.get(case.special)
@@ -1104,7 +1107,7 @@ class Harness:
             if case.kind == "valid" and r.rc == 0:
                 self.baseline[case.tool] = r.seconds
             res = Result(case, not problems, problems, r.seconds, r.err)
-        if res.handled and not self.keep:
+        if res.handled is not False and not self.keep:
             shutil.rmtree(base, ignore_errors=True)
         return res
 
