@@ -20,7 +20,8 @@ usage: bench/reliability.py [--build DIR] [--quick] [--tool NAME] [--kind KIND] 
   --verbose      print the stderr of every case not handled
   --work DIR     work folder (default: a new temporary folder, removed at the end unless --keep);
                  an existing one with finished inputs is reused
-  --timeout S    seconds a case may take before it counts as a hang (default 20)
+  --timeout S    CPU seconds a case may take before it counts as a hang (default 20; four times
+                 that in wall time)
   --memory-gb G  address-space cap of every tool run (default 4)
   --no-publish   do not rewrite docs/benchmarks.md (only a full run, without --quick, --tool or
                  --kind, publishes; a subset never does)
@@ -70,9 +71,10 @@ RULES = """\
 A case is **handled** when all of these hold:
 - no crash: the tool was not ended by a signal (other than a SIGKILL the harness sent) and printed
   no sanitizer report;
-- no hang: it finished within the per-case timeout ({timeout:g} s, or three times the tool's valid
-  run when that is longer) under an address-space cap of {memory:g} GB (RLIMIT_AS), so absurd memory
-  or time must be refused up front;
+- no hang: it finished within the per-case timeout of CPU time ({timeout:g} s, or three times the
+  tool's valid run when that is longer; {wall:g} times that in wall time, so a busy machine does not
+  make a hang but a deadlock does) under an address-space cap of {memory:g} GB (RLIMIT_AS), so absurd
+  memory or time must be refused up front;
 - the right exit code: 1 or 2 for bad input (2 where the contract says usage error: an existing
   output without --force, an unknown option, the loser of a race); 0 only where the input is
   legitimately acceptable (such cases accept either a clean refusal or a complete run): every
@@ -134,6 +136,8 @@ SANITIZER = re.compile(r"AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitiz
 NOISE_LINE = re.compile(r"^\S+: \[(info|debug|trace)\]|^Run with --help for more information\.?$")
 LONG_NUMBER = re.compile(r"\d{21,}")
 NOBODY = "nobody"  # unprivileged user for the unreadable-input cases when the harness is root
+WALL_FACTOR = 4   # a case may take this many times its timeout in wall time (a busy machine), not in CPU time
+CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 MAX_LISTED = 60  # cases not handled listed in docs/benchmarks.md
 
 
@@ -269,6 +273,7 @@ class Run:
     argv: List[str]
     rc: Optional[int] = None          # exit code, or -signal
     seconds: float = 0.0
+    cpu: float = 0.0                  # CPU seconds last seen while it ran
     timed_out: bool = False
     out: str = ""
     err: str = ""
@@ -313,17 +318,25 @@ class Runner:
     def finish(self, p, timeout=None, grace=0.0):
         argv, log, t0 = p.graintwin
         r = Run(argv)
-        try:
-            p.wait(timeout=max(0.0, (timeout or self.timeout) - (time.monotonic() - t0)))
-        except subprocess.TimeoutExpired:
-            r.timed_out = True
-            with_session(p.pid, signal.SIGKILL)
-            p.wait()
+        limit = timeout or self.timeout
+        while True:
+            try:
+                p.wait(timeout=0.05)
+                break
+            except subprocess.TimeoutExpired:
+                pass
+            r.cpu = max(r.cpu, cpu_seconds(p.pid))
+            if r.cpu > limit or time.monotonic() - t0 > WALL_FACTOR * limit:
+                r.timed_out = True
+                with_session(p.pid, signal.SIGKILL)
+                p.wait()
+                break
         r.seconds = time.monotonic() - t0
         r.rc = p.returncode
         r.out = open(log + ".out", errors="replace").read()
         r.err = open(log + ".err", errors="replace").read()
-        members = session_members(p.pid)
+        # after a hang the harness killed the session itself: what is still dying is not a leftover
+        members = [] if r.timed_out else session_members(p.pid)
         deadline = time.monotonic() + grace
         while members and time.monotonic() < deadline:
             time.sleep(0.1)
@@ -339,6 +352,16 @@ class Runner:
 
     def run(self, tool, args, cwd, tmpdir, log, timeout=None, unprivileged=False):
         return self.finish(self.start(tool, args, cwd, tmpdir, log, unprivileged), timeout)
+
+
+def cpu_seconds(pid):
+    """CPU time of a running process: all its threads and the children it has reaped."""
+    try:
+        s = open(f"/proc/{pid}/stat").read()
+    except OSError:
+        return 0.0
+    f = s[s.rfind(")") + 2:].split()
+    return sum(int(x) for x in f[11:15]) / CLOCK_TICKS
 
 
 def with_session(sid, sig):
@@ -1033,7 +1056,7 @@ def judge_files(case, before, after, outputs_allowed, problems, inputs_before, i
 
 def judge_run(case, r, problems, expect_codes):
     if r.timed_out:
-        problems.append(f"hang: still running after {r.seconds:.0f} s")
+        problems.append(f"hang: unfinished after {r.cpu:.0f} s of CPU time ({r.seconds:.0f} s wall)")
     elif r.rc < 0:
         problems.append(f"crash: ended by {signal.Signals(-r.rc).name}")
     elif r.rc not in expect_codes:
@@ -1312,7 +1335,7 @@ def section_text(results, failing, by_kind, by_tool, elapsed, build, timeout, me
             f"`bench/reliability.py` ran {len(results)} cases against the twelve tools ({build}; "
             f"{date.today().isoformat()}, {elapsed:.0f} s on {os.cpu_count()} cores). It makes its own small "
             f"inputs (a ctsynth series of two scans and the chain on it), runs each case in a folder of its own "
-            f"and judges it by these rules:\n\n" + RULES.format(timeout=timeout, memory=memory_gb) + "\n\n"
+            f"and judges it by these rules:\n\n" + RULES.format(timeout=timeout, memory=memory_gb, wall=WALL_FACTOR) + "\n\n"
             f"### Cases tried and handled, by kind\n\n{by_kind}\n\n### By tool (handled / tried)\n\n{by_tool}\n\n")
     if failing:
         shown = failing[:MAX_LISTED]
