@@ -89,8 +89,9 @@ A case is **handled** when all of these hold:
 - signals, sent once the tool catches SIGINT (its handlers are installed after option parsing):
   early (at once), mid and late (at half and four fifths of its valid run's time, if later):
   afterwards either no output exists and the tool said it was interrupted with exit 130, or every
-  output exists and the exit is 0; SIGINT goes to the process group (as a terminal's Ctrl-C),
-  SIGTERM to the tool (as kill);
+  output exists and the exit is 0, within 5 s of the signal or a quarter of the valid run's time if
+  that is longer; SIGINT goes to the process group (as a terminal's Ctrl-C), SIGTERM to the tool
+  (as kill);
 - SIGKILL mid-run: no child still running 1 s later, and the next run of the same command succeeds
   and leaves no stale temporary of the killed run;
 - races: of two runs to the same output without --force, started together, exactly one exits 0 and
@@ -136,6 +137,7 @@ SANITIZER = re.compile(r"AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitiz
 NOISE_LINE = re.compile(r"^\S+: \[(info|debug|trace)\]|^Run with --help for more information\.?$")
 LONG_NUMBER = re.compile(r"\d{21,}")
 NOBODY = "nobody"  # unprivileged user for the unreadable-input cases when the harness is root
+STOP_SECONDS, STOP_FRACTION = 5.0, 0.25  # a tool ends within max(5 s, a quarter of its valid run) of a signal
 WALL_FACTOR = 4   # a case may take this many times its timeout in wall time (a busy machine), not in CPU time
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 MAX_LISTED = 60  # cases not handled listed in docs/benchmarks.md
@@ -1186,6 +1188,10 @@ class Harness:
         r = self.runner.finish(p, self.timeout(case))
         problems = []
         judge_run(case, r, problems, {0, 130})
+        allowed = max(STOP_SECONDS, STOP_FRACTION * self.baseline[case.tool])
+        if not r.timed_out and r.seconds - at > allowed:
+            problems.append(f"took {r.seconds - at:.1f} s to end after {case.params['signal']} "
+                            f"(at most {allowed:.1f} s)")
         after = snapshot(box)
         if r.rc == 130:
             if not any("interrupt" in ln for ln in error_lines(r.err)):
