@@ -132,6 +132,66 @@ TEST(MetaImage, SizeMismatchNamesTheHeader) {
   }
 }
 
+namespace {
+std::string metaimage_error(const fs::path& dir, const std::string& header) {
+  std::ofstream(dir / "h.mha", std::ios::binary) << header;
+  try {
+    read_metaimage(dir / "h.mha");
+  } catch (const DataError& e) {
+    return e.message();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(MetaImage, HeaderNumbersAreCheckedAndNamed) {
+  test::TempDir dir;
+  const std::string head = "NDims = 3\nElementType = MET_UCHAR\n";
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 x\nElementDataFile = LOCAL\n").find("DimSize = 1 1 x is not a list of whole numbers"),
+            std::string::npos);
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 2 2 -2\nElementDataFile = LOCAL\n").find("DimSize"), std::string::npos);
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 1\nElementSpacing = 1 nan 1\nElementDataFile = LOCAL\nA")
+                .find("ElementSpacing = 1 nan 1 is not a list of finite numbers"),
+            std::string::npos);
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 1\nElementSpacing = 1 0 1\nElementDataFile = LOCAL\nA").find("must be positive"),
+            std::string::npos);
+  // 2^32 x 2^32 x 1 bytes wraps to 0 in 64 bits: no longer taken for an empty volume.
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 4294967296 4294967296 1\nElementDataFile = LOCAL\n").find("more bytes than any file holds"),
+            std::string::npos);
+  // A DimSize beyond the inline data is refused before anything is allocated.
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 100000 100000 100\nElementDataFile = LOCAL\nABCD")
+                .find("holds 4 bytes of data after its header but DimSize x ElementType needs 1000000000000"),
+            std::string::npos);
+}
+
+TEST(MetaImage, HeaderSizeMinusOneReadsTheLastBytes) {
+  test::TempDir dir;
+  std::ofstream(dir / "d.raw", std::ios::binary) << "junk" << std::string("\x01\x02\x03\x04", 4);
+  std::ofstream(dir / "d.mhd") << "NDims = 3\nDimSize = 2 2 1\nElementType = MET_UCHAR\nHeaderSize = -1\nElementDataFile = d.raw\n";
+  const auto v = std::get<Volume<std::uint8_t>>(read_metaimage(dir / "d.mhd"));
+  EXPECT_EQ(v.values(), (std::vector<std::uint8_t>{1, 2, 3, 4}));
+  std::ofstream(dir / "e.mhd") << "NDims = 3\nDimSize = 2 2 1\nElementType = MET_UCHAR\nHeaderSize = -2\nElementDataFile = d.raw\n";
+  try {
+    read_metaimage(dir / "e.mhd");
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_NE(e.message().find("HeaderSize = -2 is not a list of whole numbers"), std::string::npos) << e.message();
+  }
+}
+
+TEST(Raw, DimsWhoseByteCountOverflowsAreRefused) {
+  test::TempDir dir;
+  std::ofstream(dir / "empty.raw").flush();
+  RawLayout l;
+  l.shape = {std::size_t{1} << 32, std::size_t{1} << 32, 1};
+  try {
+    read_raw(dir / "empty.raw", l);
+    FAIL() << "a 2^32 x 2^32 x 1 volume matched an empty file";
+  } catch (const DataError& e) {
+    EXPECT_NE(e.message().find("more bytes than any file holds"), std::string::npos) << e.message();
+  }
+}
+
 TEST(Raw, ReadsBigEndianAfterAHeader) {
   test::TempDir dir;
   {
