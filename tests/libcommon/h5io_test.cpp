@@ -9,6 +9,7 @@
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "support/errors.hpp"
 #include "support/fixtures.hpp"
 #include "support/run_tool.hpp"
 
@@ -156,18 +157,7 @@ TEST(AtomicOutput, RefusesAMissingFolder) {
   EXPECT_THROW(AtomicOutput(dir / "no" / "such" / "out.h5", false), UsageError);
 }
 
-namespace {
-/// The message of the graintwin::Error that `f` throws ("" when it throws none).
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.message();
-  }
-  return "";
-}
-}  // namespace
+using test::message_of;
 
 TEST(H5File, ADeclaredExtentTheFileDoesNotStoreIsRefusedBeforeAllocating) {
   test::TempDir dir;
@@ -183,7 +173,7 @@ TEST(H5File, ADeclaredExtentTheFileDoesNotStoreIsRefusedBeforeAllocating) {
     H5Pclose(dcpl), H5Sclose(space), H5Fclose(file);
   }
   const H5File f = H5File::open(path);
-  const std::string msg = error_of([&] { f.read<double>("/volume"); });
+  const std::string msg = message_of([&] { f.read<double>("/volume"); });
   EXPECT_NE(msg.find(":/volume: the dataset declares"), std::string::npos) << msg;
   EXPECT_NE(msg.find("1099511627776 values"), std::string::npos) << msg;
   EXPECT_NE(msg.find("truncated or damaged"), std::string::npos) << msg;
@@ -200,12 +190,12 @@ TEST(H5File, OneValueReadsNameTheMissingOrMiscountedObject) {
     f.set_attr("/sample", "time", std::vector<double>{1.0, 2.0});
   }
   const H5File f = H5File::open(path);
-  EXPECT_NE(error_of([&] { f.read_scalar<double>("/sample/void_ratio"); }).find("/sample/void_ratio holds 0 values where one"),
+  EXPECT_NE(message_of([&] { f.read_scalar<double>("/sample/void_ratio"); }).find("/sample/void_ratio holds 0 values where one"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { f.read_string("/run/parameters"); }).find("holds 2 strings where one"), std::string::npos);
-  EXPECT_NE(error_of([&] { f.attr_int("/sample", "count"); }).find("attribute 'count' is nan, not a whole number"),
+  EXPECT_NE(message_of([&] { f.read_string("/run/parameters"); }).find("holds 2 strings where one"), std::string::npos);
+  EXPECT_NE(message_of([&] { f.attr_int("/sample", "count"); }).find("attribute 'count' is nan, not a whole number"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { f.attr_double("/sample", "time"); }).find("attribute 'time' is missing or not one number"),
+  EXPECT_NE(message_of([&] { f.attr_double("/sample", "time"); }).find("attribute 'time' is missing or not one number"),
             std::string::npos);
 }
 
@@ -216,7 +206,7 @@ TEST(KindCheck, AKindOfThousandsOfCharactersIsQuotedAsAnExcerpt) {
     f.set_attr("/", "kind", std::string(5000, 'x'));
     f.set_attr("/", "schema_version", 1LL);
   }
-  const std::string msg = error_of([&] { open_kind(dir / "k.h5", schema::kind::volume); });
+  const std::string msg = message_of([&] { open_kind(dir / "k.h5", schema::kind::volume); });
   EXPECT_NE(msg.find("kind=" + std::string(60, 'x') + "..., expected kind=volume"), std::string::npos) << msg;
   EXPECT_LT(msg.size(), 300u);
 }
