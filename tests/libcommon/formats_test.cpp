@@ -180,6 +180,21 @@ TEST(Raw, DimsWhoseByteCountOverflowsAreRefused) {
   EXPECT_NE(msg.find("more bytes than any file holds"), std::string::npos) << "a 2^32 x 2^32 x 1 volume matched an empty file: " << msg;
 }
 
+// Headers declaring far more pixels than their files hold (tests/fuzz/regression): refused before
+// the volume is allocated (the TIFF used to zero-fill 16 GB, the PNG to throw bad_alloc).
+TEST(Tiff, AHeaderDeclaringMoreThanTheFileHoldsIsRefused) {
+  const fs::path f = fs::path(GRAINTWIN_SOURCE_DIR) / "tests/fuzz/regression/tiff/header_declares_16_gb";
+  const std::string msg = test::message_of([&] { read_tiff(f); });
+  EXPECT_NE(msg.find("declares 1 pages of 65535 x 65535 uint32 pixels"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("truncated or damaged"), std::string::npos) << msg;
+}
+
+TEST(Slices, APngHeaderDeclaringATerapixelIsRefused) {
+  const fs::path f = fs::path(GRAINTWIN_SOURCE_DIR) / "tests/fuzz/regression/png/header_declares_a_terapixel";
+  const std::string msg = test::message_of([&] { read_png(f); });
+  EXPECT_NE(msg.find("declares 1000000 x 1000000 pixels"), std::string::npos) << msg;
+}
+
 TEST(Raw, ReadsBigEndianAfterAHeader) {
   test::TempDir dir;
   {
