@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages GrainTwin needs, and only those that are missing (checked with
 # dpkg). Nothing is downloaded from anywhere but Debian's archive. Root or sudo required to install.
+# Extra package names as arguments are installed too (scripts/fuzz.sh adds clang and libFuzzer).
 set -euo pipefail
 
 PACKAGES=(
@@ -19,6 +20,7 @@ PACKAGES=(
   # a headless browser that renders the report page in its test (every chart must decode)
   chromium
 )
+PACKAGES+=("$@")
 
 missing=()
 for p in "${PACKAGES[@]}"; do

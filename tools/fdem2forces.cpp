@@ -13,6 +13,7 @@
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/forces_file.hpp"
 #include "graintwin/micro/local_deformation.hpp"
+#include "graintwin/micro/micro_file.hpp"
 #include "graintwin/micro/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -25,7 +26,7 @@ namespace {
 /// same results file (tracks2micro RESULTS MICRO); UsageError naming the fix when it does not fit.
 std::vector<double> d2min_from_micro(const io::H5File& m, const SimulationGrains& grains, std::size_t from, std::size_t to) {
   const std::string name = m.path().string();
-  const auto source = nlohmann::json::parse(m.read_strings(schema::micro::parameters).at(0)).value("source", "");
+  const std::string source = read_micro_source(m);
   if (source != "fdem_results")
     throw UsageError("--micro " + name + " was made from " + source + ", not from simulation frames; run tracks2micro on the results file");
   const auto inc_from = m.read<std::uint64_t>(schema::micro::increment_from), inc_to = m.read<std::uint64_t>(schema::micro::increment_to);

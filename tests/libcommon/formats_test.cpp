@@ -8,6 +8,7 @@
 #include "graintwin/io/metaimage.hpp"
 #include "graintwin/io/slices.hpp"
 #include "graintwin/io/tiff.hpp"
+#include "support/errors.hpp"
 #include "support/fixtures.hpp"
 #include "support/run_tool.hpp"
 
@@ -130,6 +131,68 @@ TEST(MetaImage, SizeMismatchNamesTheHeader) {
   } catch (const DataError& e) {
     EXPECT_NE(e.message().find("DimSize"), std::string::npos);
   }
+}
+
+namespace {
+std::string metaimage_error(const fs::path& dir, const std::string& header) {
+  std::ofstream(dir / "h.mha", std::ios::binary) << header;
+  return test::message_of([&] { read_metaimage(dir / "h.mha"); });
+}
+}  // namespace
+
+TEST(MetaImage, HeaderNumbersAreCheckedAndNamed) {
+  test::TempDir dir;
+  const std::string head = "NDims = 3\nElementType = MET_UCHAR\n";
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 x\nElementDataFile = LOCAL\n").find("DimSize = 1 1 x is not a list of whole numbers"),
+            std::string::npos);
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 2 2 -2\nElementDataFile = LOCAL\n").find("DimSize"), std::string::npos);
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 1\nElementSpacing = 1 nan 1\nElementDataFile = LOCAL\nA")
+                .find("ElementSpacing = 1 nan 1 is not a list of finite numbers"),
+            std::string::npos);
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 1\nElementSpacing = 1 0 1\nElementDataFile = LOCAL\nA").find("must be positive"),
+            std::string::npos);
+  // 2^32 x 2^32 x 1 bytes wraps to 0 in 64 bits: no longer taken for an empty volume.
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 4294967296 4294967296 1\nElementDataFile = LOCAL\n").find("more bytes than any file holds"),
+            std::string::npos);
+  // A DimSize beyond the inline data is refused before anything is allocated.
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 100000 100000 100\nElementDataFile = LOCAL\nABCD")
+                .find("holds 4 bytes of data after its header but DimSize x ElementType needs 1000000000000"),
+            std::string::npos);
+}
+
+TEST(MetaImage, HeaderSizeMinusOneReadsTheLastBytes) {
+  test::TempDir dir;
+  std::ofstream(dir / "d.raw", std::ios::binary) << "junk" << std::string("\x01\x02\x03\x04", 4);
+  std::ofstream(dir / "d.mhd") << "NDims = 3\nDimSize = 2 2 1\nElementType = MET_UCHAR\nHeaderSize = -1\nElementDataFile = d.raw\n";
+  const auto v = std::get<Volume<std::uint8_t>>(read_metaimage(dir / "d.mhd"));
+  EXPECT_EQ(v.values(), (std::vector<std::uint8_t>{1, 2, 3, 4}));
+  std::ofstream(dir / "e.mhd") << "NDims = 3\nDimSize = 2 2 1\nElementType = MET_UCHAR\nHeaderSize = -2\nElementDataFile = d.raw\n";
+  const std::string msg = test::message_of([&] { read_metaimage(dir / "e.mhd"); });
+  EXPECT_NE(msg.find("HeaderSize = -2 is not a list of whole numbers"), std::string::npos) << msg;
+}
+
+TEST(Raw, DimsWhoseByteCountOverflowsAreRefused) {
+  test::TempDir dir;
+  std::ofstream(dir / "empty.raw").flush();
+  RawLayout l;
+  l.shape = {std::size_t{1} << 32, std::size_t{1} << 32, 1};
+  const std::string msg = test::message_of([&] { read_raw(dir / "empty.raw", l); });
+  EXPECT_NE(msg.find("more bytes than any file holds"), std::string::npos) << "a 2^32 x 2^32 x 1 volume matched an empty file: " << msg;
+}
+
+// Headers declaring far more pixels than their files hold (tests/fuzz/regression): refused before
+// the volume is allocated (the TIFF used to zero-fill 16 GB, the PNG to throw bad_alloc).
+TEST(Tiff, AHeaderDeclaringMoreThanTheFileHoldsIsRefused) {
+  const fs::path f = fs::path(GRAINTWIN_SOURCE_DIR) / "tests/fuzz/regression/tiff/header_declares_16_gb";
+  const std::string msg = test::message_of([&] { read_tiff(f); });
+  EXPECT_NE(msg.find("declares 1 pages of 65535 x 65535 uint32 pixels"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("truncated or damaged"), std::string::npos) << msg;
+}
+
+TEST(Slices, APngHeaderDeclaringATerapixelIsRefused) {
+  const fs::path f = fs::path(GRAINTWIN_SOURCE_DIR) / "tests/fuzz/regression/png/header_declares_a_terapixel";
+  const std::string msg = test::message_of([&] { read_png(f); });
+  EXPECT_NE(msg.find("declares 1000000 x 1000000 pixels"), std::string::npos) << msg;
 }
 
 TEST(Raw, ReadsBigEndianAfterAHeader) {

@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "support/errors.hpp"
 #include "support/fixtures.hpp"
 #include "support/run_tool.hpp"
 
@@ -116,3 +118,56 @@ TEST(Provenance, MergeSkipsLinesAlreadyPresent) {
   EXPECT_EQ(h, (std::vector<std::string>{"a", "b", "c"}));
 }
 
+using test::message_of;
+
+TEST(H5File, ADeclaredExtentTheFileDoesNotStoreIsRefusedBeforeAllocating) {
+  test::TempDir dir;
+  const auto path = dir / "huge.h5";
+  {
+    // A chunked dataset of 2^40 doubles with no chunk written: HDF5 stores nothing and reads fill values.
+    const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t dims[1] = {hsize_t{1} << 40}, chunk[1] = {64};
+    const hid_t space = H5Screate_simple(1, dims, nullptr);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 1, chunk);
+    H5Dclose(H5Dcreate2(file, "/volume", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT));
+    H5Pclose(dcpl), H5Sclose(space), H5Fclose(file);
+  }
+  const H5File f = H5File::open(path);
+  const std::string msg = message_of([&] { f.read<double>("/volume"); });
+  EXPECT_NE(msg.find(":/volume: the dataset declares"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("1099511627776 values"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("truncated or damaged"), std::string::npos) << msg;
+}
+
+TEST(H5File, OneValueReadsNameTheMissingOrMiscountedObject) {
+  test::TempDir dir;
+  const auto path = dir / "t.h5";
+  {
+    H5File f = H5File::create(path);
+    f.write("/sample/void_ratio", std::vector<double>{});
+    f.write_strings("/run/parameters", {"{}", "{}"});
+    f.set_attr("/sample", "count", std::numeric_limits<double>::quiet_NaN());
+    f.set_attr("/sample", "time", std::vector<double>{1.0, 2.0});
+  }
+  const H5File f = H5File::open(path);
+  EXPECT_NE(message_of([&] { f.read_scalar<double>("/sample/void_ratio"); }).find("/sample/void_ratio holds 0 values where one"),
+            std::string::npos);
+  EXPECT_NE(message_of([&] { f.read_string("/run/parameters"); }).find("holds 2 strings where one"), std::string::npos);
+  EXPECT_NE(message_of([&] { f.attr_int("/sample", "count"); }).find("attribute 'count' is nan, not a whole number"),
+            std::string::npos);
+  EXPECT_NE(message_of([&] { f.attr_double("/sample", "time"); }).find("attribute 'time' is missing or not one number"),
+            std::string::npos);
+}
+
+TEST(KindCheck, AKindOfThousandsOfCharactersIsQuotedAsAnExcerpt) {
+  test::TempDir dir;
+  {
+    H5File f = H5File::create(dir / "k.h5");
+    f.set_attr("/", "kind", std::string(5000, 'x'));
+    f.set_attr("/", "schema_version", 1LL);
+  }
+  const std::string msg = message_of([&] { open_kind(dir / "k.h5", schema::kind::volume); });
+  EXPECT_NE(msg.find("kind=" + std::string(60, 'x') + "..., expected kind=volume"), std::string::npos) << msg;
+  EXPECT_LT(msg.size(), 300u);
+}

@@ -38,6 +38,15 @@ std::string lower(std::string text) {
   return text;
 }
 
+std::string excerpt(const std::string& text, std::size_t max) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (out.size() >= max) return out + "...";
+    out += (c >= 0x20 && c < 0x7f) ? static_cast<char>(c) : '?';
+  }
+  return out;
+}
+
 bool natural_less(const std::string& a, const std::string& b) {
   std::size_t i = 0, j = 0;
   while (i < a.size() && j < b.size()) {

@@ -207,7 +207,7 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   if (!f.exists(g)) throw DataError(path.string() + " has no frame " + std::to_string(k) + "; it holds " +
                                     std::to_string(f.list(sr::frames).size()));
   ResultsFrame r;
-  r.time = f.attr_doubles(g, "time").at(0);
+  r.time = f.attr_double(g, "time");
   r.step = static_cast<std::uint64_t>(f.attr_int(g, "step").value_or(0));
   const auto at = [&](const char* member) { return g + "/" + member; };
   r.centroid = f.read<double>(at(sr::frame_centroid));

@@ -399,10 +399,10 @@ void Solver::load(const io::H5File& f, const std::string& group) {
   };
   SolverState s;
   s.step = static_cast<std::uint64_t>(f.attr_int(group, "step").value_or(0));
-  s.time = f.attr_doubles(group, "time").at(0);
-  s.dissipated = f.attr_doubles(group, "dissipated").at(0);
-  s.external_work = f.attr_doubles(group, "external_work").at(0);
-  s.energy_input = f.attr_doubles(group, "energy_input").at(0);
+  s.time = f.attr_double(group, "time");
+  s.dissipated = f.attr_double(group, "dissipated");
+  s.external_work = f.attr_double(group, "external_work");
+  s.energy_input = f.attr_double(group, "energy_input");
   s.x = read_vectors(f, group + "/x", state_.x.size());
   s.v = read_vectors(f, group + "/v", state_.v.size());
   const auto bodies = need("bodies", 13 * state_.bodies.size());

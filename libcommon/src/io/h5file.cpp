@@ -1,7 +1,11 @@
 #include "graintwin/io/h5file.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numeric>
+
+#include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/strings.hpp"
@@ -254,7 +258,18 @@ std::vector<double> H5File::attr_doubles(const std::string& object, const std::s
 std::optional<long long> H5File::attr_int(const std::string& object, const std::string& name) const {
   const auto v = attr_doubles(object, name);
   if (v.size() != 1) return std::nullopt;
+  // Casting NaN or a value beyond long long is undefined behaviour; a fraction is not a count either.
+  if (!(v[0] >= -9.2e18 && v[0] <= 9.2e18) || v[0] != std::floor(v[0]))
+    throw DataError(fmt::format("{}: attribute '{}' is {:g}, not a whole number; the file is damaged, rewrite it with the tool that made it",
+                                where(object), name, v[0]));
   return static_cast<long long>(v[0]);
+}
+
+double H5File::attr_double(const std::string& object, const std::string& name) const {
+  const auto v = attr_doubles(object, name);
+  if (v.size() != 1)
+    throw DataError(where(object) + ": attribute '" + name + "' is missing or not one number; the file is damaged, rewrite it with the tool that made it");
+  return v[0];
 }
 
 template <class T>
@@ -313,6 +328,28 @@ DatasetInfo H5File::info(const std::string& path) const {
     case H5T_FLOAT: out.dtype = "float" + std::to_string(size * 8); break;
     case H5T_STRING: out.dtype = "string"; break;
     default: out.dtype = "other"; break;
+  }
+  // HDF5 keeps a dataset's extent apart from its data: a chunked dataset may declare 2^60 values
+  // and store none (chunks are allocated as they are written, reads return the fill value), and
+  // readers allocate the declared extent. Compression (deflate at most ~1032:1) aside, a dataset
+  // stores what it declares, so a declared size beyond 2048 times the stored bytes (above 1 MiB, so
+  // small unwritten datasets still read as their fill value) is damage, not data.
+  double elements = 1.0;
+  bool overflow = false;
+  hsize_t count = 1;
+  for (hsize_t d : out.dims) {
+    elements *= static_cast<double>(d);
+    if (d != 0 && count > std::numeric_limits<hsize_t>::max() / d) overflow = true;
+    count *= d;
+  }
+  const double bytes = elements * static_cast<double>(size);
+  const double stored = static_cast<double>(H5Dget_storage_size(ds.get()));
+  if ((overflow && count != 0) || (bytes > 1024.0 * 1024.0 && bytes > 2048.0 * stored)) {
+    std::string shape;
+    for (hsize_t d : out.dims) shape += (shape.empty() ? "" : " x ") + std::to_string(d);
+    throw DataError(fmt::format("{}: the dataset declares {} values ({:.3g} bytes) but the file stores {:g} bytes of it; "
+                                "the file is truncated or damaged, rewrite it with the tool that made it",
+                                where(path), shape, bytes, stored));
   }
   return out;
 }
@@ -375,12 +412,28 @@ std::vector<std::string> H5File::read_strings(const std::string& path) const {
   return lines;
 }
 
+template <class T>
+T H5File::read_scalar(const std::string& path) const {
+  const auto v = read<T>(path);
+  if (v.size() != 1)
+    throw DataError(where(path) + " holds " + std::to_string(v.size()) + " values where one is expected; the file is damaged, rewrite it with the tool that made it");
+  return v[0];
+}
+
+std::string H5File::read_string(const std::string& path) const {
+  auto lines = read_strings(path);
+  if (lines.size() != 1)
+    throw DataError(where(path) + " holds " + std::to_string(lines.size()) + " strings where one is expected; the file is damaged, rewrite it with the tool that made it");
+  return std::move(lines[0]);
+}
+
 #define GRAINTWIN_H5_INSTANTIATE(T)                                                               \
   template void H5File::write<T>(const std::string&, const T*, const std::vector<hsize_t>&,       \
                                  const DatasetOptions&);                                          \
   template std::vector<T> H5File::read<T>(const std::string&, std::vector<hsize_t>*) const;       \
   template void H5File::read_box<T>(const std::string&, const std::vector<hsize_t>&,              \
-                                    const std::vector<hsize_t>&, T*) const;
+                                    const std::vector<hsize_t>&, T*) const;                       \
+  template T H5File::read_scalar<T>(const std::string&) const;
 GRAINTWIN_H5_INSTANTIATE(std::uint8_t)
 GRAINTWIN_H5_INSTANTIATE(std::int8_t)
 GRAINTWIN_H5_INSTANTIATE(std::uint16_t)

@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 
 #include "graintwin/core/error.hpp"
@@ -44,8 +48,51 @@ AnyVolume read_stream(std::istream& in, const RawLayout& l, const std::string& w
   throw DataError("unreachable");
 }
 
-std::size_t expected_bytes(const RawLayout& l) {
-  return l.shape[0] * l.shape[1] * l.shape[2] * dtype_bytes(l.dtype);
+/// Bytes of the voxels of `l`; DataError naming `what` when the product does not fit 64 bits (it
+/// would wrap around to a small number and let an absurd shape through the file size check).
+std::size_t expected_bytes(const RawLayout& l, const std::string& what) {
+  std::size_t n = dtype_bytes(l.dtype);
+  for (std::size_t d : l.shape) {
+    if (d != 0 && n > std::numeric_limits<std::size_t>::max() / d)
+      throw DataError(what + ": " + std::to_string(l.shape[0]) + " x " + std::to_string(l.shape[1]) + " x " +
+                      std::to_string(l.shape[2]) + " " + dtype_name(l.dtype) +
+                      " voxels are more bytes than any file holds; check the dimensions");
+    n *= d;
+  }
+  for (std::size_t d : l.shape)
+    if (d == 0) return 0;
+  return n;
+}
+
+// Header numbers. std::stoull and std::stod throw exceptions that name no file or key, and stoull
+// reads "-1" as 2^64 - 1.
+std::vector<std::size_t> header_counts(const fs::path& path, const std::string& key, const std::string& text) {
+  std::vector<std::size_t> out;
+  for (const auto& word : split(text, ' ')) {
+    const std::string w = trim(word);
+    if (w.empty()) continue;
+    errno = 0;
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(w.c_str(), &end, 10);
+    if (w.find_first_not_of("0123456789") != std::string::npos || *end != '\0' || errno == ERANGE)
+      throw DataError(path.string() + ": " + key + " = " + excerpt(text) + " is not a list of whole numbers; fix the header");
+    out.push_back(static_cast<std::size_t>(v));
+  }
+  return out;
+}
+
+std::vector<double> header_numbers(const fs::path& path, const std::string& key, const std::string& text) {
+  std::vector<double> out;
+  for (const auto& word : split(text, ' ')) {
+    const std::string w = trim(word);
+    if (w.empty()) continue;
+    char* end = nullptr;
+    const double v = std::strtod(w.c_str(), &end);
+    if (end == w.c_str() || *end != '\0' || !std::isfinite(v))
+      throw DataError(path.string() + ": " + key + " = " + excerpt(text) + " is not a list of finite numbers; fix the header");
+    out.push_back(v);
+  }
+  return out;
 }
 
 }  // namespace
@@ -55,8 +102,9 @@ AnyVolume read_raw_checked(const fs::path& path, const RawLayout& layout, const 
   std::error_code ec;
   const auto size = fs::file_size(path, ec);
   if (ec) throw UsageError(path.string() + ": cannot read (" + ec.message() + ")");
-  const std::size_t want = layout.header_bytes + expected_bytes(layout);
-  if (size != want)
+  const std::size_t data = expected_bytes(layout, path.string());
+  const std::size_t want = layout.header_bytes + data;
+  if (want < data || size != want)
     throw DataError(path.string() + " has " + std::to_string(size) + " bytes but " +
                     std::to_string(layout.shape[0]) + " x " + std::to_string(layout.shape[1]) + " x " +
                     std::to_string(layout.shape[2]) + " " + dtype_name(layout.dtype) +
@@ -82,7 +130,7 @@ AnyVolume read_metaimage(const fs::path& path) {
     const auto eq = line.find('=');
     if (eq == std::string::npos) {
       if (!trim(line).empty())
-        throw DataError(path.string() + ": header line '" + trim(line) + "' is not 'Key = Value'; is this a MetaImage header?");
+        throw DataError(path.string() + ": header line '" + excerpt(trim(line)) + "' is not 'Key = Value'; is this a MetaImage header?");
       continue;
     }
     const std::string key = trim(line.substr(0, eq));
@@ -99,11 +147,8 @@ AnyVolume read_metaimage(const fs::path& path) {
   };
   const std::string ndims = need("NDims");
   if (ndims != "3")
-    throw DataError(path.string() + ": NDims = " + ndims + "; GrainTwin reads 3-D MetaImage volumes only");
-  const auto dims = split(need("DimSize"), ' ');
-  std::vector<std::size_t> d;
-  for (const auto& s : dims)
-    if (!trim(s).empty()) d.push_back(std::stoull(s));
+    throw DataError(path.string() + ": NDims = " + excerpt(ndims) + "; GrainTwin reads 3-D MetaImage volumes only");
+  const std::vector<std::size_t> d = header_counts(path, "DimSize", need("DimSize"));
   if (d.size() != 3) throw DataError(path.string() + ": DimSize must have 3 values (x y z)");
   const std::string type = need("ElementType");
   RawLayout l;
@@ -113,7 +158,7 @@ AnyVolume read_metaimage(const fs::path& path) {
   else if (type == "MET_UINT") l.dtype = DType::uint32;
   else if (type == "MET_FLOAT") l.dtype = DType::float32;
   else
-    throw DataError(path.string() + ": ElementType " + type +
+    throw DataError(path.string() + ": ElementType " + excerpt(type) +
                     " is not supported; use MET_UCHAR, MET_USHORT, MET_UINT or MET_FLOAT");
   if (keys.count("ElementNumberOfChannels") && keys["ElementNumberOfChannels"] != "1")
     throw DataError(path.string() + ": multi-channel MetaImage is not a grey volume");
@@ -125,36 +170,51 @@ AnyVolume read_metaimage(const fs::path& path) {
   const std::string spacing = keys.count("ElementSpacing") ? keys["ElementSpacing"] : keys["ElementSize"];
   Vec3 origin{0.0, 0.0, 0.0};
   if (!spacing.empty()) {
-    std::vector<double> sp;
-    for (const auto& s : split(spacing, ' '))
-      if (!trim(s).empty()) sp.push_back(std::stod(s));
+    const std::vector<double> sp = header_numbers(path, "ElementSpacing", spacing);
     if (sp.size() != 3) throw DataError(path.string() + ": ElementSpacing must have 3 values");
+    if (!(sp[0] > 0 && sp[1] > 0 && sp[2] > 0))
+      throw DataError(path.string() + ": ElementSpacing = " + excerpt(spacing) + " must be positive; fix the header");
     l.voxel_size = {sp[2] * 1e-3, sp[1] * 1e-3, sp[0] * 1e-3};  // ITK writes millimetres
   } else {
     l.voxel_size = {0.0, 0.0, 0.0};
   }
   const std::string off = keys.count("Offset") ? keys["Offset"] : keys["Position"];
   if (!off.empty()) {
-    std::vector<double> o;
-    for (const auto& s : split(off, ' '))
-      if (!trim(s).empty()) o.push_back(std::stod(s));
+    const std::vector<double> o = header_numbers(path, "Offset", off);
     if (o.size() == 3) origin = {o[2] * 1e-3, o[1] * 1e-3, o[0] * 1e-3};
   }
   const std::string data_file = need("ElementDataFile");
   AnyVolume v;
   if (local_data) {
+    // Compare with the bytes that follow the header before allocating: DimSize is only a claim.
+    const std::streamoff at = in.tellg();
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    const std::size_t want = expected_bytes(l, path.string());
+    if (at < 0 || ec || size - static_cast<std::uintmax_t>(at) != want)
+      throw DataError(path.string() + " holds " + std::to_string(at < 0 || ec ? 0 : size - static_cast<std::uintmax_t>(at)) +
+                      " bytes of data after its header but DimSize x ElementType needs " + std::to_string(want) +
+                      "; check the header");
     v = read_stream(in, l, path.string());
-    if (in.peek() != std::char_traits<char>::eof())
-      throw DataError(path.string() + " has more data than DimSize x ElementType says; check the header");
   } else {
     if (data_file == "LIST" || data_file.find('%') != std::string::npos)
-      throw DataError(path.string() + ": multi-file MetaImage (ElementDataFile = " + data_file +
+      throw DataError(path.string() + ": multi-file MetaImage (ElementDataFile = " + excerpt(data_file) +
                       ") is not supported; give the slices as a folder instead");
     const fs::path raw = path.parent_path() / data_file;
-    const std::size_t header = keys.count("HeaderSize") ? std::stoull(keys["HeaderSize"]) : 0;
-    l.header_bytes = header;
     if (!fs::exists(raw))
-      throw UsageError(path.string() + " points to data file " + raw.string() + ", which does not exist");
+      throw UsageError(path.string() + " points to data file " + excerpt(data_file) + ", which does not exist beside it");
+    // HeaderSize = -1 means the data are the last bytes of the file (the MetaImage convention).
+    const std::string header = keys.count("HeaderSize") ? keys["HeaderSize"] : "0";
+    if (header == "-1") {
+      std::error_code ec;
+      const auto size = fs::file_size(raw, ec);
+      const std::size_t data = expected_bytes(l, path.string());
+      l.header_bytes = !ec && size >= data ? size - data : 0;
+    } else {
+      const auto h = header_counts(path, "HeaderSize", header);
+      if (h.size() != 1) throw DataError(path.string() + ": HeaderSize = " + excerpt(header) + " must be one whole number or -1; fix the header");
+      l.header_bytes = h[0];
+    }
     v = read_raw_checked(raw, l, "check DimSize, ElementType and HeaderSize in " + path.string());
   }
   std::visit([&](auto& vol) { vol.set_origin(origin); }, v);

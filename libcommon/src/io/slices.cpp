@@ -2,6 +2,7 @@
 
 #include <glob.h>
 #include <png.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <csetjmp>
@@ -99,6 +100,17 @@ bool png_read_raw(const char* path, PngRaw* raw) {
   if (raw->bit_depth == 16) png_set_swap(png);  // PNG is big-endian
   png_read_update_info(png, info);
   const std::size_t row = png_get_rowbytes(png, info);
+  // The pixels come from zlib streams in the file, which expand at most ~1032:1: a header
+  // declaring more (libpng allows 10^6 x 10^6) is damage, and must not size an allocation.
+  struct stat st;
+  const double file_bytes = ::fstat(::fileno(fp), &st) == 0 ? static_cast<double>(st.st_size) : 0.0;
+  if (static_cast<double>(row) * raw->height > 1100.0 * file_bytes + 1e6) {
+    std::snprintf(raw->error, sizeof raw->error, "its header declares %u x %u pixels, far more than its %.0f bytes can hold",
+                  raw->width, raw->height, file_bytes);
+    png_destroy_read_struct(&png, &info, nullptr);
+    std::fclose(fp);
+    return false;
+  }
   raw->pixels.resize(row * raw->height);
   for (std::uint32_t y = 0; y < raw->height; ++y) png_read_row(png, raw->pixels.data() + y * row, nullptr);
   png_read_end(png, nullptr);

@@ -1,5 +1,6 @@
 #include "graintwin/io/tiff.hpp"
 
+#include <fmt/format.h>
 #include <tiffio.h>
 
 #include <cstdarg>
@@ -130,6 +131,28 @@ void parse_description(const std::string& desc, std::optional<Vec3>& voxel, std:
   }
 }
 
+// The volume is allocated from page 0's header before any pixel is read, so the header must not
+// declare more than the file can hold: uncompressed pages at most the file's bytes, compressed ones
+// at most 20000 times them (lossless codecs stay far below that on scan data; deflate cannot pass
+// ~1032:1). A damaged 1 KB file declaring 65535 x 65535 float pages is refused, not zero-filled.
+void check_declared_size(TIFF* t, const PageFormat& first, int pages, const std::filesystem::path& path) {
+  bool compressed = false;
+  for (int p = 0; p < pages && !compressed; ++p) {
+    if (!TIFFSetDirectory(t, static_cast<tdir_t>(p))) break;  // read_pages reports it
+    std::uint16_t c = COMPRESSION_NONE;
+    TIFFGetFieldDefaulted(t, TIFFTAG_COMPRESSION, &c);
+    compressed = c != COMPRESSION_NONE;
+  }
+  TIFFSetDirectory(t, 0);
+  std::error_code ec;
+  const double file_bytes = static_cast<double>(std::filesystem::file_size(path, ec));
+  const double declared = static_cast<double>(pages) * first.height * first.width * dtype_bytes(first.dtype);
+  if (!ec && declared > (compressed ? 20000.0 : 1.0) * file_bytes)
+    throw DataError(fmt::format("{} declares {} pages of {} x {} {} pixels ({:.3g} bytes), more than its {:g} bytes can hold; "
+                                "the file is truncated or damaged",
+                                path.string(), pages, first.width, first.height, dtype_name(first.dtype), declared, file_bytes));
+}
+
 template <class T>
 Volume<T> read_pages(TIFF* t, const PageFormat& first, int pages, const std::filesystem::path& path) {
   Volume<T> v({static_cast<std::size_t>(pages), first.height, first.width});
@@ -160,6 +183,7 @@ AnyVolume read_tiff(const std::filesystem::path& path) {
     throw DataError(path.string() + " is truncated or damaged after page " + std::to_string(pages - 1) +
                     libtiff_says() + "; re-export the stack");
   const PageFormat first = page_format(t.get(), path, 0);
+  check_declared_size(t.get(), first, pages, path);
 
   std::optional<Vec3> voxel, origin;
   std::optional<double> spacing;

@@ -1,6 +1,7 @@
 #include "graintwin/io/volume_io.hpp"
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
@@ -26,7 +27,7 @@ H5File open_kind(const std::filesystem::path& path, const std::string& kind, con
     throw UsageError(path.string() + " is an HDF5 file without a GrainTwin 'kind' attribute, expected kind=" +
                      kind + (hint.empty() ? "; import foreign images with volconvert" : tail));
   if (found != kind)
-    throw UsageError(path.string() + " holds kind=" + found + ", expected kind=" + kind + tail);
+    throw UsageError(path.string() + " holds kind=" + excerpt(found) + ", expected kind=" + kind + tail);
   const auto v = f.attr_int("/", schema::attr::schema_version);
   if (!v)
     throw UsageError(path.string() + " has no schema_version attribute; rewrite it with the current tools");
@@ -70,7 +71,7 @@ ImageHeader read_image_header(const H5File& file, const std::string& path) {
                     "; volumes must be uint8, uint16, uint32 or float32");
   const auto order = file.attr_string(path, schema::attr::axis_order).value_or("zyx");
   if (order != "zyx")
-    throw DataError(file.path().string() + ":" + path + " has axis_order '" + order + "', expected 'zyx'");
+    throw DataError(file.path().string() + ":" + path + " has axis_order '" + excerpt(order) + "', expected 'zyx'");
   const auto vs = file.attr_doubles(path, schema::attr::voxel_size);
   if (vs.size() == 3) h.voxel_size = {vs[0], vs[1], vs[2]};
   const auto o = file.attr_doubles(path, schema::attr::origin);

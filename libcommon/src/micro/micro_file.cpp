@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -132,6 +135,14 @@ void write_micro_file(const std::filesystem::path& path, const MicroFile& c, con
     write_state(f, std::string(sm::states) + "/" + std::to_string(q), r.states[q], s.psd.empty() ? nullptr : &s.psd[q]);
   f.write_strings(sm::parameters, {c.parameters_json});
   io::write_history(f, history);
+}
+
+std::string read_micro_source(const io::H5File& f) {
+  const nlohmann::json p = nlohmann::json::parse(f.read_string(sm::parameters), nullptr, false);
+  if (!p.is_object() || !p.contains("source") || !p["source"].is_string())
+    throw DataError(fmt::format("{}: {} is not a JSON object naming its source; the file is damaged, rewrite it with tracks2micro",
+                                f.path().string(), sm::parameters));
+  return p["source"].get<std::string>();
 }
 
 void write_micro_vtp(const std::filesystem::path& path, const MicroFile& c) {

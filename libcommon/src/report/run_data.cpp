@@ -11,6 +11,7 @@
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
+#include "graintwin/micro/micro_file.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/local_deformation.hpp"
@@ -90,7 +91,7 @@ ScanData read_scan(const RunFiles& files, std::size_t s) {
   d.void_ratio = std::nan("");
   d.coordination_mean = std::nan("");
   const io::H5File labels = io::H5File::open(files.labels[s]);
-  if (labels.exists(schema::labels::sample_void_ratio)) d.void_ratio = labels.read<double>(schema::labels::sample_void_ratio).at(0);
+  if (labels.exists(schema::labels::sample_void_ratio)) d.void_ratio = labels.read_scalar<double>(schema::labels::sample_void_ratio);
   if (!files.shapes[s].empty()) {
     const shape::ShapesFile sh = shape::read_shapes_file(files.shapes[s]);
     d.psd = sh.psd;
@@ -99,7 +100,10 @@ ScanData read_scan(const RunFiles& files, std::size_t s) {
   if (!files.contacts[s].empty()) {
     namespace sc = schema::contacts;
     const io::H5File c = io::H5File::open(files.contacts[s]);
-    d.contacts = c.info(sc::pair).dims.at(0);
+    const auto pair_dims = c.info(sc::pair).dims;
+    if (pair_dims.size() != 2 || pair_dims[1] != 2)
+      throw DataError(files.contacts[s].string() + ": " + sc::pair + " is not a table of (low, high) label pairs; rewrite it with labels2contacts");
+    d.contacts = pair_dims[0];
     d.coordination = c.read<std::uint64_t>(sc::coordination_count);
     d.coordination_mean = attr_double(c, "/coordination", "mean");
     d.rose_normal = read_rose(c, sc::rose_normal, sc::counts);
@@ -186,7 +190,7 @@ MicroData read_micro_data(const fs::path& path) {
   namespace sm = schema::micro;
   const io::H5File f = io::H5File::open(path);
   MicroData m;
-  m.source = nlohmann::json::parse(f.read_strings(sm::parameters).at(0)).value("source", "");
+  m.source = micro::read_micro_source(f);
   m.state_d50 = f.read<double>(sm::state_d50);
   for (std::size_t t = 0; t < m.state_d50.size(); ++t) {
     const std::string g = std::string(sm::states) + "/" + std::to_string(t);

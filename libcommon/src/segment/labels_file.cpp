@@ -86,10 +86,10 @@ LabelsFile read_labels_file(const std::filesystem::path& path) {
   if (centre.size() == 2) r.centre_x = centre[0], r.centre_y = centre[1];
   if (radius.size() == 1) r.radius = nan_to(radius[0], inf);
   if (zr.size() == 2) r.z_min = nan_to(zr[0], -inf), r.z_max = nan_to(zr[1], inf);
-  c.sample.void_ratio.e = f.read<double>("/sample/void_ratio").at(0);
-  c.sample.void_ratio.solid_m3 = f.read<double>("/sample/solid_volume").at(0);
-  c.sample.void_ratio.void_m3 = f.read<double>("/sample/void_volume").at(0);
-  c.parameters_json = f.read_strings("/segmentation/parameters").at(0);
+  c.sample.void_ratio.e = f.read_scalar<double>("/sample/void_ratio");
+  c.sample.void_ratio.solid_m3 = f.read_scalar<double>("/sample/solid_volume");
+  c.sample.void_ratio.void_m3 = f.read_scalar<double>("/sample/void_volume");
+  c.parameters_json = f.read_string("/segmentation/parameters");
   return c;
 }
 

@@ -132,8 +132,8 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
   }
   c.psd.diameter = f.read<double>("/psd/diameter");
   c.psd.percent_passing = f.read<double>("/psd/percent_passing");
-  c.psd.d50 = f.read<double>("/psd/d50").at(0);
-  c.parameters_json = f.read_strings("/shapes/parameters").at(0);
+  c.psd.d50 = f.read_scalar<double>("/psd/d50");
+  c.parameters_json = f.read_string("/shapes/parameters");
   return c;
 }
 

@@ -9,6 +9,9 @@ namespace graintwin {
 std::vector<std::string> split(const std::string& text, char sep);
 std::string trim(const std::string& text);
 std::string lower(std::string text);
+/// Text read from a file, fit to be quoted in a message: bytes other than printable ASCII become
+/// '?', and past `max` characters it is cut with "..." (a damaged file must not print pages).
+std::string excerpt(const std::string& text, std::size_t max = 60);
 /// Natural ("human") order: "slice2" < "slice10".
 bool natural_less(const std::string& a, const std::string& b);
 /// Parses a length with an optional unit suffix: "27.5um", "0.0607mm", "6e-5" (metres when bare).

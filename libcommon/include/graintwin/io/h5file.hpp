@@ -77,8 +77,11 @@ class H5File {
                 const std::vector<double>& values);
   bool has_attr(const std::string& object, const std::string& name) const;
   std::optional<std::string> attr_string(const std::string& object, const std::string& name) const;
+  /// nullopt when absent or not one number; DataError when it is not a whole number in range (NaN, 1e300, 2.5).
   std::optional<long long> attr_int(const std::string& object, const std::string& name) const;
   std::vector<double> attr_doubles(const std::string& object, const std::string& name) const;
+  /// The one number of an attribute; DataError naming it when it is absent or holds another count.
+  double attr_double(const std::string& object, const std::string& name) const;
 
   /// Writes a row-major N-d array (dims slowest first). Parent groups are created.
   template <class T>
@@ -91,6 +94,9 @@ class H5File {
   /// Writes a 1-D dataset of variable-length UTF-8 strings.
   void write_strings(const std::string& path, const std::vector<std::string>& lines);
 
+  /// Shape and type. DataError when the shape declares more values than the file can hold: an
+  /// element count that overflows 64 bits, or far more bytes than the dataset stores (a damaged
+  /// file must not make a reader allocate its declared extent).
   DatasetInfo info(const std::string& path) const;
   /// Reads a whole dataset converted to T (HDF5 converts numeric types).
   template <class T>
@@ -100,6 +106,11 @@ class H5File {
   void read_box(const std::string& path, const std::vector<hsize_t>& offset,
                 const std::vector<hsize_t>& count, T* out) const;
   std::vector<std::string> read_strings(const std::string& path) const;
+  /// The one value of a dataset of one element (e.g. /sample/void_ratio); DataError naming it otherwise.
+  template <class T>
+  T read_scalar(const std::string& path) const;
+  /// The one string of a 1-D string dataset of one element (e.g. a tool's parameters JSON).
+  std::string read_string(const std::string& path) const;
 
  private:
   H5File(std::filesystem::path path, H5Id file) : path_(std::move(path)), file_(std::move(file)) {}

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Builds the library, tools and tests with AddressSanitizer and UndefinedBehaviorSanitizer (gcc,
+# like the normal build; -O1 -g1, assertions on) in build-sanitize/, then runs ctest there (docs/testing.md).
+#   scripts/sanitize.sh [CTEST_ARGS...]      e.g. scripts/sanitize.sh -L volconvert
+# Tools that the tests start as processes are sanitized too: a report in any of them fails its test.
+set -euo pipefail
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BUILD="$ROOT/build-sanitize"
+bash "$ROOT/scripts/deps.sh"
+cmake -S "$ROOT" -B "$BUILD" -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" -DGRAINTWIN_SANITIZE=ON \
+  -DGRAINTWIN_BUILD_BENCH=OFF >/dev/null
+start=$(date +%s)
+cmake --build "$BUILD" -j "$(nproc)"
+built=$(date +%s)
+# Leaks are reported (LeakSanitizer); libgomp's and libhdf5's process-lifetime allocations are not
+# leaks of ours and are suppressed by name.
+export LSAN_OPTIONS="suppressions=$ROOT/tests/fuzz/lsan.supp:print_suppressions=0"
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+status=0
+ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)" --timeout 3600 "$@" || status=$?
+echo "sanitize: build $((built - start)) s, tests $(($(date +%s) - built)) s, ctest exit $status"
+exit $status
