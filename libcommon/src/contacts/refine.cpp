@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 
 namespace graintwin::contacts {
 
@@ -314,7 +315,7 @@ std::vector<Refinement> refine_contacts(const Volume<T>& grey, const Volume<std:
   for (std::size_t k = 0; k < contacts.size(); ++k) radii[k] = {radius_of(contacts[k].low), radius_of(contacts[k].high)};
   std::vector<Refinement> out(contacts.size());
   std::atomic<std::size_t> done{0};
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) num_threads(useful_threads(contacts.size()))
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     out[k] = refine_contact(grey, labels, contacts[k], radii[k][0], radii[k][1], params);
     const std::size_t d = ++done;

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 
 namespace graintwin::segment {
 namespace {
@@ -42,7 +43,8 @@ std::vector<std::uint64_t> voxel_counts(const Volume<std::uint32_t>& labels, std
   std::vector<std::uint64_t> total(std::size_t{max} + 1, 0);
   const std::uint32_t* l = labels.data();
   const std::size_t n = labels.size();
-#pragma omp parallel
+  // A table per thread: no more threads than processors (integer sums: the same for any team).
+#pragma omp parallel num_threads(useful_threads(n))
   {
     std::vector<std::uint64_t> c(std::size_t{max} + 1, 0);
 #pragma omp for schedule(static) nowait
@@ -224,7 +226,8 @@ std::vector<GrainRecord> grain_table(const Volume<std::uint32_t>& labels) {
   };
   std::vector<Acc> total(std::size_t{m} + 1);
   const std::uint32_t* l = labels.data();
-#pragma omp parallel
+  // A table per thread: no more threads than processors (integer sums: the same for any team).
+#pragma omp parallel num_threads(useful_threads(s[0]))
   {
     std::vector<Acc> acc(std::size_t{m} + 1);
 #pragma omp for schedule(static) nowait
