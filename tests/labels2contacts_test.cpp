@@ -184,3 +184,16 @@ TEST(Labels2contacts, ReadsThePipelineParameters) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "c.h5"));
 }
+
+TEST(Labels2contacts, GrainTableShorterThanTheImageIsRefused) {
+  test::TempDir dir;
+  segment::LabelsFile c;
+  c.labels = three_boxes();
+  c.grains = segment::grain_table(c.labels);
+  c.grains.pop_back();  // label 3 keeps its voxels but loses its row
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / "short.h5", c, {"a table one row short"});
+  test::expect_clean_failure("labels2contacts", dir, {(dir / "short.h5").string(), (dir / "c.h5").string()}, 1,
+                             (dir / "short.h5").string() + " does not match its label image: 1 grain of the label image "
+                             "has no row in the grain table (label 3); rewrite the file with ct2labels");
+}
