@@ -1,5 +1,6 @@
 #include "graintwin/contacts/refine.hpp"
 
+#include <fmt/format.h>
 #include <omp.h>
 
 #include <Eigen/Cholesky>
@@ -12,6 +13,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/parallel.hpp"
+#include "graintwin/core/volume_ops.hpp"
 
 namespace graintwin::contacts {
 
@@ -23,6 +25,31 @@ const char* status_name(RefineStatus s) {
     case RefineStatus::rejected: return "rejected";
   }
   return "?";
+}
+
+void check_grey_for_refinement(const AnyVolume& grey, const std::string& name) {
+  const ValueRange r = value_range(grey);
+  if (r.non_finite > 0)
+    throw DataError(name + " holds " + std::to_string(r.non_finite) +
+                    " NaN or infinite voxels; crop them away (volconvert --crop) or run without the volume");
+  if (!(r.max > r.min))
+    throw DataError(fmt::format("{} holds the grey value {:g} in every voxel, so there is no contrast between grains and "
+                                "pores and the contact confidences would be undefined; pass the scan the labels were "
+                                "made from, or run without the volume",
+                                name, r.min));
+}
+
+ConfidenceCount count_confidences(const std::vector<Refinement>& fits, double min_confidence) {
+  ConfidenceCount c;
+  for (const Refinement& f : fits) {
+    if (std::isnan(f.confidence))
+      ++c.unknown;
+    else if (f.confidence >= min_confidence)
+      ++c.at_least;
+    else
+      ++c.below;
+  }
+  return c;
 }
 
 namespace {
