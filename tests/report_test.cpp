@@ -321,6 +321,33 @@ TEST(ReportFailures, BadInputsFailCleanly) {
   test::expect_clean_failure("report", out, {run.path().string(), page}, 2, "--force");
 }
 
+TEST(ReportFailures, PathsOfTheWrongKindSayWhatTheyAreAndWhatIsExpected) {
+  test::TempDir run, out;
+  fs::create_directories(run / "scan_000");
+  write_labels(run / "scan_000/labels.h5", 0);
+  const std::string labels = (run / "scan_000/labels.h5").string(), page = (out / "r.html").string();
+  // A file where the run folder belongs.
+  test::expect_clean_failure("report", out, {labels, page}, 2,
+                             "the run directory " + labels + " is a file, not a folder; pass the folder Makefile.pipeline");
+  // Folders where files belong: an option's, and one with a layout name inside the run.
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--labels", (run / "scan_000").string()}, 2,
+                             "--labels " + (run / "scan_000").string() + " is a folder, not a file; name the file itself");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--python", run.path().string()}, 2,
+                             "--python " + run.path().string() + " is a folder, not a file");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--chart-script", run.path().string()}, 2,
+                             "--chart-script " + run.path().string() + " is a folder, not a file");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--bench-img", labels}, 2,
+                             "--bench-img " + labels + " is a file, not a folder; pass the repository's docs/img");
+  fs::create_directories(run / "tracks.h5");
+  test::expect_clean_failure("report", out, {run.path().string(), page}, 2,
+                             "the run's file " + (run / "tracks.h5").string() + " is a folder, not a file; move it out of "
+                             "the run directory, or name the file with --tracks");
+  fs::remove(run / "tracks.h5");
+  fs::create_directories(run / "scan_000/contacts.h5");
+  test::expect_clean_failure("report", out, {run.path().string(), page}, 2,
+                             (run / "scan_000/contacts.h5").string() + " is a folder, not a file");
+}
+
 // ---- the library's helpers against exact answers -------------------------------------------
 
 TEST(ReportCharts, Base64AndEscapingFollowTheStandards) {
