@@ -184,3 +184,40 @@ TEST(Labels2contacts, ReadsThePipelineParameters) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "c.h5"));
 }
+
+TEST(Labels2contacts, GrainTableShorterThanTheImageIsRefused) {
+  test::TempDir dir;
+  segment::LabelsFile c;
+  c.labels = three_boxes();
+  c.grains = segment::grain_table(c.labels);
+  c.grains.pop_back();  // label 3 keeps its voxels but loses its row
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / "short.h5", c, {"a table one row short"});
+  test::expect_clean_failure("labels2contacts", dir, {(dir / "short.h5").string(), (dir / "c.h5").string()}, 1,
+                             (dir / "short.h5").string() + " does not match its label image: 1 grain of the label image "
+                             "has no row in the grain table (label 3); rewrite the file with ct2labels");
+}
+
+TEST(Labels2contacts, GreyVolumeWithoutContrastIsRefused) {
+  test::TempDir dir;
+  const SpherePair p = write_sphere_pair(dir);
+  // Every voxel 0: no fit can converge, so every confidence would be NaN and every contact counted.
+  io::write_volume_file(dir / "black.h5", Volume<std::uint16_t>({40, 40, 40}, {kVoxel, kVoxel, kVoxel}), {"all zero"});
+  test::expect_clean_failure("labels2contacts", dir, {p.labels.string(), (dir / "black.h5").string(), (dir / "c.h5").string()},
+                             1, (dir / "black.h5").string() + " holds the grey value 0 in every voxel, so there is no contrast");
+}
+
+TEST(Labels2contacts, SummaryCountsUnknownConfidencesApart) {
+  test::TempDir dir;
+  const SpherePair p = write_sphere_pair(dir);
+  const auto r = run_tool("labels2contacts", {p.labels.string(), p.scan.string(), (dir / "c.h5").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::H5File f = io::open_kind(dir / "c.h5", "contacts");
+  const auto confidence = f.read<double>("/contacts/confidence");
+  std::size_t above = 0, unknown = 0;
+  for (double c : confidence) above += c >= 0.5, unknown += std::isnan(c);
+  const std::string line = std::to_string(above + unknown) + " of " + std::to_string(confidence.size()) +
+                           " contacts are counted in Z and the fabric: " + std::to_string(above) +
+                           " with confidence >= 0.5 and " + std::to_string(unknown) + " not fitted (confidence unknown)";
+  EXPECT_NE(r.err.find(line), std::string::npos) << r.err;
+}

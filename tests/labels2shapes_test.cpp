@@ -11,6 +11,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "graintwin/shape/shapes_file.hpp"
 #include "support/cli_contract.hpp"
@@ -123,6 +124,19 @@ TEST(Labels2shapes, BadInputsFailCleanly) {
   empty.parameters_json = "{}";
   segment::write_labels_file(dir / "empty.h5", empty, {"empty"});
   fail(dir, {(dir / "empty.h5").string(), out}, 1, "holds no grain");
+}
+
+TEST(Labels2shapes, GrainTableShorterThanTheImageIsRefusedNotDropped) {
+  test::TempDir dir;
+  segment::LabelsFile c;
+  c.labels = test::label_balls({40, 40, 40}, kBalls, {kVoxel, kVoxel, kVoxel});
+  c.grains = segment::grain_table(c.labels);
+  c.grains.resize(5);  // grains 6 to 8 keep their voxels but lose their rows
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / "short.h5", c, {"a table three rows short"});
+  fail(dir, {(dir / "short.h5").string(), (dir / "shapes.h5").string()}, 1,
+       "the grain table of " + (dir / "short.h5").string() + " does not match its label image: 3 grains of the label "
+       "image have no row in the grain table (labels 6 to 8); rewrite the file with ct2labels");
 }
 
 TEST(Labels2shapes, TooFewDirectionsLowerTheDegreeWithAWarning) {

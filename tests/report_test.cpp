@@ -8,12 +8,17 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <numbers>
 #include <random>
 #include <regex>
 #include <sstream>
+#include <thread>
 
 #include "graintwin/contacts/fabric.hpp"
 #include "graintwin/io/h5file.hpp"
@@ -22,6 +27,7 @@
 #include "graintwin/report/run_data.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "support/cli_contract.hpp"
+#include "support/processes.hpp"
 #include "support/phantoms.hpp"
 #include "support/simulation_results.hpp"
 
@@ -319,6 +325,53 @@ TEST(ReportFailures, BadInputsFailCleanly) {
   // A run of one labelled scan and nothing else is a page that says what each stage would add.
   ASSERT_EQ(run_tool("report", {run.path().string(), page}).exit_code, 0);
   test::expect_clean_failure("report", out, {run.path().string(), page}, 2, "--force");
+}
+
+TEST(ReportFailures, PathsOfTheWrongKindSayWhatTheyAreAndWhatIsExpected) {
+  test::TempDir run, out;
+  fs::create_directories(run / "scan_000");
+  write_labels(run / "scan_000/labels.h5", 0);
+  const std::string labels = (run / "scan_000/labels.h5").string(), page = (out / "r.html").string();
+  // A file where the run folder belongs.
+  test::expect_clean_failure("report", out, {labels, page}, 2,
+                             "the run directory " + labels + " is a file, not a folder; pass the folder Makefile.pipeline");
+  // Folders where files belong: an option's, and one with a layout name inside the run.
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--labels", (run / "scan_000").string()}, 2,
+                             "--labels " + (run / "scan_000").string() + " is a folder, not a file; name the file itself");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--python", run.path().string()}, 2,
+                             "--python " + run.path().string() + " is a folder, not a file");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--chart-script", run.path().string()}, 2,
+                             "--chart-script " + run.path().string() + " is a folder, not a file");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--bench-img", labels}, 2,
+                             "--bench-img " + labels + " is a file, not a folder; pass the repository's docs/img");
+  fs::create_directories(run / "tracks.h5");
+  test::expect_clean_failure("report", out, {run.path().string(), page}, 2,
+                             "the run's file " + (run / "tracks.h5").string() + " is a folder, not a file; move it out of "
+                             "the run directory, or name the file with --tracks");
+  fs::remove(run / "tracks.h5");
+  fs::create_directories(run / "scan_000/contacts.h5");
+  test::expect_clean_failure("report", out, {run.path().string(), page}, 2,
+                             (run / "scan_000/contacts.h5").string() + " is a folder, not a file");
+}
+
+TEST(ReportFailures, ChartScriptDiesWithAKilledReport) {
+  test::TempDir run, out;
+  fs::create_directories(run / "scan_000");
+  write_labels(run / "scan_000/labels.h5", 0);
+  const fs::path script = run / "slow.py";
+  std::ofstream(script) << "import time\ntime.sleep(60)\n";
+  const pid_t report = test::spawn_tool("report", {run.path().string(), (out / "r.html").string(), "--chart-script", script.string(), "-q"});
+  std::vector<pid_t> children;
+  for (int tries = 0; tries < 3000 && children.empty(); ++tries) {  // up to 30 s: the run is read first
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    children = test::child_pids(report);
+  }
+  ASSERT_EQ(children.size(), 1u) << "the chart script did not start";
+  ASSERT_EQ(::kill(report, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(report, &status, 0), report);
+  EXPECT_TRUE(test::process_ends_within(children[0], std::chrono::seconds(1))) << "the chart script outlived the report";
+  ::kill(children[0], SIGKILL);  // not left behind when it did
 }
 
 // ---- the library's helpers against exact answers -------------------------------------------

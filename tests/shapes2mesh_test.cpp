@@ -1,14 +1,14 @@
 // shapes2mesh: CLI contract; the twin of a phantom scan (labels -> labels2shapes -> shapes2mesh)
 // checked against the balls' exact volumes, element validity and watertight grain surfaces; a
 // broken SH surface caught and replaced; the .vtu and .msh views; the same model whatever the
-// number of gmsh worker processes; Ctrl-C ending the workers; bad inputs failing cleanly.
+// number of gmsh worker processes; Ctrl-C ending the workers, SIGKILL taking them along, -j 1024
+// starting no more of them than grains or processors; bad inputs failing cleanly.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
-#include <fcntl.h>
+#include <omp.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <chrono>
@@ -25,12 +25,11 @@
 #include "graintwin/shape/shapes_file.hpp"
 #include "support/cli_contract.hpp"
 #include "support/phantoms.hpp"
+#include "support/processes.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
 using test::run_tool;
-
-extern char** environ;
 
 namespace {
 
@@ -53,6 +52,20 @@ Inputs write_inputs(const test::TempDir& dir) {
   return {dir / "labels.h5", dir / "shapes.h5"};
 }
 
+/// Starts shapes2mesh at -j 2 on fine meshes (so that meshing lasts) and returns its pid and its
+/// gmsh workers once they are all forked (at the start, one per thread up to the processors).
+std::pair<pid_t, std::vector<pid_t>> start_long_run(const test::TempDir& dir, const Inputs& in) {
+  const pid_t tool = test::spawn_tool("shapes2mesh", {in.shapes.string(), (dir / "m.h5").string(), "-j", "2", "-q",
+                                                      "--elements-per-diameter", "40"});
+  std::vector<pid_t> workers;
+  const std::size_t expected = std::min<std::size_t>(2, omp_get_num_procs());
+  for (int tries = 0; tries < 500 && workers.size() < expected; ++tries) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    workers = test::child_pids(tool);
+  }
+  return {tool, workers};
+}
+
 double ball_volume(std::size_t i) { return 4.0 / 3.0 * M_PI * std::pow(kBalls[i].r * kVoxel, 3); }
 
 /// Grain g's triangles as a stand-alone surface over the model's nodes.
@@ -62,32 +75,6 @@ mesh::TriangleSurface grain_surface(const fdem::Model& m, std::size_t g) {
   for (std::uint32_t t = m.grains[g].triangle_begin; t < m.grains[g].triangle_end; ++t)
     s.triangles.push_back({int(m.triangles[t][0]), int(m.triangles[t][1]), int(m.triangles[t][2])});
   return s;
-}
-
-/// Starts build/bin/<tool> with `args` (output to /dev/null) and returns its pid without waiting.
-pid_t spawn_tool(const std::string& tool, const std::vector<std::string>& args) {
-  std::vector<std::string> words{(std::filesystem::path(GRAINTWIN_TOOL_DIR) / tool).string()};
-  words.insert(words.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& w : words) argv.push_back(w.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start " + words[0]);
-  return pid;
-}
-
-/// Children of process `pid`'s main thread (Linux /proc).
-std::vector<pid_t> child_pids(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/task/" + std::to_string(pid) + "/children");
-  std::vector<pid_t> out;
-  for (pid_t c; in >> c;) out.push_back(c);
-  return out;
 }
 
 }  // namespace
@@ -153,15 +140,8 @@ TEST(Shapes2mesh, PhantomTwinHasEveryBallAtItsVolumeWithValidElements) {
 TEST(Shapes2mesh, InterruptEndsTheWorkersAndWritesNothing) {
   test::TempDir dir;
   const Inputs in = write_inputs(dir);
-  // Fine meshes so that meshing lasts well beyond the interrupt.
-  const pid_t tool = spawn_tool("shapes2mesh", {in.shapes.string(), (dir / "m.h5").string(), "-j", "2", "-q",
-                                                      "--elements-per-diameter", "40"});
-  std::vector<pid_t> workers;
-  for (int tries = 0; tries < 200 && workers.size() < 2; ++tries) {  // the workers are forked at the start
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    workers = child_pids(tool);
-  }
-  ASSERT_EQ(workers.size(), 2u);
+  const auto [tool, workers] = start_long_run(dir, in);
+  ASSERT_EQ(workers.size(), std::min<std::size_t>(2, omp_get_num_procs())) << "no more workers than processors";
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   ASSERT_EQ(::kill(tool, SIGINT), 0);
   const auto start = std::chrono::steady_clock::now();
@@ -172,6 +152,35 @@ TEST(Shapes2mesh, InterruptEndsTheWorkersAndWritesNothing) {
   EXPECT_EQ(WEXITSTATUS(status), 130);
   for (pid_t w : workers) EXPECT_NE(::kill(w, 0), 0) << "worker " << w << " outlived the tool";
   EXPECT_EQ(test::list_dir(dir.path()), (std::vector<std::string>{"labels.h5", "shapes.h5"}));
+}
+
+TEST(Shapes2mesh, KilledToolTakesItsWorkersWithIt) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const auto [tool, workers] = start_long_run(dir, in);
+  ASSERT_FALSE(workers.empty());
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // meshing
+  ASSERT_EQ(::kill(tool, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(tool, &status, 0), tool);
+  for (pid_t w : workers) {
+    EXPECT_TRUE(test::process_ends_within(w, std::chrono::seconds(1))) << "worker " << w << " outlived the killed tool";
+    ::kill(w, SIGKILL);
+  }
+}
+
+TEST(Shapes2mesh, ThousandsOfThreadsStartNoMoreWorkersThanGrainsOrProcessors) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = run_tool("shapes2mesh", {in.shapes.string(), (dir / "m.h5").string(), "-j", "1024", "-q", "--order", "1",
+                                          "--elements-per-diameter", "4"});
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::H5File f = io::H5File::open(dir / "m.h5");
+  const auto p = nlohmann::json::parse(f.read_strings("/mesh/parameters").at(0));
+  EXPECT_EQ(p["gmsh_processes"].get<int>(), std::min<int>(kBalls.size(), omp_get_num_procs()));
+  EXPECT_LT(seconds, 60.0) << "1024 threads on 8 grains must not crawl";
 }
 
 TEST(Shapes2mesh, BrokenShSurfaceFallsBackToVoxelsOrEllipsoidWithANote) {

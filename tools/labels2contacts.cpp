@@ -18,7 +18,6 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
-#include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
@@ -187,10 +186,7 @@ int main(int argc, char** argv) {
     AnyVolume grey;
     if (refine) {
       grey = io::read_volume_file(volume_path);
-      const ValueRange r = value_range(grey);
-      if (r.non_finite > 0)
-        throw DataError(volume_path.string() + " holds " + std::to_string(r.non_finite) +
-                        " NaN or infinite voxels; crop them away (volconvert --crop) or run without the volume");
+      contacts::check_grey_for_refinement(grey, volume_path.string());
     }
     const Shape3& s = lab.labels.shape();
     spdlog::info("{} grains in {} x {} x {} voxels (z, y, x)", lab.grains.size(), s[0], s[1], s[2]);
@@ -249,9 +245,16 @@ int main(int argc, char** argv) {
         counted.back().normal = normal[k];
       }
     }
-    if (refine)
-      spdlog::info("{} of {} contacts have confidence >= {} and are counted in Z and the fabric", counted.size(), m,
-                   o.min_confidence);
+    if (refine) {
+      const contacts::ConfidenceCount cc = contacts::count_confidences(fits, o.min_confidence);
+      spdlog::info("{} of {} contacts are counted in Z and the fabric: {} with confidence >= {} and {} not fitted "
+                   "(confidence unknown); {} below",
+                   counted.size(), m, cc.at_least, o.min_confidence, cc.unknown, cc.below);
+      if (m > 0 && cc.unknown == m)
+        spdlog::warn("no contact could be fitted to the grey levels of {}: every confidence is unknown (NaN) and every "
+                     "normal is the PCA one; check that it is the scan the labels were made from",
+                     volume_path.string());
+    }
     const contacts::Coordination z = contacts::coordination(lab.grains, counted, o.include_edge_grains);
     std::vector<Vec3> counted_normals, counted_branches;
     for (const auto& c : counted) counted_normals.push_back(c.normal), counted_branches.push_back(c.branch);

@@ -91,13 +91,13 @@ int main(int argc, char** argv) {
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     // Options and files first, before reading any table.
     if (output.extension() != ".html") throw UsageError("the report " + output.string() + " must end in .html");
-    std::error_code ec;
     if (script.empty()) script = fs::path(GRAINTWIN_SOURCE_DIR) / "pipelines/plots/report_charts.py";
-    if (!fs::is_regular_file(python, ec))
+    std::error_code ec;
+    if (!fs::exists(python, ec))
       throw UsageError("--python " + python.string() + " does not exist; install Debian's python3 and python3-matplotlib (scripts/deps.sh)");
-    if (!fs::is_regular_file(script, ec)) throw UsageError("--chart-script " + script.string() + " does not exist; check the path");
-    if (!bench_img.empty() && !fs::is_directory(bench_img, ec))
-      throw UsageError("--bench-img " + bench_img.string() + " is not a folder; pass the repository's docs/img");
+    require_file(python, "--python", "name the python3 program itself");
+    require_file(script, "--chart-script");
+    if (!bench_img.empty()) require_folder(bench_img, "--bench-img", "pass the repository's docs/img");
     if (bench_img.empty()) bench_img = fs::path(GRAINTWIN_SOURCE_DIR) / "docs/img";
     const fs::path img_dir = output.parent_path() / (output.stem().string() + "_img");
     io::AtomicOutput html_out(output, ctx.force());

@@ -194,12 +194,19 @@ int main(int argc, char** argv) {
     std::optional<io::AtomicOutput> vtu_out, msh_out;
     if (!vtu_path.empty()) vtu_out.emplace(vtu_path, ctx.force());
     if (!msh_path.empty()) msh_out.emplace(msh_path, ctx.force());
-    ctx.add_input_history(io::open_kind(shapes_path, schema::kind::shapes, "pass the output of labels2shapes"));
+    std::size_t meshes = 0;  // at most: the grains of SHAPES, or the equivalent sample's draws
+    {
+      const io::H5File sf = io::open_kind(shapes_path, schema::kind::shapes, "pass the output of labels2shapes");
+      ctx.add_input_history(sf);
+      const auto dims = sf.info("/grains/label").dims;
+      meshes = dims.empty() ? 0 : dims[0];
+      if (equivalent) meshes = std::max<std::size_t>(meshes, po.grains);
+    }
     if (!labels_path.empty()) ctx.add_input_history(io::open_kind(labels_path, schema::kind::labels, "pass the output of ct2labels"));
     if (!tracks_path.empty()) io::open_kind(tracks_path, schema::kind::tracks, "pass the output of shapes2tracks");
 
     // Forked now, while the process is small and has no threads running.
-    mesh::GmshWorkers workers(ctx.threads());
+    mesh::GmshWorkers workers(mesh::GmshWorkers::useful_count(ctx.threads(), meshes));
     mo.workers = &workers;
     shape::ShapesFile shapes = shape::read_shapes_file(shapes_path);
     if (shapes.grains.empty()) throw DataError(shapes_path.string() + " holds no grain; check the segmentation and labels2shapes run");

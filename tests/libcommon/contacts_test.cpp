@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <random>
@@ -420,4 +421,39 @@ TEST(ContactsRefine, FailsCleanlyWithoutGreyContrastAndChecksShapes) {
   EXPECT_TRUE(std::isnan(f.normal[0]));
   Volume<float> other({3, 3, 3});
   EXPECT_THROW(refine_contacts(other, p.labels, cs, p.grains), UsageError);
+}
+
+TEST(ContactsRefine, GreyVolumeWithoutContrastOrWithNaNIsRefused) {
+  const auto message = [](const AnyVolume& v) {
+    try {
+      check_grey_for_refinement(v, "scan.h5");
+    } catch (const DataError& e) {
+      return e.message();
+    }
+    return std::string();
+  };
+  Volume<std::uint16_t> flat({6, 6, 6});
+  for (auto& g : flat.values()) g = 1200;
+  EXPECT_EQ(message(flat).rfind("scan.h5 holds the grey value 1200 in every voxel, so there is no contrast", 0), 0u) << message(flat);
+  Volume<float> nan({6, 6, 6});
+  nan(1, 2, 3) = 1.0f;
+  nan(2, 2, 2) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(message(nan).rfind("scan.h5 holds 1 NaN or infinite voxels", 0), 0u) << message(nan);
+  Volume<std::uint8_t> grey({6, 6, 6});
+  grey(3, 3, 3) = 1;
+  EXPECT_EQ(message(grey), "");
+}
+
+TEST(ContactsRefine, FailedFitsAreCountedAsUnknownNotAsConfident) {
+  std::vector<Refinement> fits(5);  // default: not fitted, confidence NaN
+  fits[0].confidence = 0.9;
+  fits[1].confidence = 0.5;
+  fits[2].confidence = 0.1;
+  const ConfidenceCount c = count_confidences(fits, 0.5);
+  EXPECT_EQ(c.at_least, 2u);
+  EXPECT_EQ(c.below, 1u);
+  EXPECT_EQ(c.unknown, 2u);
+  const ConfidenceCount none = count_confidences(std::vector<Refinement>(3), 0.5);
+  EXPECT_EQ(none.at_least, 0u) << "NaN is not >= 0.5";
+  EXPECT_EQ(none.unknown, 3u);
 }

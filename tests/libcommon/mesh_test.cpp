@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
+#include <omp.h>
 #include <signal.h>
 #include <sys/wait.h>
 
@@ -361,6 +363,18 @@ TEST(GmshWorkers, MeshAsThisProcessDoesAndSurviveACrash) {
     EXPECT_EQ(::waitpid(pid, nullptr, WNOHANG), -1) << pid;
     EXPECT_EQ(errno, ECHILD);
   }
+}
+
+TEST(GmshWorkers, NoMoreThanUsefulAndStoppedTogether) {
+  EXPECT_EQ(mesh::GmshWorkers::useful_count(5000, 8), std::min(8, omp_get_num_procs()));
+  EXPECT_EQ(mesh::GmshWorkers::useful_count(5000, 1), 1);
+  EXPECT_EQ(mesh::GmshWorkers::useful_count(1, 300), 1);
+  EXPECT_EQ(mesh::GmshWorkers::useful_count(4, 0), 1) << "at least one";
+  // Idle workers are stopped together (all sockets closed, then all reaped), and every one is reaped.
+  std::optional<mesh::GmshWorkers> workers(std::in_place, 40);
+  const std::vector<pid_t> pids = workers->pids();
+  workers.reset();
+  for (pid_t pid : pids) EXPECT_EQ(::waitpid(pid, nullptr, WNOHANG), -1) << "worker " << pid << " was not reaped";
 }
 
 TEST(EquivalentPacking, KeepsTheLibraryPsdAndTheSolidFraction) {

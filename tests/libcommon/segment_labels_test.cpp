@@ -7,6 +7,8 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/segment/labels.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "support/run_tool.hpp"
 
 using namespace graintwin;
 using namespace graintwin::segment;
@@ -150,5 +152,65 @@ TEST(GrainTable, SameWithOneAndTwoThreads) {
     EXPECT_EQ(one[i].voxels, two[i].voxels);
     EXPECT_EQ(one[i].centroid_xyz, two[i].centroid_xyz);
     EXPECT_EQ(one[i].bbox, two[i].bbox);
+  }
+}
+
+TEST(GrainTable, MismatchNamesMissingExtraAndDisagreeingRows) {
+  Volume<std::uint32_t> l({6, 7, 8});
+  fill_box(l, 1, {0, 0, 0}, {2, 2, 2});
+  fill_box(l, 2, {3, 3, 3}, {5, 5, 5});
+  fill_box(l, 3, {0, 4, 5}, {1, 6, 8});
+  fill_box(l, 4, {4, 0, 6}, {6, 2, 8});
+  const auto table = grain_table(l);
+  EXPECT_EQ(grain_table_mismatch(l, table), "");
+
+  auto short_table = table;
+  short_table.resize(2);
+  EXPECT_EQ(grain_table_mismatch(l, short_table), "2 grains of the label image have no row in the grain table (labels 3 to 4)");
+  auto extra = table;
+  extra.push_back(table.back());
+  extra.back().label = 9;
+  EXPECT_EQ(grain_table_mismatch(l, extra), "1 row names a label absent from the label image (first: label 9)");
+  auto wrong = table;
+  wrong[1].voxels = 7;
+  wrong[2].bbox[0] = 1;
+  EXPECT_EQ(grain_table_mismatch(l, wrong),
+            "2 rows disagree with the image (first: label 2 has 7 voxels in the table but 8 in the image)");
+  auto moved = table;
+  moved[3].centroid_xyz[0] += 0.5 * l.voxel_size()[2];
+  EXPECT_NE(grain_table_mismatch(l, moved).find("label 4's centroid is not the mean of its voxels"), std::string::npos);
+  auto unsorted = table;
+  std::swap(unsorted[0], unsorted[1]);
+  EXPECT_EQ(grain_table_mismatch(l, unsorted), "its rows are not in increasing label order (label 1 follows 2)");
+  // Every kind at once, in one sentence.
+  short_table.push_back(table[3]);
+  short_table.back().label = 5;
+  EXPECT_EQ(grain_table_mismatch(l, short_table),
+            "2 grains of the label image have no row in the grain table (labels 3 to 4) and 1 row names a label absent "
+            "from the label image (first: label 5)");
+  // Labels beyond the voxel count cannot be a numbered grain table's.
+  l(0, 0, 0) = 4000000000u;
+  EXPECT_NE(grain_table_mismatch(l, table).find("label 4000000000, more than its 336 voxels"), std::string::npos);
+}
+
+TEST(LabelsFile, ReadingRefusesAGrainTableThatDisagreesWithTheImage) {
+  test::TempDir dir;
+  LabelsFile c;
+  c.labels = Volume<std::uint32_t>({5, 5, 5});
+  fill_box(c.labels, 1, {0, 0, 0}, {2, 2, 2});
+  fill_box(c.labels, 2, {3, 3, 3}, {5, 5, 5});
+  c.grains = grain_table(c.labels);
+  c.parameters_json = "{}";
+  write_labels_file(dir / "good.h5", c, {"test"});
+  EXPECT_EQ(read_labels_file(dir / "good.h5").grains.size(), 2u);
+  c.grains.pop_back();
+  write_labels_file(dir / "short.h5", c, {"test"});
+  try {
+    read_labels_file(dir / "short.h5");
+    FAIL() << "a grain without a row was accepted";
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.message(), "the grain table of " + (dir / "short.h5").string() +
+                               " does not match its label image: 1 grain of the label image has no row in the grain "
+                               "table (label 2); rewrite the file with ct2labels");
   }
 }

@@ -1,6 +1,8 @@
 // The shared-design-matrix SH fitter: exact recovery of band-limited radii, truncation residuals,
 // conditioning guard, exact moments, and the sphere quadrature.
 #include <gtest/gtest.h>
+#include <omp.h>
+#include <time.h>
 
 #include <numbers>
 #include <random>
@@ -73,4 +75,29 @@ TEST(SphereQuadrature, WeightsSumToTheSphereArea) {
   }
   EXPECT_NEAR(w, 4 * std::numbers::pi, 1e-12);
   EXPECT_NEAR(z2, 4 * std::numbers::pi / 3, 1e-12);
+}
+
+TEST(ShFitter, ThousandThreadsDoNotSpinThroughTheSvd) {
+  // Eigen's parallel products wait by spinning: with -j 1024 on a few processors the fitter's SVD
+  // burnt seconds of CPU in threads waiting for each other. The threads are started first (their
+  // creation is not the fitter's cost), then the fitter's CPU time is compared with one thread's.
+  const auto cpu_seconds = [] {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+  };
+  omp_set_num_threads(1);
+  double start = cpu_seconds();
+  const ShFitter one(15, 0);
+  const double single = cpu_seconds() - start;
+  omp_set_num_threads(1024);
+#pragma omp parallel
+  {
+  }
+  start = cpu_seconds();
+  const ShFitter many(15, 0);
+  const double spread = cpu_seconds() - start;
+  omp_set_num_threads(omp_get_num_procs());
+  EXPECT_LT(spread, 4.0 * single + 0.3) << "one thread: " << single << " s of CPU";
+  EXPECT_EQ(many.degree(), one.degree());
 }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/segment/connectivity.hpp"
 
 namespace graintwin::contacts {
@@ -188,7 +189,9 @@ std::vector<PairSums> contact_sums(const Volume<std::uint32_t>& labels, const st
   const auto steps = segment::neighbour_steps(segment::Connectivity::corners, s);
   PairTable total;
   std::atomic<std::size_t> slabs_done{0};
-#pragma omp parallel
+  // A pair table and three filtered slices per thread: no more threads than processors or slabs
+  // (integer sums: the same for any team).
+#pragma omp parallel num_threads(useful_threads(s[0]))
   {
     // Contiguous z ranges per thread, so that each filtered slice is reused by three slabs.
     const auto nt = static_cast<std::size_t>(omp_get_num_threads()), t = static_cast<std::size_t>(omp_get_thread_num());

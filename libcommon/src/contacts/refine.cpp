@@ -1,5 +1,6 @@
 #include "graintwin/contacts/refine.hpp"
 
+#include <fmt/format.h>
 #include <omp.h>
 
 #include <Eigen/Cholesky>
@@ -11,6 +12,8 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
+#include "graintwin/core/volume_ops.hpp"
 
 namespace graintwin::contacts {
 
@@ -22,6 +25,31 @@ const char* status_name(RefineStatus s) {
     case RefineStatus::rejected: return "rejected";
   }
   return "?";
+}
+
+void check_grey_for_refinement(const AnyVolume& grey, const std::string& name) {
+  const ValueRange r = value_range(grey);
+  if (r.non_finite > 0)
+    throw DataError(name + " holds " + std::to_string(r.non_finite) +
+                    " NaN or infinite voxels; crop them away (volconvert --crop) or run without the volume");
+  if (!(r.max > r.min))
+    throw DataError(fmt::format("{} holds the grey value {:g} in every voxel, so there is no contrast between grains and "
+                                "pores and the contact confidences would be undefined; pass the scan the labels were "
+                                "made from, or run without the volume",
+                                name, r.min));
+}
+
+ConfidenceCount count_confidences(const std::vector<Refinement>& fits, double min_confidence) {
+  ConfidenceCount c;
+  for (const Refinement& f : fits) {
+    if (std::isnan(f.confidence))
+      ++c.unknown;
+    else if (f.confidence >= min_confidence)
+      ++c.at_least;
+    else
+      ++c.below;
+  }
+  return c;
 }
 
 namespace {
@@ -314,7 +342,7 @@ std::vector<Refinement> refine_contacts(const Volume<T>& grey, const Volume<std:
   for (std::size_t k = 0; k < contacts.size(); ++k) radii[k] = {radius_of(contacts[k].low), radius_of(contacts[k].high)};
   std::vector<Refinement> out(contacts.size());
   std::atomic<std::size_t> done{0};
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) num_threads(useful_threads(contacts.size()))
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     out[k] = refine_contact(grey, labels, contacts[k], radii[k][0], radii[k][1], params);
     const std::size_t d = ++done;

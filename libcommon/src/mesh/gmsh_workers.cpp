@@ -15,6 +15,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
@@ -217,16 +218,31 @@ std::string describe(int status) {
 
 }  // namespace
 
+int GmshWorkers::useful_count(int threads, std::size_t meshes) {
+  const std::size_t n = std::min({static_cast<std::size_t>(std::max(threads, 1)), meshes,
+                                  static_cast<std::size_t>(std::max(omp_get_num_procs(), 1))});
+  return static_cast<int>(std::max<std::size_t>(n, 1));
+}
+
 GmshWorkers::GmshWorkers(int count) {
   if (count < 1) throw UsageError(fmt::format("GmshWorkers: at least one worker process is needed (got {})", count));
   workers_.resize(static_cast<std::size_t>(count));
   std::lock_guard lock(mutex_);
-  for (std::size_t i = 0; i < workers_.size(); ++i) start(i);
+  try {
+    for (std::size_t i = 0; i < workers_.size(); ++i) start(i);
+  } catch (...) {
+    std::vector<std::size_t> all(workers_.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    stop(all, true);  // those started so far: the destructor does not run for a failed constructor
+    throw;
+  }
 }
 
 GmshWorkers::~GmshWorkers() {
   std::lock_guard lock(mutex_);
-  for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, workers_[i].busy);
+  std::vector<std::size_t> all(workers_.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  stop(all, false);
 }
 
 std::vector<pid_t> GmshWorkers::pids() const {
@@ -259,21 +275,30 @@ void GmshWorkers::start(std::size_t slot) {
   workers_[slot].socket = ends[0];
 }
 
-void GmshWorkers::stop(std::size_t slot, bool kill) {
-  Worker& w = workers_[slot];
-  if (w.pid == 0) return;
-  if (kill) ::kill(w.pid, SIGKILL);
-  ::close(w.socket);  // an idle worker ends at end of stream
-  int status = 0;
-  for (int tries = 0; ::waitpid(w.pid, &status, WNOHANG) == 0; ++tries) {
-    if (tries == 200) {  // 2 s: a worker stuck in gmsh
-      ::kill(w.pid, SIGKILL);
-      ::waitpid(w.pid, &status, 0);
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+void GmshWorkers::stop(const std::vector<std::size_t>& slots, bool kill) {
+  for (std::size_t slot : slots) {
+    Worker& w = workers_[slot];
+    if (w.pid == 0) continue;
+    if (kill || w.busy) ::kill(w.pid, SIGKILL);
+    ::close(w.socket);  // an idle worker ends at end of stream
+    w.socket = -1;
   }
-  w.pid = 0, w.socket = -1;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);  // for a worker stuck in gmsh
+  for (std::size_t slot : slots) {
+    Worker& w = workers_[slot];
+    if (w.pid == 0) continue;
+    int status = 0;
+    while (::waitpid(w.pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() >= deadline) {
+        ::kill(w.pid, SIGKILL);
+        while (::waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
+        }
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    w.pid = 0;
+  }
 }
 
 TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report) {
@@ -307,7 +332,7 @@ TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report) 
       if (ready > 0 || (ready < 0 && errno != EINTR)) return;  // recv reports errors
       if (interrupted()) {
         std::lock_guard lock(mutex_);
-        stop(slot, true);
+        stop({slot}, true);
         throw InterruptedError();
       }
     }

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/micro/clusters.hpp"
 #include "graintwin/track/point_grid.hpp"
 
@@ -91,7 +92,8 @@ PairCorrelation pair_correlation(const std::vector<Eigen::Vector3d>& points, con
   const auto dirs = fibonacci_directions(directions);
   const track::PointGrid grid(in, r_max);
   std::vector<double> sum(bins, 0.0);
-#pragma omp parallel
+  // Two rows of bins per thread (up to --rdf-bins each): no more threads than processors.
+#pragma omp parallel num_threads(useful_threads(in.size()))
   {
     std::vector<double> local(bins, 0.0), weight(bins);
 #pragma omp for schedule(dynamic, 64)

@@ -1,13 +1,15 @@
 #include "graintwin/report/page.hpp"
 
 #include <fcntl.h>
-#include <spawn.h>
+#include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -189,26 +191,82 @@ std::string report_html(const PageContent& c) {
   return o.str();
 }
 
-void run_chart_script(const fs::path& python, const fs::path& script, const fs::path& charts_json, const fs::path& out_dir) {
-  const fs::path log = out_dir / "chart_script.log";
-  std::vector<std::string> args{python.string(), script.string(), charts_json.string(), out_dir.string()};
+namespace {
+
+/// Starts `argv` (argv[0] a path, no PATH search) with stdin from /dev/null and stdout and stderr
+/// into `log`. The child is killed by the kernel when the thread that started it ends, so it
+/// cannot outlive this process even after a SIGKILL. Returns the child's pid; DataError (without
+/// the fix, which the caller knows) when it cannot start, with the reason.
+pid_t start_child(std::vector<std::string> args, const fs::path& log) {
+  // Everything the child needs is prepared here: between fork and exec only async-signal-safe
+  // calls are allowed (other threads may hold the allocator's locks).
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0)
-    throw DataError("cannot start " + python.string() + " for the charts; install Debian's python3 and python3-matplotlib (scripts/deps.sh) or pass --python");
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  const int in = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  int report[2] = {-1, -1};  // the child writes errno here when exec fails; exec closes it otherwise
+  const bool ready = in >= 0 && out >= 0 && ::pipe2(report, O_CLOEXEC) == 0;
+  const int open_errno = errno;
+  const pid_t parent = ::getpid();
+  const pid_t pid = ready ? ::fork() : -1;
+  if (pid == 0) {
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);  // the parent died before prctl took effect
+    // dup2 onto itself would keep close-on-exec: a descriptor already in place only loses the flag.
+    const auto onto = [](int fd, int target) { return fd == target ? ::fcntl(fd, F_SETFD, 0) : ::dup2(fd, target); };
+    int e = 0;
+    if (onto(in, STDIN_FILENO) < 0 || onto(out, STDOUT_FILENO) < 0 || onto(out, STDERR_FILENO) < 0)
+      e = errno;
+    else
+      ::execve(argv[0], argv.data(), environ), e = errno;
+    (void)!::write(report[1], &e, sizeof e);
+    ::_exit(127);
   }
-  throw_if_interrupted();
+  const int fork_errno = errno;
+  for (int fd : {in, out, report[1]})
+    if (fd >= 0) ::close(fd);
+  if (pid < 0) {
+    if (report[0] >= 0) ::close(report[0]);
+    throw DataError(std::strerror(ready ? fork_errno : open_errno));
+  }
+  int exec_errno = 0;
+  ssize_t got = 0;
+  while ((got = ::read(report[0], &exec_errno, sizeof exec_errno)) < 0 && errno == EINTR) {
+  }
+  ::close(report[0]);
+  if (got > 0) {
+    while (::waitpid(pid, nullptr, 0) < 0 && errno == EINTR) {
+    }
+    throw DataError(std::strerror(exec_errno));
+  }
+  return pid;
+}
+
+}  // namespace
+
+void run_chart_script(const fs::path& python, const fs::path& script, const fs::path& charts_json, const fs::path& out_dir) {
+  const fs::path log = out_dir / "chart_script.log";
+  pid_t pid = 0;
+  try {
+    pid = start_child({python.string(), script.string(), charts_json.string(), out_dir.string()}, log);
+  } catch (const DataError& e) {
+    throw DataError("cannot start " + python.string() + " for the charts (" + e.message() +
+                    "); install Debian's python3 and python3-matplotlib (scripts/deps.sh) or pass --python");
+  }
+  // Polled rather than blocking, so that an interrupt (which only sets a flag) ends the script too.
+  int status = 0;
+  for (;;) {
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid || (done < 0 && errno != EINTR)) break;
+    if (interrupted()) {
+      ::kill(pid, SIGKILL);
+      while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      throw InterruptedError();
+    }
+    ::usleep(20000);
+  }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::string text = read_binary_file(log), tail;
     std::istringstream lines(text);

@@ -23,23 +23,21 @@ namespace graintwin::report {
 
 namespace {
 
-bool is_file(const fs::path& p) {
-  std::error_code ec;
-  return fs::is_regular_file(p, ec);
-}
-
-/// `given` when set (it must exist), else `fallback` when that exists, else empty.
+/// `given` when set (it must be a file), else `fallback` when it exists (it must be a file too:
+/// a folder of that name would otherwise pass for a stage that has not run), else empty.
 fs::path given_or_found(const fs::path& given, const fs::path& fallback, const std::string& option) {
   if (!given.empty()) {
-    if (!is_file(given)) throw UsageError(option + " " + given.string() + " does not exist; check the path");
+    require_file(given, option);
     return given;
   }
-  return is_file(fallback) ? fallback : fs::path();
+  std::error_code ec;
+  if (fallback.empty() || !fs::exists(fallback, ec)) return {};
+  require_file(fallback, "the run's file", "move it out of the run directory, or name the file with " + option);
+  return fallback;
 }
 
 void require_files(const std::vector<fs::path>& given, const std::string& option) {
-  for (const fs::path& p : given)
-    if (!is_file(p)) throw UsageError(option + " " + p.string() + " does not exist; check the path");
+  for (const fs::path& p : given) require_file(p, option);
 }
 
 /// One file per scan: `given` (one per scan, each must exist) or `name` in each scan folder.
@@ -53,7 +51,7 @@ std::vector<fs::path> per_scan(const std::vector<fs::path>& given, const std::ve
     return given;
   }
   std::vector<fs::path> out;
-  for (const fs::path& d : scan_dirs) out.push_back(is_file(d / name) ? d / name : fs::path());
+  for (const fs::path& d : scan_dirs) out.push_back(given_or_found({}, d / name, option));
   return out;
 }
 
@@ -125,11 +123,33 @@ std::string check_hint(const std::string& kind) {
 
 }  // namespace
 
+namespace {
+
+/// Why `path` is not a regular file (`folder` false) or a folder (true), as a UsageError.
+void require_kind(const fs::path& path, bool folder, const std::string& what, const std::string& fix) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (folder ? fs::is_directory(st) : fs::is_regular_file(st)) return;
+  const std::string name = what + " " + path.string();
+  if (!fs::exists(st)) throw UsageError(name + " does not exist; check the path");
+  const char* is = folder ? (fs::is_regular_file(st) ? " is a file, not a folder; " : " is not a folder; ")
+                          : (fs::is_directory(st) ? " is a folder, not a file; " : " is not a regular file (a device, pipe or socket); ");
+  throw UsageError(name + is + fix);
+}
+
+}  // namespace
+
+void require_file(const fs::path& path, const std::string& what, const std::string& fix) { require_kind(path, false, what, fix); }
+
+void require_folder(const fs::path& path, const std::string& what, const std::string& fix) { require_kind(path, true, what, fix); }
+
 RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given) {
   std::error_code ec;
-  if (!fs::is_directory(run_dir, ec))
+  if (!fs::exists(run_dir, ec))
     throw UsageError("the run directory " + run_dir.string() +
                      " does not exist; run the pipeline first (make -f Makefile.pipeline) or check the path");
+  require_folder(run_dir, "the run directory",
+                 "pass the folder Makefile.pipeline writes a series into (runs/<series>, holding scan_*/labels.h5)");
   RunFiles f;
   std::vector<fs::path> scan_dirs;
   if (!given.labels.empty()) {
@@ -142,7 +162,9 @@ RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given) {
   } else {
     for (const auto& e : fs::directory_iterator(run_dir, ec)) {
       const std::string name = e.path().filename().string();
-      if (e.is_directory() && name.rfind(layout::scan_prefix, 0) == 0 && is_file(e.path() / layout::labels)) scan_dirs.push_back(e.path());
+      if (!e.is_directory(ec) || name.rfind(layout::scan_prefix, 0) != 0 || !fs::exists(e.path() / layout::labels, ec)) continue;
+      require_file(e.path() / layout::labels, "the scan's labels file", "move it out of the run directory, or name the files with --labels");
+      scan_dirs.push_back(e.path());
     }
     std::sort(scan_dirs.begin(), scan_dirs.end());
     if (scan_dirs.empty())

@@ -1,6 +1,7 @@
 #include "graintwin/segment/labels.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 #include <set>
@@ -8,6 +9,7 @@
 #include <unordered_map>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 
 namespace graintwin::segment {
 namespace {
@@ -42,7 +44,8 @@ std::vector<std::uint64_t> voxel_counts(const Volume<std::uint32_t>& labels, std
   std::vector<std::uint64_t> total(std::size_t{max} + 1, 0);
   const std::uint32_t* l = labels.data();
   const std::size_t n = labels.size();
-#pragma omp parallel
+  // A table per thread: no more threads than processors (integer sums: the same for any team).
+#pragma omp parallel num_threads(useful_threads(n))
   {
     std::vector<std::uint64_t> c(std::size_t{max} + 1, 0);
 #pragma omp for schedule(static) nowait
@@ -224,7 +227,8 @@ std::vector<GrainRecord> grain_table(const Volume<std::uint32_t>& labels) {
   };
   std::vector<Acc> total(std::size_t{m} + 1);
   const std::uint32_t* l = labels.data();
-#pragma omp parallel
+  // A table per thread: no more threads than processors (integer sums: the same for any team).
+#pragma omp parallel num_threads(useful_threads(s[0]))
   {
     std::vector<Acc> acc(std::size_t{m} + 1);
 #pragma omp for schedule(static) nowait
@@ -262,6 +266,70 @@ std::vector<GrainRecord> grain_table(const Volume<std::uint32_t>& labels) {
     table.push_back(r);
   }
   return table;
+}
+
+std::string grain_table_mismatch(const Volume<std::uint32_t>& labels, const std::vector<GrainRecord>& table) {
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    if (table[i].label == 0) return "it has a row for label 0, which is background";
+    if (i > 0 && table[i].label <= table[i - 1].label)
+      return "its rows are not in increasing label order (label " + std::to_string(table[i].label) + " follows " +
+             std::to_string(table[i - 1].label) + ")";
+  }
+  const std::uint32_t m = max_label(labels);
+  if (m > labels.size())
+    return "the label image holds label " + std::to_string(m) + ", more than its " + std::to_string(labels.size()) +
+           " voxels, so its grains are not numbered 1 to N";
+  const std::vector<GrainRecord> image = grain_table(labels);
+  const Vec3& vs = labels.voxel_size();
+  const double centroid_tol = 1e-6 * std::min({vs[0], vs[1], vs[2]});
+  // One walk over both tables, in label order.
+  std::size_t missing = 0, extra = 0, differ = 0;
+  std::uint32_t missing_lo = 0, missing_hi = 0, extra_first = 0;
+  std::string first_difference;
+  for (std::size_t i = 0, j = 0; i < image.size() || j < table.size();) {
+    if (j == table.size() || (i < image.size() && image[i].label < table[j].label)) {
+      if (missing++ == 0) missing_lo = image[i].label;
+      missing_hi = image[i++].label;
+      continue;
+    }
+    if (i == image.size() || table[j].label < image[i].label) {
+      if (extra++ == 0) extra_first = table[j].label;
+      ++j;
+      continue;
+    }
+    const GrainRecord &a = image[i++], &b = table[j++];
+    const std::string label = "label " + std::to_string(a.label);
+    std::string what;
+    if (a.voxels != b.voxels)
+      what = label + " has " + std::to_string(b.voxels) + " voxels in the table but " + std::to_string(a.voxels) + " in the image";
+    else if (a.bbox != b.bbox)
+      what = label + "'s bounding box is not the one of its voxels";
+    else if (a.touches_edge != b.touches_edge)
+      what = label + "'s volume-edge flag is wrong";
+    else if (!(std::abs(a.centroid_xyz[0] - b.centroid_xyz[0]) <= centroid_tol &&
+               std::abs(a.centroid_xyz[1] - b.centroid_xyz[1]) <= centroid_tol &&
+               std::abs(a.centroid_xyz[2] - b.centroid_xyz[2]) <= centroid_tol))
+      what = label + "'s centroid is not the mean of its voxels";
+    else if (!(std::abs(a.volume_m3 - b.volume_m3) <= 1e-9 * a.volume_m3))
+      what = label + "'s volume is not its voxel count times the voxel volume";
+    if (!what.empty() && differ++ == 0) first_difference = what;
+  }
+  std::vector<std::string> parts;
+  const auto grains = [](std::size_t n) { return std::to_string(n) + (n == 1 ? " grain" : " grains"); };
+  if (missing > 0)
+    parts.push_back(grains(missing) + " of the label image " + (missing == 1 ? "has" : "have") + " no row in the grain table (" +
+                    (missing == 1 ? "label " + std::to_string(missing_lo)
+                                  : "labels " + std::to_string(missing_lo) + " to " + std::to_string(missing_hi)) +
+                    ")");
+  if (extra > 0)
+    parts.push_back(std::to_string(extra) + (extra == 1 ? " row names a label" : " rows name labels") +
+                    " absent from the label image (first: label " + std::to_string(extra_first) + ")");
+  if (differ > 0)
+    parts.push_back(std::to_string(differ) + (differ == 1 ? " row disagrees" : " rows disagree") +
+                    " with the image (first: " + first_difference + ")");
+  std::string out;
+  for (std::size_t k = 0; k < parts.size(); ++k) out += (k == 0 ? "" : k + 1 == parts.size() ? " and " : ", ") + parts[k];
+  return out;
 }
 
 }  // namespace graintwin::segment

@@ -77,6 +77,12 @@ LabelsFile read_labels_file(const std::filesystem::path& path) {
     for (int k = 0; k < 6; ++k) g.bbox[k] = bbox[6 * i + k];
     g.touches_edge = edge[i] != 0;
   }
+  // Every reader relies on one row per grain of the image (labels2shapes measures the rows,
+  // labels2contacts looks centroids up by label): a table that disagrees would drop or misplace grains.
+  const std::string mismatch = grain_table_mismatch(c.labels, c.grains);
+  if (!mismatch.empty())
+    throw DataError("the grain table of " + path.string() + " does not match its label image: " + mismatch +
+                    "; rewrite the file with ct2labels");
   Cylinder& r = c.sample.region;
   const auto centre = f.attr_doubles("/sample", "cylinder_centre_xy");
   const auto radius = f.attr_doubles("/sample", "cylinder_radius");

@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/segment/edt.hpp"
 
 namespace graintwin::segment {
@@ -42,7 +43,8 @@ std::vector<std::uint64_t> region_histogram(const Volume<T>& v, const Cylinder& 
   if constexpr (std::is_integral_v<T>) bins = std::size_t{std::numeric_limits<T>::max()} + 1;
   std::vector<std::uint64_t> total(bins, 0);
   const T* d = v.data();
-#pragma omp parallel
+  // A histogram per thread: no more threads than processors (integer sums: the same for any team).
+#pragma omp parallel num_threads(useful_threads(v.nz() * v.ny()))
   {
     std::vector<std::uint64_t> h(bins, 0);
     if constexpr (std::is_integral_v<T>) {

@@ -9,6 +9,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/filters.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/shape/isosurface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
@@ -299,7 +300,7 @@ std::vector<GrainShape> measure_grains(const Volume<std::uint32_t>& labels, cons
   std::vector<GrainShape> out(grains.size());
   std::atomic<std::size_t> done{0};
   std::exception_ptr error;
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) num_threads(useful_threads(grains.size()))
   for (std::size_t i = 0; i < grains.size(); ++i) {
     try {
       out[i] = measure_grain(labels, grey, grains[i].first, grains[i].second, fitter, options);

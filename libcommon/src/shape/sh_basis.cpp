@@ -15,6 +15,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 
 namespace graintwin::shape {
 
@@ -293,7 +294,7 @@ Eigen::MatrixXd sh_design_matrix(int degree, const std::vector<Eigen::Vector3d>&
     }
   }
   Eigen::MatrixXd a(rows, k);
-#pragma omp parallel for schedule(static) if (rows > 256)
+#pragma omp parallel for schedule(static) if (rows > 256) num_threads(useful_threads(static_cast<std::size_t>(rows)))
   for (std::ptrdiff_t i = 0; i < rows; ++i) {
     double* values = scratch_values(degree);
     sh_values_dir(degree, unit_dirs[static_cast<std::size_t>(i)], values);

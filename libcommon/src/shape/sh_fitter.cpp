@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::shape {
@@ -32,6 +33,8 @@ SphereQuadrature sphere_quadrature(int n_theta, int n_phi) {
 }
 
 ShFitter::ShFitter(int degree, int n_directions) : requested_degree_(degree) {
+  // The SVD's products run on Eigen's threads; with -j above the processor count they would spin.
+  const EigenThreadCap cap;
   if (degree < 0) throw UsageError("the SH degree must be >= 0; give e.g. 15");
   if (n_directions < 0) throw UsageError("the number of sample directions must be >= 0 (0 = automatic)");
   const int n = n_directions > 0 ? n_directions : 2 * sh_count(degree);

@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "graintwin/contacts/detect.hpp"
@@ -60,6 +61,20 @@ struct Refinement {
   int iterations = 0;
   std::size_t voxels = 0;               ///< voxels in the fit
 };
+
+/// Refuses (DataError naming `name`, the grey volume's file) a grey volume that cannot give
+/// refined normals or confidences: NaN or infinite voxels, or one value in every voxel (no contrast
+/// between grains and pores to fit, so every confidence would be undefined).
+void check_grey_for_refinement(const AnyVolume& grey, const std::string& name);
+
+/// How the confidences of a set of fits compare with a threshold. A fit that failed has no
+/// confidence (NaN): it is `unknown`, neither above nor below.
+struct ConfidenceCount {
+  std::size_t at_least = 0;  ///< confidence >= the threshold
+  std::size_t below = 0;     ///< confidence < the threshold
+  std::size_t unknown = 0;   ///< NaN: the fit failed
+};
+ConfidenceCount count_confidences(const std::vector<Refinement>& fits, double min_confidence);
 
 /// Refines one contact. grey and labels: same shape and geometry (not checked here). `radius_low`
 /// and `radius_high` (m) seed the local radii (e.g. equivalent-sphere radii). A fit that fails does

@@ -64,6 +64,10 @@ struct GmshRequest;
 /// process as it is.
 class GmshWorkers {
  public:
+  /// How many workers are worth starting for `meshes` meshes at `threads` threads: no more than
+  /// the meshes, nor than the processors (each worker is a busy single-threaded process, so more
+  /// of them only cost memory and start-up time), and at least one.
+  static int useful_count(int threads, std::size_t meshes);
   explicit GmshWorkers(int count);
   ~GmshWorkers();
   GmshWorkers(const GmshWorkers&) = delete;
@@ -81,7 +85,10 @@ class GmshWorkers {
     bool busy = false;
   };
   void start(std::size_t slot);
-  void stop(std::size_t slot, bool kill);
+  /// Closes the socket of each given slot (killing the busy ones and all of them when `kill`), then
+  /// reaps them together: one idle worker ends at end of stream within milliseconds, so
+  /// stopping N takes about as long as stopping one. Any still alive after 2 s are killed.
+  void stop(const std::vector<std::size_t>& slots, bool kill);
   std::vector<Worker> workers_;
   mutable std::mutex mutex_;
   std::condition_variable freed_;

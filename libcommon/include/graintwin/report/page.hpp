@@ -54,7 +54,9 @@ std::string report_html(const PageContent& content);
 
 /// Runs `python` `script` `charts_json` `out_dir` as a child process (no shell) and waits; the
 /// script draws every chart of the JSON into out_dir. DataError with the script's last stderr
-/// lines when it fails or cannot start; InterruptedError when the run was interrupted meanwhile.
+/// lines when it fails or cannot start; InterruptedError (the script killed) when the run is
+/// interrupted meanwhile. The script dies with the calling thread, so call it from the main
+/// thread: it cannot outlive a report killed by SIGKILL.
 void run_chart_script(const fs::path& python, const fs::path& script, const fs::path& charts_json, const fs::path& out_dir);
 
 }  // namespace graintwin::report

@@ -40,10 +40,19 @@ inline constexpr const char* forces = "forces.h5";
 inline constexpr const char* simulation_micro = "simulation_micro.h5";
 }  // namespace layout
 
+/// UsageError "WHAT PATH does not exist; check the path" (or "is a folder, not a file; FIX", or "is
+/// not a regular file ...; FIX") unless `path` is a regular file or a link to one. `what` names the
+/// path for the user: an option ("--python") or a role ("the run's file").
+void require_file(const fs::path& path, const std::string& what, const std::string& fix = "name the file itself");
+/// The same for a folder ("is a file, not a folder"); `fix` ends the message when the path exists
+/// but is not a folder.
+void require_folder(const fs::path& path, const std::string& what, const std::string& fix);
+
 /// Fills what `given` leaves empty from `run_dir`'s layout: scans are the scan_* folders holding
 /// a labels file (unless `given.labels` lists them), the per-scan and series files those that
-/// exist. Files named in `given` must exist. UsageError in one sentence naming the path and the
-/// fix: no run directory, no scans, a named file missing, per-scan lists of the wrong length.
+/// exist. Files named in `given` must be files. UsageError in one sentence naming the path and the
+/// fix: no run directory (or a file in its place), no scans, a named file missing or a folder, a
+/// layout name that is not a file (a folder called tracks.h5), per-scan lists of the wrong length.
 RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given);
 
 /// Opens every file of `files` and checks its kind (UsageError naming the file and the stage that

@@ -30,7 +30,8 @@ void write_labels_file(const std::filesystem::path& path, const LabelsFile& cont
                        const std::vector<std::string>& history);
 
 /// Reads a labels file; UsageError naming the file if it is not one. The grain table is read from
-/// the file (not recomputed); its length must match the largest label.
+/// the file (not recomputed) and checked against the label image (grain_table_mismatch): DataError
+/// naming the file when a grain has no row or a row disagrees with its voxels.
 LabelsFile read_labels_file(const std::filesystem::path& path);
 
 }  // namespace graintwin::segment
