@@ -1,5 +1,6 @@
 #include "graintwin/fdem/scene.hpp"
 
+#include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -260,15 +261,15 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
                    "penalty_per_size", "penalty_element_size"});
     Material mat;
     mat.name = t.text("name", mat.name);
-    mat.density = t.positive("density", mat.density);
-    mat.young = t.positive("young", mat.young);
+    mat.density = t.number("density", mat.density);
+    mat.young = t.number("young", mat.young);
     mat.poisson = t.number("poisson", mat.poisson);
-    if (!(mat.poisson > -1 && mat.poisson < 0.5)) t.fail("poisson must lie in (-1, 0.5)");
-    mat.friction = t.non_negative("friction", mat.friction);
-    mat.normal_penalty = t.positive("normal_penalty", mat.normal_penalty);
-    mat.tangential_penalty = t.positive("tangential_penalty", mat.tangential_penalty);
-    mat.damping_ratio = t.non_negative("damping_ratio", mat.damping_ratio);
-    if (mat.damping_ratio >= 1) t.fail("damping_ratio must be below 1 (a fraction of critical damping)");
+    mat.friction = t.number("friction", mat.friction);
+    mat.normal_penalty = t.number("normal_penalty", mat.normal_penalty);
+    mat.tangential_penalty = t.number("tangential_penalty", mat.tangential_penalty);
+    mat.damping_ratio = t.number("damping_ratio", mat.damping_ratio);
+    // The same ranges as a model file's materials (one check for both).
+    if (const std::string problem = material_range_problem(mat); !problem.empty()) t.fail(problem);
     SizePenalty size_penalty;
     if (t.has("penalty_per_size")) size_penalty.per_size = t.positive("penalty_per_size", 0.0);
     if (t.has("penalty_element_size")) size_penalty.element_size = t.positive("penalty_element_size", 0.0);
@@ -477,6 +478,10 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
       throw UsageError("material '" + m.materials[k].name + "' sets penalty_per_size but no grain uses it; " +
                        "give it penalty_element_size or drop the key");
     m.materials[k].normal_penalty = m.materials[k].tangential_penalty = rule.per_size * m.materials[k].young / h;
+    if (const std::string problem = material_range_problem(m.materials[k]); !problem.empty())
+      throw UsageError(fmt::format("material '{}': penalty_per_size {:g} x young / {:g} m gives a penalty out of range: {}; "
+                                   "lower penalty_per_size or give a larger penalty_element_size",
+                                   m.materials[k].name, rule.per_size, h, problem));
   }
   return m;
 }
