@@ -310,6 +310,10 @@ TEST(Fdemrun, TriaxialTestWritesItsSeriesStagesAndFramesAtTheAskedStrains) {
       EXPECT_EQ(std::isnan(eps1[i]), stage[i] != shearing) << "row " << i;
       EXPECT_EQ(std::isnan(inertial[i]), stage[i] != shearing) << "row " << i;
       EXPECT_NEAR(radial[i], volume[i], 1e-9 * volume[i]) << "row " << i;
+      // sigma_1 / sigma_3 is NaN exactly while the lateral boundary carries nothing (the wall not
+      // yet reached, the membrane held without pressure), never an infinity.
+      EXPECT_EQ(std::isnan(ratio[i]), !(lateral[i] > 0)) << "row " << i;
+      EXPECT_FALSE(std::isinf(ratio[i])) << "row " << i;
       if (stage[i] == shearing) {
         EXPECT_GE(eps1[i], before);
         before = eps1[i];
