@@ -4,7 +4,9 @@
 // --checkpoint and --restart reproducing the uninterrupted run bit for bit; a triaxial test of 27
 // rigid cubes in the servo wall and in the membrane (stages, triaxial columns, frames at the asked
 // strains, membrane positions), and the membrane test split over five processes, stopped in each of
-// its four phases, matching the whole run bit for bit; bad scenes and options failing cleanly.
+// its four phases, matching the whole run bit for bit; bad scenes and options failing cleanly;
+// grains started in each other or behind a platen refused, or relaxed apart; a run above the step
+// ceiling and a model file's material out of range refused with the numbers.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -23,6 +25,7 @@
 #include "graintwin/io/schema.hpp"
 #include "support/cli_contract.hpp"
 #include "support/cube_sample.hpp"
+#include "support/simulation_results.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
@@ -259,6 +262,129 @@ TEST(Fdemrun, BadInputsFailCleanly) {
 
 namespace {
 
+/// A rigid box whose bottom starts 0.3 mm behind the bottom platen, and two elastic boxes started
+/// half through each other (their corners on each other's faces), under gravity.
+const char* kOverlapScene = R"(
+[run]
+duration = 2e-5
+gravity = [0, 0, -9.81]
+frame_interval = 1e-5
+
+[[grains]]
+size = [1e-3, 1e-3, 1e-3]
+position = [0, 0, 0.2e-3]
+element_size = 0.5e-3
+kind = "rigid"
+
+[[grains]]
+size = [1e-3, 1e-3, 1e-3]
+position = [3e-3, 0, 0.6e-3]
+element_size = 0.25e-3
+kind = "tet4"
+
+[[grains]]
+size = [1e-3, 1e-3, 1e-3]
+position = [3.5e-3, 0, 0.6e-3]
+element_size = 0.25e-3
+kind = "tet4"
+
+[[platens]]
+name = "bottom"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+)";
+
+}  // namespace
+
+TEST(Fdemrun, GrainsStartedInsideEachOtherOrAPlatenAreRefused) {
+  // Run as they were, the box in the platen flew off at 549 m/s and the two boxes never parted.
+  test::TempDir dir;
+  const auto out = (dir / "out.h5").string();
+  const auto both = write_scene(dir, "both.toml", kOverlapScene);
+  test::expect_clean_failure("fdemrun", dir, {both.string(), out}, 2,
+                             "both.toml: grains label 2 and label 3 overlap by 0.5 mm at the start, beyond the tolerance "
+                             "of 0.124 mm ([run] overlap_tolerance = 0.1 x the smaller grain's equivalent diameter, "
+                             "1.24 mm) (2 overlaps in all are beyond theirs); move them apart, or set [run] "
+                             "relax_overlaps = true to push overlapping grains apart before the run");
+  const auto platen = write_scene(dir, "platen.toml", replaced(kOverlapScene, "position = [3.5e-3, 0, 0.6e-3]", "position = [5e-3, 0, 0.6e-3]"));
+  test::expect_clean_failure("fdemrun", dir, {platen.string(), out}, 2,
+                             "platen.toml: grain label 1 reaches 0.3 mm behind platen 'bottom' at the start, beyond the "
+                             "tolerance of 0.124 mm ([run] overlap_tolerance = 0.1 x the grain's equivalent diameter, "
+                             "1.24 mm); move them apart");
+  // A wider tolerance accepts the pair (half a box: 0.5 mm), as contact off does.
+  const auto wide = write_scene(dir, "wide.toml", replaced(replaced(kOverlapScene, "position = [0, 0, 0.2e-3]", "position = [0, 0, 0.5e-3]"),
+                                                          "frame_interval", "overlap_tolerance = 0.45\nframe_interval"));
+  EXPECT_EQ(run_tool("fdemrun", {wide.string(), out, "-q"}).exit_code, 0);
+  const auto off = write_scene(dir, "off.toml", replaced(kOverlapScene, "frame_interval", "contact = false\nframe_interval"));
+  EXPECT_EQ(run_tool("fdemrun", {off.string(), out, "-q", "--force"}).exit_code, 0);
+}
+
+TEST(Fdemrun, RelaxedOverlapsPartTheBoxesAndLiftTheGrainOutOfThePlatenAtSaneSpeeds) {
+  test::TempDir dir;
+  const auto scene = write_scene(dir, "relax.toml", replaced(kOverlapScene, "frame_interval", "relax_overlaps = true\nframe_interval"));
+  const auto out = dir / "out.h5";
+  const auto r = run_tool("fdemrun", {scene.string(), out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("relaxed the initial overlaps ([run] relax_overlaps)"), std::string::npos) << r.err;
+  const fdem::ResultsFrame first = fdem::read_results_frame(out, 0);
+  const fdem::ResultsFrame last = fdem::read_results_frame(out, fdem::results_frame_count(out) - 1);
+  // The grain in the platen starts on it, the boxes side by side; they stay so, at the speeds of
+  // gravity and of the few hundred nanometres of overlap left (a hundredth of the tolerance).
+  const double tolerance = 0.1 * std::cbrt(6 / std::numbers::pi) * 1e-3;
+  EXPECT_NEAR(first.centroid[2], 0.5e-3, 0.011 * tolerance);
+  EXPECT_NEAR(first.centroid[6] - first.centroid[3], 1e-3, 0.011 * tolerance);
+  EXPECT_NEAR(last.centroid[6] - last.centroid[3], 1e-3, 0.011 * tolerance);
+  for (std::size_t k = 0; k < last.velocity.size(); ++k) EXPECT_LT(std::abs(last.velocity[k]), 0.05) << k;
+  for (const double overlap : last.overlap) EXPECT_LT(overlap, 0.011 * tolerance);
+  const auto run = nlohmann::json::parse(io::H5File::open(out).read_strings("/run/parameters").at(0));
+  EXPECT_NEAR(run["initial_overlaps"]["deepest"].get<double>(), 0.5e-3, 1e-12);
+  EXPECT_EQ(run["initial_overlaps"]["moved_grains"].get<int>(), 3);
+}
+
+TEST(Fdemrun, ARunBeyondTheStepCeilingIsRefusedWithTheNumbers) {
+  test::TempDir dir;
+  const auto out = (dir / "out.h5").string();
+  // A penalty far too stiff shrinks the contact's time step until the 40 us of the scene take
+  // hundreds of millions of steps: refused before the first, with what sets the step.
+  const auto stiff = write_scene(dir, "stiff.toml", replaced(replaced(kScene, "contact = false\n", ""), "poisson = 0.2",
+                                                             "poisson = 0.2\nnormal_penalty = 1e22\ntangential_penalty = 1e22"));
+  const auto r = run_tool("fdemrun", {stiff.string(), out});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  for (const char* words : {"stiff.toml: the run would take", "s of stages at", "above the ceiling of 1e+07 steps",
+                            "is the contact limit", "soften the penalty", "raise [run] max_steps"})
+    EXPECT_NE(r.err.find(words), std::string::npos) << words << "\n" << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // The ceiling is the scene's: a low one refuses the plain scene, set by its elements' limit.
+  const auto low = write_scene(dir, "low.toml", replaced(kScene, "contact = false", "contact = false\nmax_steps = 100"));
+  test::expect_clean_failure("fdemrun", dir, {low.string(), out}, 2, "above the ceiling of 100 steps; the time step");
+  test::expect_clean_failure("fdemrun", dir, {low.string(), out}, 2, "is the element limit");
+  const auto none = write_scene(dir, "none.toml", replaced(kScene, "contact = false", "contact = false\nmax_steps = 0"));
+  test::expect_clean_failure("fdemrun", dir, {none.string(), out}, 2, "max_steps must lie in [1, 1e+15] (got 0)");
+}
+
+TEST(Fdemrun, AModelFileMaterialOutOfRangeIsRefusedNamingTheFile) {
+  // The same Young's modulus of 0 that a scene's [[materials]] refuses, and a negative density
+  // (whose message named no file), in a model file.
+  test::TempDir dir;
+  fdem::Model grains;
+  fdem::add_grain(grains, fdem::box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d::Zero(), fdem::GrainKind::tet4, 0, 5);
+  const auto model = dir / "grains.h5";
+  fdem::write_model_file(model, grains, {"test"});
+  const auto scene = write_scene(dir, "scene.toml", "[run]\nduration = 1e-6\n[model]\nfile = \"grains.h5\"\n");
+  const auto out = (dir / "out.h5").string();
+  test::replace_dataset(model, "/materials/young", std::vector<double>{0.0}, {1});
+  test::expect_clean_failure("fdemrun", dir, {scene.string(), out}, 1,
+                             model.string() + ": material 'ottawa_sand': young must lie in [1000, 1e+13] Pa (got 0 Pa)");
+  test::replace_dataset(model, "/materials/young", std::vector<double>{92.1e9}, {1});
+  test::replace_dataset(model, "/materials/density", std::vector<double>{-2650.0}, {1});
+  test::expect_clean_failure("fdemrun", dir, {scene.string(), out}, 1, model.string() + ": material 'ottawa_sand': density");
+  const auto in_scene = write_scene(dir, "young.toml", "[run]\nduration = 1e-6\n[[materials]]\nyoung = 0\n[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\n");
+  test::expect_clean_failure("fdemrun", dir, {in_scene.string(), out}, 2,
+                             "young.toml: [[materials]] 1: young must lie in [1000, 1e+13] Pa (got 0 Pa)");
+}
+
+namespace {
+
 /// A triaxial scene over a model file of 27 rigid cubes (support/cube_sample.hpp); `boundary` is
 /// the [triaxial] boundary key.
 std::filesystem::path triaxial_scene(const test::TempDir& dir, const std::string& boundary) {
@@ -310,6 +436,10 @@ TEST(Fdemrun, TriaxialTestWritesItsSeriesStagesAndFramesAtTheAskedStrains) {
       EXPECT_EQ(std::isnan(eps1[i]), stage[i] != shearing) << "row " << i;
       EXPECT_EQ(std::isnan(inertial[i]), stage[i] != shearing) << "row " << i;
       EXPECT_NEAR(radial[i], volume[i], 1e-9 * volume[i]) << "row " << i;
+      // sigma_1 / sigma_3 is NaN exactly while the lateral boundary carries nothing (the wall not
+      // yet reached, the membrane held without pressure), never an infinity.
+      EXPECT_EQ(std::isnan(ratio[i]), !(lateral[i] > 0)) << "row " << i;
+      EXPECT_FALSE(std::isinf(ratio[i])) << "row " << i;
       if (stage[i] == shearing) {
         EXPECT_GE(eps1[i], before);
         before = eps1[i];

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <sstream>
 
@@ -14,6 +15,7 @@
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/fdem/ellipsoid_grain.hpp"
 #include "graintwin/fdem/frames_vtk.hpp"
+#include "graintwin/fdem/initial_overlap.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
@@ -128,7 +130,9 @@ int main(int argc, char** argv) {
       "and eq. 28, the log strains eps_1 and eps_v from the start of shearing, the kinetic/elastic energy ratio and the "
       "inertial number, and frames are saved at the start of shearing, at the frame_strains and at the end; its "
       "checkpoints also hold the wall, the membrane and where the procedure stands, so --restart resumes it mid-phase. "
-      "The scene format is in docs/fdemrun.md.");
+      "Before the first step it refuses grains started inside each other or behind a platen deeper than [run] "
+      "overlap_tolerance (or pushes them apart with relax_overlaps = true) and a run of more estimated steps than [run] "
+      "max_steps. The scene format is in docs/fdemrun.md.");
   fs::path scene_path, output, checkpoint, restart, model_path;
   tool.add_input("scene", scene_path, "Scene file (.toml, docs/fdemrun.md)");
   tool.add_output("results", output, "Output kind=fdem_results .h5");
@@ -171,7 +175,7 @@ int main(int argc, char** argv) {
     text << std::ifstream(scene_path).rdbuf();
     std::stringstream model_bytes;  // a restart needs the same model file too
     if (scene.model) model_bytes << std::ifstream(scene.model->path, std::ios::binary).rdbuf();
-    const Model model = build_model(scene, append_ellipsoid_grain);
+    Model model = build_model(scene, append_ellipsoid_grain);
     for (std::size_t k = 0; k < scene.size_penalties.size(); ++k)
       if (scene.size_penalties[k].per_size > 0)
         spdlog::info("material '{}': p_n = p_t = {:.4g} N/m^3 ({:g} E / h at h = {:.4g} mm)", model.materials[k].name,
@@ -183,7 +187,21 @@ int main(int argc, char** argv) {
     options.element_safety = scene.element_safety;
     options.rigid_contact_nodes = scene.rigid_contact_nodes;
     options.contact.enabled = scene.contact;
-    Solver solver(model, options);
+    auto built = std::make_unique<Solver>(model, options);
+    // Overlaps are checked (or relaxed) on the solver's contact before anything heavy; relaxing moves
+    // grains of the model, so the solver is built anew on it.
+    const OverlapSettlement settled = settle_initial_overlaps(*built, model, scene.overlaps, scene_path.string());
+    if (scene.contact && settled.passes == 0)
+      spdlog::info("deepest initial overlap {:.3g} mm, within [run] overlap_tolerance", 1e3 * settled.deepest);
+    if (settled.passes > 0) {
+      spdlog::info("relaxed the initial overlaps ([run] relax_overlaps) in {} pass{}: {} grains moved, by at most {:.3g} mm; "
+                   "deepest overlap {:.3g} mm, was {:.3g} mm",
+                   settled.passes, settled.passes == 1 ? "" : "es", settled.moved_grains, 1e3 * settled.largest_move,
+                   1e3 * settled.deepest_after, 1e3 * settled.deepest);
+      built.reset();
+      built = std::make_unique<Solver>(model, options);
+    }
+    Solver& solver = *built;
     const StepLimits limits = solver.time_step_limits();
     double dt = scene.time_step;
     if (dt > 0) {
@@ -194,6 +212,7 @@ int main(int argc, char** argv) {
         throw UsageError(scene_path.string() + ": no element or contact limit bounds the time step (rigid grains without "
                          "contact); set [run] time_step");
     }
+    check_step_ceiling(estimate_steps(scene, solver, dt), scene.max_steps, scene, limits, dt, scene_path.string());
     std::uint64_t total = 0;
     std::vector<std::uint64_t> stage_end;
     for (const StageSpec& st : scene.stages) stage_end.push_back(total += steps_of(st.duration, dt));
@@ -218,7 +237,13 @@ int main(int argc, char** argv) {
     }
     nlohmann::json p = {{"scene", scene_path.string()}, {"scene_text", text.str()}, {"time_step", dt},
                         {"steps", total},           {"threads", ctx.threads()},    {"restart", restart.string()},
-                        {"model_file", scene.model ? scene.model->path.string() : ""}};
+                        {"model_file", scene.model ? scene.model->path.string() : ""},
+                        {"initial_overlaps",
+                         {{"deepest", settled.deepest},
+                          {"relaxation_passes", settled.passes},
+                          {"moved_grains", settled.moved_grains},
+                          {"largest_move", settled.largest_move},
+                          {"deepest_after", settled.deepest_after}}}};
     ResultsWriter writer(out.temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());

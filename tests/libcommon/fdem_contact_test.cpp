@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <numbers>
 #include <random>
@@ -384,6 +386,75 @@ TEST(ContactModel, PressedFaceCarriesPenaltyTimesAreaTimesOverlap) {
   EXPECT_NEAR((records[0].normal - Eigen::Vector3d::UnitZ()).norm(), 0, 1e-12);
   EXPECT_NEAR((records[0].force - on_cube).norm(), 0, 1e-12 * expected);
   EXPECT_NEAR(records[0].point.z(), 0.5 * kMm - 0.5 * overlap, 1e-12);
+}
+
+TEST(ContactModel, OverlapsAreFoundAtAnyDepthUnlikeTheStepsSearch) {
+  // The cube 0.3 mm into the slab: the step's search looks only a tenth of the smallest grain deep
+  // (0.1 mm), the overlap check finds the cube's bottom nodes 0.3 mm inside the slab.
+  const Model m = pressed_cubes(0.3 * kMm);
+  ContactModel contact(m, unit_masses(m), {});
+  const std::vector<PlatenState> platen{{Eigen::Vector3d(0, 0, -0.4 * kMm), Eigen::Vector3d::UnitZ()}};
+  const std::vector<Overlap> overlaps = contact.overlaps(m.nodes, platen);
+  ASSERT_EQ(overlaps.size(), 2u);
+  EXPECT_EQ(overlaps[0].a, 0u);
+  EXPECT_EQ(overlaps[0].b, 1u);
+  EXPECT_NEAR(overlaps[0].depth, 0.3 * kMm, 1e-15);
+  EXPECT_EQ(overlaps[1].a, 0u);  // the slab's bottom face 0.1 mm behind the platen
+  EXPECT_EQ(overlaps[1].b, 2u);
+  EXPECT_NEAR(overlaps[1].depth, 0.1 * kMm, 1e-15);
+  auto f = zeros(m.nodes.size());
+  EXPECT_LT(contact.add_forces(m.nodes, zeros(m.nodes.size()), {}, 1e-9, f).max_overlap, 0.11 * kMm);
+  // Two one-cell cubes half through each other: every corner lies on the other's faces (depth 0),
+  // the face triangles' centroids are a third of the edge inside.
+  Model coarse;
+  const TetMesh cube = box_mesh(Eigen::Vector3d::Constant(kMm), kMm);
+  add_grain(coarse, cube, Eigen::Vector3d::Zero(), GrainKind::rigid, 0, 1);
+  add_grain(coarse, cube, Eigen::Vector3d(0.5 * kMm, 0, 0), GrainKind::rigid, 0, 2);
+  const std::vector<Overlap> through = ContactModel(coarse, unit_masses(coarse), {}).overlaps(coarse.nodes, {});
+  ASSERT_EQ(through.size(), 1u);
+  EXPECT_NEAR(through[0].depth, kMm / 3, 1e-15);
+  // Touching: nothing beyond round-off; apart: nothing.
+  const Model touching = pressed_cubes(0), apart = pressed_cubes(-1e-7);
+  for (const Overlap& o : ContactModel(touching, unit_masses(touching), {}).overlaps(touching.nodes, {}))
+    EXPECT_LT(o.depth, 1e-18);
+  EXPECT_TRUE(ContactModel(apart, unit_masses(apart), {}).overlaps(apart.nodes, {}).empty());
+}
+
+TEST(ContactModel, OverlapsOfSixteenThousandGrainsComeThroughTheBroadPhase) {
+  // 16 000 faceted spheres on a cubic lattice 0.9 diameters apart: each overlaps its six lattice
+  // neighbours by about a tenth of a diameter and no other grain (the diagonal ones are 1.27
+  // diameters apart). Every overlap is found, and only those, in a few seconds (docs/fdemrun.md).
+  const double radius = 0.25 * kMm, pitch = 0.9 * 2 * radius;
+  mesh::TetOptions o;
+  o.size = 0.4 * radius;
+  const mesh::TetMesh sphere = mesh::mesh_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(radius),
+                                                    Eigen::Quaterniond::Identity(), o);
+  constexpr int kSide[3] = {25, 25, 26};
+  Model m;
+  for (int i = 0; i < kSide[0]; ++i)
+    for (int j = 0; j < kSide[1]; ++j)
+      for (int k = 0; k < kSide[2]; ++k) {
+        mesh::TetMesh placed = sphere;
+        for (Eigen::Vector3d& p : placed.nodes) p += pitch * Eigen::Vector3d(i, j, k);
+        mesh::append_grain(m, placed, static_cast<std::uint32_t>(m.grains.size() + 1), GrainKind::rigid);
+      }
+  ASSERT_EQ(m.grains.size(), 16250u);
+  ContactModel contact(m, unit_masses(m), {});
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<Overlap> overlaps = contact.overlaps(m.nodes, {});
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("overlaps of %zu grains: %.2f s\n", m.grains.size(), seconds);
+  const auto index = [&](int i, int j, int k) { return static_cast<std::uint32_t>((i * kSide[1] + j) * kSide[2] + k); };
+  std::size_t expected = 0;
+  for (int d = 0; d < 3; ++d) expected += static_cast<std::size_t>(kSide[0] * kSide[1] * kSide[2] / kSide[d] * (kSide[d] - 1));
+  ASSERT_EQ(overlaps.size(), expected);
+  for (const Overlap& ov : overlaps) {
+    const std::uint32_t step = ov.b - ov.a;
+    EXPECT_TRUE(step == 1 || step == index(0, 1, 0) || step == index(1, 0, 0)) << ov.a << " " << ov.b;
+    // A tenth of the diameter between the true spheres; the facets cut a little off.
+    EXPECT_GT(ov.depth, 0.05 * radius);
+    EXPECT_LT(ov.depth, 0.2 * radius);
+  }
 }
 
 TEST(ContactModel, NoForceAcrossAGap) {

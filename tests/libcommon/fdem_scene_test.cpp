@@ -200,6 +200,45 @@ TEST(FdemScene, BadModelAndShapeTablesFailWithTheFix) {
             std::string::npos);
 }
 
+TEST(FdemScene, MaterialsAndRunKeysOutOfTheirRangeAreRefusedWithTheRange) {
+  // Material values take the model files' ranges (one check for both), printed readably.
+  test::TempDir dir;
+  const auto scene = [&](const std::string& body) { return write_text(dir, "bad.toml", "[run]\nduration = 1e-6\n" + body); };
+  const std::string box = "[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\n";
+  const auto says = [&](const std::string& body, const std::string& words) {
+    const std::string message = error_of(scene(body));
+    EXPECT_NE(message.find(words), std::string::npos) << message;
+  };
+  says("[[materials]]\nyoung = 0\n", "bad.toml: [[materials]] 1: young must lie in [1000, 1e+13] Pa (got 0 Pa)");
+  says("[[materials]]\ndensity = -2650\n", "density must lie in [1, 1e+10] kg/m^3 (got -2650 kg/m^3)");
+  says("[[materials]]\npoisson = 0.5\n", "poisson must lie in (-1, 0.5) (got 0.5)");
+  says("[[materials]]\ndamping_ratio = 1\n", "damping_ratio must lie in [0, 1) (got 1)");
+  says("[[materials]]\nnormal_penalty = 1e30\n", "normal_penalty must lie in (0, 1e+24] N/m^3 (got 1e+30 N/m^3)");
+  says("[[materials]]\nfriction = nan\n", "friction must be a number");
+  says(box + "[[platens]]\nfriction = 20\n", "bad.toml: [[platens]] 1: friction must lie in [0, 10] (got 20)");
+  const auto run = [&](const std::string& keys) { return write_text(dir, "run.toml", "[run]\nduration = 1e-6\n" + keys + box); };
+  EXPECT_NE(error_of(run("overlap_tolerance = 0.9\n")).find("overlap_tolerance must lie in [0.001, 0.5]"), std::string::npos);
+  EXPECT_NE(error_of(run("relax_overlaps = 1\n")).find("relax_overlaps must be true or false"), std::string::npos);
+  EXPECT_NE(error_of(run("max_steps = 1e16\n")).find("max_steps must lie in [1, 1e+15] (got 1e+16)"), std::string::npos);
+  const Scene defaults = read_scene(run(""));
+  EXPECT_EQ(defaults.overlaps.tolerance, 0.1);
+  EXPECT_FALSE(defaults.overlaps.relax);
+  EXPECT_EQ(defaults.max_steps, 1e7);
+  const Scene set = read_scene(run("overlap_tolerance = 0.1\nrelax_overlaps = true\nmax_steps = 5e8\n"));
+  EXPECT_EQ(set.overlaps.tolerance, 0.1);
+  EXPECT_TRUE(set.overlaps.relax);
+  EXPECT_EQ(set.max_steps, 5e8);
+  // A penalty set per element size is checked once resolved on the mesh.
+  const Scene tiny = read_scene(scene("[[materials]]\npenalty_per_size = 1000\npenalty_element_size = 1e-12\n" + box));
+  try {
+    build_model(tiny);
+    ADD_FAILURE() << "a penalty of 9e25 N/m^3 was accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(e.message().find("gives a penalty out of range: normal_penalty must lie in (0, 1e+24] N/m^3"), std::string::npos)
+        << e.message();
+  }
+}
+
 TEST(FdemScene, PenaltyPerSizeIsResolvedOnTheBuiltMeshes) {
   // Boxes meshed at h = 0.5 mm: two of a surface triangle's three edges are h, so the median edge
   // is h, for 4-node grains and (doubled quarter faces) for 10-node ones.

@@ -1,5 +1,6 @@
 // kind=fdem_model files: round trip of a mixed 4/10-node model with materials, platens and sample
-// cylinder; refusal of other kinds and of inconsistent models; the .vtu and .msh views.
+// cylinder; refusal of other kinds, of inconsistent models and of values out of their physical
+// range (with the file named); the .vtu and .msh views.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -9,6 +10,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "support/run_tool.hpp"
+#include "support/simulation_results.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
@@ -111,6 +113,47 @@ TEST(ModelFile, RefusesOtherKindsAndBrokenModels) {
   m = two_tet_model();
   m.grains[0].material = 4;
   EXPECT_THROW(fdem::validate_model(m, "m"), DataError);
+}
+
+TEST(ModelFile, ValuesOutOfTheirPhysicalRangeAreRefusedNamingTheFile) {
+  // A model file is checked like a scene's [[materials]] (one check for both): a zero Young's
+  // modulus, a negative density, a NaN node or a platen without a normal is refused on reading,
+  // with the file, the material and the range, before any solver sees it.
+  test::TempDir dir;
+  const auto good = dir / "good.h5";
+  fdem::write_model_file(good, two_tet_model(), {"test"});
+  const auto refused = [&](const std::string& name, const std::string& dataset, const std::vector<double>& values,
+                           const std::vector<hsize_t>& dims) {
+    const auto path = dir / name;
+    std::filesystem::copy_file(good, path);
+    test::replace_dataset(path, dataset, values, dims);
+    try {
+      fdem::read_model_file(path);
+    } catch (const DataError& e) {
+      EXPECT_NE(e.message().find(path.string()), std::string::npos) << e.message();
+      return e.message();
+    }
+    ADD_FAILURE() << name << " was read";
+    return std::string();
+  };
+  const fdem::Material sand, glass = two_tet_model().materials[1];
+  std::string message = refused("young.h5", "/materials/young", {sand.young, 0.0}, {2});
+  EXPECT_NE(message.find("material 'glass': young must lie in [1000, 1e+13] Pa (got 0 Pa)"), std::string::npos) << message;
+  message = refused("density.h5", "/materials/density", {-sand.density, glass.density}, {2});
+  EXPECT_NE(message.find("material 'ottawa_sand': density must lie in [1, 1e+10] kg/m^3 (got -2650 kg/m^3)"),
+            std::string::npos)
+      << message;
+  message = refused("poisson.h5", "/materials/poisson", {sand.poisson, std::nan("")}, {2});
+  EXPECT_NE(message.find("poisson must lie in (-1, 0.5) (got nan)"), std::string::npos) << message;
+  message = refused("penalty.h5", "/materials/normal_penalty", {sand.normal_penalty, 1e300}, {2});
+  EXPECT_NE(message.find("normal_penalty must lie in (0, 1e+24] N/m^3"), std::string::npos) << message;
+  std::vector<double> nodes;
+  for (const Vector3d& p : two_tet_model().nodes) nodes.insert(nodes.end(), {p.x(), p.y(), p.z()});
+  nodes[4] = std::numeric_limits<double>::infinity();
+  message = refused("node.h5", "/nodes", nodes, {14, 3});
+  EXPECT_NE(message.find("node 1 has a coordinate that is not a finite number"), std::string::npos) << message;
+  message = refused("platen.h5", "/platens/normal", {0, 0, 1, 0, 0, 0}, {2, 3});
+  EXPECT_NE(message.find("platen 'top' needs a finite point, a unit normal"), std::string::npos) << message;
 }
 
 TEST(ModelFile, VtuAndMshViews) {

@@ -1,7 +1,9 @@
 #include "graintwin/fdem/model_file.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <limits>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -18,20 +20,26 @@ namespace {
 
 constexpr std::uint32_t kPadding = std::numeric_limits<std::uint32_t>::max();
 
-/// The numeric material columns, one dataset each under /materials.
+/// The numeric material columns, one dataset each under /materials, with the physical range every
+/// value must lie in (scenes and model files alike, material_range_problem; docs/formats.md).
 struct MaterialColumn {
   const char* name;
   const char* unit;
   double Material::*field;
+  double low, high;
+  bool low_open, high_open;  ///< the bound itself is excluded
 };
 constexpr MaterialColumn kMaterialColumns[] = {
-    {"density", "kg/m^3", &Material::density},
-    {"young", "Pa", &Material::young},
-    {"poisson", "1", &Material::poisson},
-    {"friction", "1", &Material::friction},
-    {"normal_penalty", "N/m^3", &Material::normal_penalty},
-    {"tangential_penalty", "N/m^3", &Material::tangential_penalty},
-    {"damping_ratio", "1", &Material::damping_ratio},
+    // Up to ten million times rock's density, for mass scaling.
+    {"density", "kg/m^3", &Material::density, 1, 1e10, false, false},
+    // From soft rubber to diamond and beyond.
+    {"young", "Pa", &Material::young, 1e3, 1e13, false, false},
+    {"poisson", "1", &Material::poisson, -1, 0.5, true, true},
+    {"friction", "1", &Material::friction, 0, 10, false, false},
+    // p = k E / h reaches 1e24 only for k = 100, E = 1e13 Pa and h = 1 um.
+    {"normal_penalty", "N/m^3", &Material::normal_penalty, 0, 1e24, true, false},
+    {"tangential_penalty", "N/m^3", &Material::tangential_penalty, 0, 1e24, true, false},
+    {"damping_ratio", "1", &Material::damping_ratio, 0, 1, false, true},
 };
 
 std::string material_path(const char* column) { return std::string(sm::materials) + "/" + column; }
@@ -64,9 +72,46 @@ void check_tiling(const Model& m, std::uint32_t Grain::*begin, std::uint32_t Gra
     throw DataError(fmt::format("{}: the grains own {} {} but the model has {}; rebuild the model", where, next, what, total));
 }
 
+/// Whether every coordinate of v is finite.
+bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
 }  // namespace
 
+std::string material_range_problem(const Material& material) {
+  for (const MaterialColumn& c : kMaterialColumns) {
+    const double v = material.*c.field;
+    const bool above_low = c.low_open ? v > c.low : v >= c.low;
+    const bool below_high = c.high_open ? v < c.high : v <= c.high;
+    if (std::isfinite(v) && above_low && below_high) continue;
+    const std::string unit = std::string_view(c.unit) == "1" ? std::string() : " " + std::string(c.unit);
+    return fmt::format("{} must lie in {}{:g}, {:g}{}{} (got {:g}{})", c.name, c.low_open ? '(' : '[', c.low, c.high,
+                       c.high_open ? ')' : ']', unit, v, unit);
+  }
+  return {};
+}
+
 void validate_model(const Model& m, const std::string& where) {
+  // Values first: a damaged or hand-edited file must not reach the solver as NaN or a zero modulus.
+  for (std::size_t i = 0; i < m.nodes.size(); ++i)
+    if (!finite(m.nodes[i]))
+      throw DataError(fmt::format("{}: node {} has a coordinate that is not a finite number; rebuild the model", where, i));
+  for (const Material& mat : m.materials)
+    if (const std::string problem = material_range_problem(mat); !problem.empty())
+      throw DataError(fmt::format("{}: material '{}': {}; the model is damaged or was edited, rebuild it", where, mat.name,
+                                  problem));
+  for (const Platen& p : m.platens)
+    if (!finite(p.point) || !finite(p.normal) || std::abs(p.normal.norm() - 1) > 1e-6 || !(p.friction >= 0 && p.friction <= 10))
+      throw DataError(fmt::format("{}: platen '{}' needs a finite point, a unit normal and a friction in [0, 10] (got "
+                                  "normal length {:g}, friction {:g}); rebuild the model",
+                                  where, p.name, p.normal.norm(), p.friction));
+  if (const auto& s = m.sample;
+      s && !(s->axis_xy.allFinite() && s->radius > 0 && std::isfinite(s->radius) && std::isfinite(s->z_min) &&
+             std::isfinite(s->z_max) && s->z_min < s->z_max && s->membrane_thickness >= 0 &&
+             std::isfinite(s->membrane_thickness)))
+    throw DataError(fmt::format("{}: the sample cylinder needs a finite axis, a positive radius, z_min < z_max and a "
+                                "membrane thickness of at least 0 (got radius {:g} m, z from {:g} to {:g} m, thickness "
+                                "{:g} m); rebuild the model",
+                                where, s->radius, s->z_min, s->z_max, s->membrane_thickness));
   const std::size_t ne = m.element_grain.size();
   if (m.element_offset.size() != ne + 1 || m.element_offset.front() != 0 || m.element_offset.back() != m.element_nodes.size())
     throw DataError(where + ": the element offsets do not match the element list; rebuild the model");

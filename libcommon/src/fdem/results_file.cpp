@@ -163,7 +163,12 @@ void ResultsWriter::write_triaxial_columns() {
   const auto strained = [&](std::size_t i) { return reference_row_ && i >= *reference_row_; };
   column(sr::series_axial_stress, [](std::size_t, const TriaxialMeasure& m) { return m.axial_stress; }, "Pa");
   column(sr::series_lateral_stress, [](std::size_t, const TriaxialMeasure& m) { return m.lateral_stress; }, "Pa");
-  column(sr::series_stress_ratio, [](std::size_t, const TriaxialMeasure& m) { return m.axial_stress / m.lateral_stress; }, "1");
+  // sigma_1 / sigma_3 is undefined while the lateral boundary carries nothing (the servo wall before
+  // the grains reach it, the membrane held at zero pressure before its release): NaN there, never
+  // an infinity (docs/formats.md).
+  column(sr::series_stress_ratio, [&](std::size_t, const TriaxialMeasure& m) {
+    return m.lateral_stress > 0 ? m.axial_stress / m.lateral_stress : nan;
+  }, "1");
   column(sr::series_height, [](std::size_t, const TriaxialMeasure& m) { return m.height; }, "m");
   column(sr::series_volume, [](std::size_t, const TriaxialMeasure& m) { return m.volume; }, "m^3");
   column(sr::series_volume_radial, [](std::size_t, const TriaxialMeasure& m) { return m.volume_radial; }, "m^3");

@@ -1,5 +1,6 @@
 #include "graintwin/fdem/scene.hpp"
 
+#include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -233,7 +234,8 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   if (const toml::table* run = root["run"].as_table()) {
     const Table r(*run, file + ": [run]",
                   {"duration", "time_step", "element_safety", "rigid_contact_nodes", "gravity", "damping", "contact",
-                   "frame_interval", "series_interval", "checkpoint_interval"});
+                   "frame_interval", "series_interval", "checkpoint_interval", "overlap_tolerance", "relax_overlaps",
+                   "max_steps"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
     s.element_safety = r.positive("element_safety", 0.8);
@@ -246,6 +248,16 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     s.frame_interval = r.non_negative("frame_interval", 0);
     s.series_interval = r.non_negative("series_interval", 0);
     s.checkpoint_interval = r.non_negative("checkpoint_interval", 0);
+    s.overlaps.tolerance = r.number("overlap_tolerance", s.overlaps.tolerance);
+    if (!(s.overlaps.tolerance >= 1e-3 && s.overlaps.tolerance <= 0.5))
+      r.fail(fmt::format("overlap_tolerance must lie in [0.001, 0.5] (a fraction of the smaller grain's equivalent diameter; "
+                         "got {:g})",
+                         s.overlaps.tolerance));
+    s.overlaps.relax = r.flag("relax_overlaps", false);
+    s.max_steps = r.number("max_steps", s.max_steps);
+    // Step counts stay exact in a double and an int64 below 1e15.
+    if (!(s.max_steps >= 1 && s.max_steps <= 1e15))
+      r.fail(fmt::format("max_steps must lie in [1, 1e+15] (got {:g})", s.max_steps));
   } else if (top.has("run")) {
     top.fail("run must be a [run] table");
   }
@@ -260,15 +272,15 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
                    "penalty_per_size", "penalty_element_size"});
     Material mat;
     mat.name = t.text("name", mat.name);
-    mat.density = t.positive("density", mat.density);
-    mat.young = t.positive("young", mat.young);
+    mat.density = t.number("density", mat.density);
+    mat.young = t.number("young", mat.young);
     mat.poisson = t.number("poisson", mat.poisson);
-    if (!(mat.poisson > -1 && mat.poisson < 0.5)) t.fail("poisson must lie in (-1, 0.5)");
-    mat.friction = t.non_negative("friction", mat.friction);
-    mat.normal_penalty = t.positive("normal_penalty", mat.normal_penalty);
-    mat.tangential_penalty = t.positive("tangential_penalty", mat.tangential_penalty);
-    mat.damping_ratio = t.non_negative("damping_ratio", mat.damping_ratio);
-    if (mat.damping_ratio >= 1) t.fail("damping_ratio must be below 1 (a fraction of critical damping)");
+    mat.friction = t.number("friction", mat.friction);
+    mat.normal_penalty = t.number("normal_penalty", mat.normal_penalty);
+    mat.tangential_penalty = t.number("tangential_penalty", mat.tangential_penalty);
+    mat.damping_ratio = t.number("damping_ratio", mat.damping_ratio);
+    // The same ranges as a model file's materials (one check for both).
+    if (const std::string problem = material_range_problem(mat); !problem.empty()) t.fail(problem);
     SizePenalty size_penalty;
     if (t.has("penalty_per_size")) size_penalty.per_size = t.positive("penalty_per_size", 0.0);
     if (t.has("penalty_element_size")) size_penalty.element_size = t.positive("penalty_element_size", 0.0);
@@ -386,7 +398,10 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     const Eigen::Vector3d n = t.vector("normal", Eigen::Vector3d::UnitZ());
     if (!(n.norm() > 0)) t.fail("normal must not be zero");
     spec.platen.normal = n.normalized();
-    spec.platen.friction = t.non_negative("friction", 0);
+    spec.platen.friction = t.number("friction", 0);
+    // The range of a model file's platens (validate_model).
+    if (!(spec.platen.friction >= 0 && spec.platen.friction <= 10))
+      t.fail(fmt::format("friction must lie in [0, 10] (got {:g})", spec.platen.friction));
     spec.velocity = t.vector("velocity", Eigen::Vector3d::Zero());
     if (std::find(platen_names.begin(), platen_names.end(), spec.platen.name) != platen_names.end())
       t.fail("platen name '" + spec.platen.name + "' is used twice");
@@ -477,6 +492,10 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
       throw UsageError("material '" + m.materials[k].name + "' sets penalty_per_size but no grain uses it; " +
                        "give it penalty_element_size or drop the key");
     m.materials[k].normal_penalty = m.materials[k].tangential_penalty = rule.per_size * m.materials[k].young / h;
+    if (const std::string problem = material_range_problem(m.materials[k]); !problem.empty())
+      throw UsageError(fmt::format("material '{}': penalty_per_size {:g} x young / {:g} m gives a penalty out of range: {}; "
+                                   "lower penalty_per_size or give a larger penalty_element_size",
+                                   m.materials[k].name, rule.per_size, h, problem));
   }
   return m;
 }

@@ -1,5 +1,7 @@
 #include "graintwin/fdem/triaxial_run.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -15,7 +17,53 @@ std::vector<double> measure_values(const TriaxialMeasure& m) {
   return {m.axial_stress, m.lateral_stress, m.height, m.volume, m.volume_radial};
 }
 
+/// The shearing strain rate of `spec` on the solver's grains, 1/s: its strain_rate, else the rate of
+/// its inertial number at sigma_3.
+double shearing_rate(const Solver& solver, const TriaxialSpec& spec, double d50) {
+  return spec.strain_rate > 0 ? spec.strain_rate
+                              : strain_rate_of(spec.shear_inertial_number, d50, solver.model().materials.front().density,
+                                               spec.options.confining_pressure);
+}
+
+/// Steps of shearing to the target strain: H = H0 (1 - rate t) at constant platen speed and eps_1 =
+/// ln(H0 / H), plus half the ramp's steps, which cover half the distance of full speed.
+double shear_steps(const TriaxialSpec& spec, double rate, double dt) {
+  return std::ceil(((1 - std::exp(-spec.target_axial_strain)) + 0.5 * spec.shear_ramp_strain) / (rate * dt));
+}
+
 }  // namespace
+
+StepEstimate estimate_steps(const Scene& scene, const Solver& solver, double dt) {
+  if (!scene.triaxial) {
+    const double duration = scene.total_duration();
+    return {duration / dt, fmt::format("{:.3g} s of stages at {:.3g} s a step", duration, dt)};
+  }
+  const TriaxialSpec& spec = *scene.triaxial;
+  const double rate = shearing_rate(solver, spec, grains_d50(solver));
+  const double shearing = shear_steps(spec, rate, dt);
+  const double phases = spec.membrane ? 2 : 1;
+  return {phases * static_cast<double>(spec.consolidation_steps) + shearing,
+          fmt::format("at most {:g} x {} consolidation steps, then shearing to eps_1 = {:g} at {:.3g} /s in {:.3g} steps "
+                      "of {:.3g} s",
+                      phases, spec.consolidation_steps, spec.target_axial_strain, rate, shearing, dt)};
+}
+
+void check_step_ceiling(const StepEstimate& estimate, double max_steps, const Scene& scene, const StepLimits& limits,
+                        double dt, const std::string& where) {
+  if (estimate.steps <= max_steps) return;
+  const bool contact_sets = limits.contact_stable <= limits.element_stable;
+  const std::string cause =
+      scene.time_step > 0
+          ? fmt::format("the scene's [run] time_step: give a longer one (the stable limit is {:.3g} s)", limits.stable())
+      : contact_sets ? fmt::format("the contact limit (the elements allow {:.3g} s): soften the penalty (normal_penalty, "
+                                   "tangential_penalty or penalty_per_size)",
+                                   limits.element_stable)
+                     : fmt::format("the element limit (the contact allows {:.3g} s): coarsen the mesh (element_size)",
+                                   limits.contact_stable);
+  throw UsageError(fmt::format("{}: the run would take {:.3g} steps ({}), above the ceiling of {:g} steps; the time step "
+                               "{:.3g} s is {}, shorten the run, or raise [run] max_steps",
+                               where, estimate.steps, estimate.how, max_steps, dt, cause));
+}
 
 void save_progress(io::H5File& file, const TriaxialRunProgress& p) {
   file.ensure_group(kProgressGroup);
@@ -65,9 +113,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   TriaxialRunSummary summary;
   summary.d50 = grains_d50(solver);
   const double density = solver.model().materials.front().density;
-  summary.strain_rate = spec.strain_rate > 0 ? spec.strain_rate
-                                             : strain_rate_of(spec.shear_inertial_number, summary.d50, density,
-                                                              options.confining_pressure);
+  summary.strain_rate = shearing_rate(solver, spec, summary.d50);
   summary.inertial_number = inertial_number(summary.strain_rate, summary.d50, density, options.confining_pressure);
 
   TriaxialBoundary boundary(solver.model(), options, summary.d50);
@@ -130,10 +176,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   if (fresh_shearing) run.start = measure(solver, boundary, platens);
   summary.start = run.start;
   writer.set_strain_reference(run.start.height, run.start.volume);
-  // H = H0 (1 - rate t) at constant platen speed, and eps_1 = ln(H0 / H).
-  // Plus half the ramp's steps, which cover half the distance of full speed.
-  const auto expected = static_cast<std::size_t>(std::ceil(
-      ((1 - std::exp(-spec.target_axial_strain)) + 0.5 * spec.shear_ramp_strain) / (summary.strain_rate * dt)));
+  const auto expected = static_cast<std::size_t>(shear_steps(spec, summary.strain_rate, dt));
   begin("shearing", expected - std::min<std::size_t>(expected, fresh_shearing ? 0 : procedure.step));
   shearing_rate = summary.strain_rate;
   if (fresh_shearing) {

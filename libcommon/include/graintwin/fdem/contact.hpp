@@ -116,6 +116,12 @@ struct BallContactOptions {
   double friction = 0;  ///< Coulomb coefficient between ball and grain
 };
 
+/// How deep a grain reaches into another grain, or behind a platen (ContactModel::overlaps).
+struct Overlap {
+  std::uint32_t a = 0, b = 0;  ///< grain indices, a < b; b = grains.size() + platen index for a platen
+  double depth = 0;            ///< m, > 0: the deepest point of one inside the other (or behind the platen)
+};
+
 struct ContactStepStats {
   std::size_t pairs = 0;          ///< candidate grain pairs of the broad phase
   std::size_t node_contacts = 0;  ///< active node contacts after this step
@@ -165,6 +171,15 @@ class ContactModel {
                                        std::span<const Eigen::Vector3d> ball_spin, const BallContactOptions& balls,
                                        double dt, std::span<Eigen::Vector3d> f, std::span<Eigen::Vector3d> ball_force,
                                        std::span<Eigen::Vector3d> ball_moment);
+  /// Every grain pair, and grain and platen, that overlaps with the nodes at x (every node read from
+  /// x, none placed by a pose), sorted by (a, b): for the initial state's check, not for stepping.
+  /// Unlike the step, whose search looks no deeper than a tenth of the smallest grain, it finds
+  /// overlaps of any depth: each surface node and surface triangle centroid of one grain inside the
+  /// other's box is searched in the other's tree without a bound and tested inside by the
+  /// pseudonormal (the centroids catch boxes whose corners lie on each other's faces). A pair
+  /// costs its points inside the other's box, and pairs come from the broad phase: linear in the
+  /// grains for a packing. The next add_forces() rebuilds its pairs.
+  std::vector<Overlap> overlaps(std::span<const Eigen::Vector3d> x, std::span<const PlatenState> platens);
   /// Ball contact limit on the time step, s, like stable_time_step() for the stiffest grain material.
   double ball_stable_time_step(const BallContactOptions& balls) const;
   /// Per grain, the forces on the rigid ones (those with a pose) in this step: from add_forces, which

@@ -17,9 +17,16 @@
 
 namespace graintwin::fdem {
 
-/// Checks the model's internal consistency (ranges contiguous and grain-owned, 4 or 10 nodes per
-/// element, indices in range, one grain per element and triangle, materials referenced exist);
-/// throws DataError naming `what` (a file or "model") and the first problem found.
+/// The first numeric material value outside its physical range, as "young must lie in [1000,
+/// 1e+13] Pa (got 0 Pa)", or empty when every value is in range (and finite). The one check of
+/// material values for scene [[materials]] tables and model files alike (ranges: docs/formats.md).
+std::string material_range_problem(const Material& material);
+
+/// Checks the model's values (finite node coordinates, materials in range, platens with a unit
+/// normal, a sample cylinder of positive size) and its internal consistency (ranges contiguous and
+/// grain-owned, 4 or 10 nodes per element, indices in range, one grain per element and triangle,
+/// materials referenced exist); throws DataError naming `what` (a file or "model") and the first
+/// problem found.
 void validate_model(const Model& model, const std::string& what);
 
 /// Writes `model` (validated first) with `history` as /provenance/history. `extra` (optional)

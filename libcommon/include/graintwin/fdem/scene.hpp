@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/fdem/initial_overlap.hpp"
 #include "graintwin/fdem/model.hpp"
 #include "graintwin/fdem/size_grading.hpp"
 #include "graintwin/fdem/triaxial.hpp"
@@ -103,6 +104,10 @@ struct Scene {
   double frame_interval = 0;              ///< s between saved frames; 0 = first and last only
   double series_interval = 0;             ///< s between time-series rows; 0 = every step
   double checkpoint_interval = 0;         ///< s between checkpoints; 0 = at the end only
+  /// Initial overlaps (fdem/initial_overlap.hpp): [run] overlap_tolerance and relax_overlaps.
+  OverlapOptions overlaps;
+  /// Most steps a run may take, estimated before it starts (check_step_ceiling); [run] max_steps.
+  double max_steps = 1e7;
   double total_duration() const;
   /// Index in the built model of primitive grain k (the model file's grains come first).
   std::size_t primitive_grain(std::size_t k) const { return (model ? model->model->grains.size() : 0) + k; }

@@ -53,6 +53,24 @@ struct TriaxialRunSummary {
   TriaxialMeasure start, end;     ///< at the start and the end of shearing
 };
 
+/// A run's length in steps, estimated before it starts.
+struct StepEstimate {
+  double steps = 0;  ///< a double: an absurd estimate (a penalty far too stiff) is reported, not overflowed
+  std::string how;   ///< what it is made of, e.g. "6e-05 s of stages at 1.5e-08 s a step"
+};
+
+/// The steps the scene's run takes at time step `dt` on `solver` (built from the scene's model):
+/// the stages' duration over dt, or for a triaxial test at most [triaxial] consolidation_steps in
+/// each consolidation phase (one in the wall, one in the membrane) plus the shearing's steps at
+/// its strain rate.
+StepEstimate estimate_steps(const Scene& scene, const Solver& solver, double dt);
+
+/// UsageError naming `where` (the scene file) when `estimate` exceeds `max_steps` ([run]
+/// max_steps): the steps, what they are made of, what set the time step (the scene's time_step,
+/// the element or the contact limit of `limits`) and the fixes.
+void check_step_ceiling(const StepEstimate& estimate, double max_steps, const Scene& scene, const StepLimits& limits,
+                        double dt, const std::string& where);
+
 /// Runs the test on `solver` (which must have contact, and platens "bottom" and "top") at time
 /// step `dt`, a series row every `row_every` steps. UsageError before any step on a model the
 /// test cannot run; DataError when a consolidation does not settle.
