@@ -231,7 +231,7 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   const auto out = (dir / "out.h5").string();
   test::expect_clean_failure("fdemrun", dir, {(dir / "missing.toml").string(), out}, 2, "missing.toml");
   const auto typo = write_scene(dir, "typo.toml", replaced(kScene, "element_size = 1e-3", "element_sise = 1e-3"));
-  test::expect_clean_failure("fdemrun", dir, {typo.string(), out}, 2, "key 'element_sise' is unknown");
+  test::expect_clean_failure("fdemrun", dir, {typo.string(), out}, 2, "key 'element_sise' is unknown; did you mean 'element_size'?");
   const auto sphere = write_scene(dir, "sphere.toml", replaced(kScene, "kind = \"rigid\"", "kind = \"rigid\"\nshape = \"sphere\""));
   test::expect_clean_failure("fdemrun", dir, {sphere.string(), out}, 2, "size does not apply to a sphere");
   const auto no_model = write_scene(dir, "no_model.toml", replaced(kScene, "[run]", "[model]\nfile = \"gone.h5\"\n[run]"));

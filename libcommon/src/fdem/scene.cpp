@@ -10,6 +10,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/strings.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/primitives.hpp"
 
@@ -25,7 +26,9 @@ class Table {
       if (!known.count(std::string(k.str()))) {
         std::string list;
         for (const char* key : keys) list += (list.empty() ? "" : ", ") + std::string(key);
-        fail("key '" + std::string(k.str()) + "' is unknown (known: " + list + ")");
+        const std::string hint = closest_name(std::string(k.str()), {keys.begin(), keys.end()});
+        fail("key '" + std::string(k.str()) + "' is unknown" + (hint.empty() ? "" : "; did you mean '" + hint + "'?") +
+             " (known: " + list + ")");
       }
   }
   [[noreturn]] void fail(const std::string& what) const { throw UsageError(where_ + ": " + what); }
