@@ -4,9 +4,11 @@
 #include <bit>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/core/strings.hpp"
 
 namespace graintwin::io {
@@ -44,8 +46,14 @@ AnyVolume read_stream(std::istream& in, const RawLayout& l, const std::string& w
   throw DataError("unreachable");
 }
 
-std::size_t expected_bytes(const RawLayout& l) {
-  return l.shape[0] * l.shape[1] * l.shape[2] * dtype_bytes(l.dtype);
+/// Bytes of data the layout describes; DataError when they do not fit in 64 bits (a product that
+/// wrapped round could match a small file and make every later index run off the volume).
+std::size_t expected_bytes(const RawLayout& l, const fs::path& path, const std::string& fix) {
+  const auto bytes = checked_product({l.shape[0], l.shape[1], l.shape[2], dtype_bytes(l.dtype)});
+  if (!bytes || *bytes > std::numeric_limits<std::uint64_t>::max() - l.header_bytes)
+    throw DataError(path.string() + ": " + std::to_string(l.shape[0]) + " x " + std::to_string(l.shape[1]) + " x " +
+                    std::to_string(l.shape[2]) + " " + dtype_name(l.dtype) + " voxels are more bytes than a 64-bit size counts; " + fix);
+  return *bytes;
 }
 
 }  // namespace
@@ -55,13 +63,18 @@ AnyVolume read_raw_checked(const fs::path& path, const RawLayout& layout, const 
   std::error_code ec;
   const auto size = fs::file_size(path, ec);
   if (ec) throw UsageError(path.string() + ": cannot read (" + ec.message() + ")");
-  const std::size_t want = layout.header_bytes + expected_bytes(layout);
+  const std::size_t data = expected_bytes(layout, path, fix);
+  const std::size_t want = layout.header_bytes + data;
   if (size != want)
     throw DataError(path.string() + " has " + std::to_string(size) + " bytes but " +
                     std::to_string(layout.shape[0]) + " x " + std::to_string(layout.shape[1]) + " x " +
                     std::to_string(layout.shape[2]) + " " + dtype_name(layout.dtype) +
                     (layout.header_bytes ? " after a " + std::to_string(layout.header_bytes) + "-byte header" : "") +
                     " needs " + std::to_string(want) + "; " + fix);
+  check_memory(static_cast<double>(data), "reading " + path.string(),
+               std::to_string(layout.shape[0]) + " x " + std::to_string(layout.shape[1]) + " x " +
+                   std::to_string(layout.shape[2]) + " " + dtype_name(layout.dtype) + " voxels",
+               "convert it on a machine with more memory");
   std::ifstream in(path, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(layout.header_bytes));
   return read_stream(in, layout, path.string());
@@ -143,6 +156,7 @@ AnyVolume read_metaimage(const fs::path& path) {
   const std::string data_file = need("ElementDataFile");
   AnyVolume v;
   if (local_data) {
+    expected_bytes(l, path, "check DimSize and ElementType");
     v = read_stream(in, l, path.string());
     if (in.peek() != std::char_traits<char>::eof())
       throw DataError(path.string() + " has more data than DimSize x ElementType says; check the header");
