@@ -148,3 +148,42 @@ TEST(Ct2labels, WrongInputsAndOptionsAreUsageErrors) {
   fail(dir, {scan.string(), (dir / "x.h5").string(), "--region", "cylinder"}, 2, "--cylinder");
   fail(dir, {scan.string(), (dir / "x.h5").string(), "--preview", (dir / "p.jpg").string()}, 2, ".png");
 }
+
+// Numeric options are finite and in range before anything is read; a Gaussian larger than the
+// volume is refused from the header alone (sigma 1e6 on a 40 x 60 x 60 volume used to hang).
+TEST(Ct2labels, OptionsOutsideTheirRangeAndKernelsLargerThanTheVolumeAreRefused) {
+  test::TempDir dir;
+  const auto small = write_constant<std::uint16_t>(dir, "small.h5", 1000, {40, 60, 60});
+  const std::string out = (dir / "labels.h5").string();
+  fail(dir, {small.string(), out, "--sigma-vox", "1e6"}, 2, "--sigma-vox: must be a finite number in (0, 20] voxels, not 1e6");
+  fail(dir, {small.string(), out, "--sigma-vox", "nan"}, 2, "not nan");
+  fail(dir, {small.string(), out, "--sigma-vox", "20"}, 2,
+       "--sigma-vox 20 (a Gaussian cut at 3 sigma) spans 121 voxels, more than the volume (40 x 60 x 60 voxels, z y x)");
+  fail(dir, {small.string(), out, "--threshold", "inf"}, 2, "--threshold: must be a finite number");
+  fail(dir, {small.string(), out, "--open-vox", "1e9"}, 2, "[0, 50] voxels");
+  fail(dir, {small.string(), out, "--min-distance-vox", "0"}, 2, "(0, 1000] voxels");
+  fail(dir, {small.string(), out, "--min-volume-vox", "nan"}, 2, "--min-volume-vox");
+  fail(dir, {small.string(), out, "--d50", "1km"}, 2, "unknown unit 'km'");
+  fail(dir, {small.string(), out, "--region", "cylinder", "--cylinder", "0,0,2m"}, 2,
+       "--cylinder radius must be a length in [1 um, 1 m], not 2m");
+}
+
+// A sample cylinder centred at or below zero is a valid region: the volume's origin is arbitrary.
+TEST(Ct2labels, CylinderCentresAtZeroAndBelowAreAccepted) {
+  test::TempDir dir;
+  const Volume<float> f = test::scan_balls({44, 44, 44}, kBalls, 4, 0.03, {2e-5, 2e-5, 2e-5});
+  Volume<std::uint16_t> v(f.shape(), f.voxel_size(), {-4.3e-4, -4.3e-4, -4.3e-4});  // centred on the origin
+  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  io::write_volume_file(dir / "centred.h5", v, {"centred phantom"});
+  for (const std::string& centre : {std::string("0,0"), std::string("-0.01mm,0um")}) {
+    const auto out = dir / "labels.h5";
+    const auto r = run_tool("ct2labels", {(dir / "centred.h5").string(), out.string(), "-q", "--force", "--region",
+                                          "cylinder", "--cylinder", centre + ",0.4mm"});
+    ASSERT_EQ(r.exit_code, 0) << centre << ": " << r.err;
+    const auto labels = segment::read_labels_file(out);
+    EXPECT_NEAR(labels.sample.region.centre_x, centre[0] == '-' ? -1e-5 : 0.0, 1e-12) << centre;
+    EXPECT_EQ(labels.sample.region.centre_y, 0.0);
+    EXPECT_DOUBLE_EQ(labels.sample.region.radius, 4e-4);
+    EXPECT_GT(labels.sample.void_ratio.e, 0.0);
+  }
+}

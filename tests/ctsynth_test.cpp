@@ -151,3 +151,39 @@ TEST(Ctsynth, MissingSceneIsAUsageError) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("nope.toml"), std::string::npos) << r.err;
 }
+
+// Every option and scene key is a finite number in a stated range, checked before any grain is
+// made: NaN blur crashed, a huge blur or sample hung or ran out of memory, a huge grey scale wrote a
+// saturated scan without a word. Each is refused at once, naming the option and the range or fix.
+TEST(Ctsynth, OptionsOutsideTheirRangeAreRefusedBeforeAnyWork) {
+  test::TempDir dir;
+  write_scene(dir / "scene.toml");
+  const std::string scene = (dir / "scene.toml").string(), out = (dir / "out").string();
+  const auto refused = [&](const std::vector<std::string>& options, const std::vector<std::string>& says) {
+    std::vector<std::string> args{scene, out};
+    args.insert(args.end(), options.begin(), options.end());
+    const auto r = run_tool("ctsynth", args);
+    EXPECT_EQ(r.exit_code, 2) << options[0] << "\n" << r.err;
+    for (const auto& s : says) EXPECT_NE(r.err.find(s), std::string::npos) << options[0] << ": " << s << "\n" << r.err;
+    EXPECT_EQ(r.err.find("std::"), std::string::npos) << r.err;
+    EXPECT_EQ(test::list_dir(dir.path()), (std::vector<std::string>{"scene.toml"})) << options[0];
+  };
+  refused({"--blur", "nan"}, {"--blur", "[0, 20] voxels", "not nan"});
+  refused({"--blur", "1e6"}, {"--blur", "[0, 20] voxels", "not 1e6"});
+  refused({"--noise=-inf"}, {"--noise", "[0, 10]"});
+  refused({"--diameter", "10m"}, {"--diameter", "[10 um, 1 m]"});
+  refused({"--d50", "0"}, {"--d50", "[1 um, 100 mm]"});
+  refused({"--strains", "0,0.5"}, {"--strains", "[0, 0.5)"});
+  refused({"--sh-degree", "2.5"}, {"--sh-degree", "whole number in [2, 30]"});
+  refused({"--box", "1mm,nan,1mm", "--container", "box"}, {"--box", "finite length"});
+  // Inside every range but too large together: the scans alone would be petabytes.
+  refused({"--diameter", "1m", "--height", "1m"}, {"ctsynth needs about", "voxels", "--voxel-size"});
+  // Grey levels that would saturate uint16, or leave no contrast.
+  refused({"--grey-scale", "1e12"}, {"--grey-scale", "(0, 1e+06]"});
+  refused({"--grey-scale", "1e6"}, {"--grey-scale 1e+06", "65535", "at most 80713"});
+  refused({"--grey-grain", "0.05"}, {"--grey-grain 0.05 is not above --grey-void 0.1"});
+  refused({"--grey-scale", "1e-3"}, {"same value", "at least 1.54"});
+  // The scene file's keys are the same options, with the same checks.
+  write_scene(dir / "scene.toml", "blur = 1e6\n");
+  refused({"-q"}, {"--blur", "[0, 20] voxels"});
+}

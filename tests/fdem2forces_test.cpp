@@ -239,3 +239,19 @@ TEST(Fdem2forces, ChainsNeverReplaceAFolderItDidNotWrite) {
   EXPECT_EQ(run_tool("fdem2forces", again).exit_code, 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "chains" / "chains.pvd"));
 }
+
+// NaN passed --chain-threshold; a negative --window wrapped round to 2^64 - 1. Both are refused
+// with the range, before the results file is opened.
+TEST(Fdem2forces, OptionsOutsideTheirRangeAreRefused) {
+  test::TempDir dir;
+  const auto results = known_results(dir);
+  const std::string out = (dir / "forces.h5").string();
+  const auto refused = [&](const std::vector<std::string>& options, const std::string& says) {
+    test::expect_option_refused("fdem2forces", dir, {results.string(), out}, options, says);
+  };
+  refused({"--chain-threshold", "nan"}, "--chain-threshold: must be a finite number in (0, 1000], not nan");
+  refused({"--window", "-1"}, "--window: must be a whole number in [0, 1e+09] frames, not -1");
+  refused({"--radius-d50", "0"}, "(0, 100] d50");
+  refused({"--pdf-bins-per-decade", "nan"}, "[1, 100]");
+  refused({"--rose-theta-bins", "1e9"}, "[1, 180]");
+}

@@ -562,3 +562,14 @@ TEST(Fdemrun, TriaxialRunSplitInEveryPhaseIsTheWholeRunBitForBit) {
   }
   EXPECT_EQ(rows, whole_series.step.size());
 }
+
+// The run's own numeric option: a whole number of steps in a stated range (CLI11 alone read -1 as
+// 2^64 - 1 steps).
+TEST(Fdemrun, StopStepOutsideItsRangeIsRefused) {
+  test::TempDir dir;
+  const auto good = write_scene(dir, "good.toml", kScene);
+  const auto out = (dir / "out.h5").string();
+  test::expect_clean_failure("fdemrun", dir, {good.string(), out, "--stop-step", "-1"}, 2,
+                             "--stop-step: must be a whole number in [0, 1e+15] steps, not -1");
+  test::expect_clean_failure("fdemrun", dir, {good.string(), out, "--stop-step", "nan"}, 2, "[0, 1e+15] steps");
+}

@@ -221,3 +221,28 @@ TEST(Labels2contacts, SummaryCountsUnknownConfidencesApart) {
                            " with confidence >= 0.5 and " + std::to_string(unknown) + " not fitted (confidence unknown)";
   EXPECT_NE(r.err.find(line), std::string::npos) << r.err;
 }
+
+// NaN passed every range check (--gap-tolerance-vox nan accepted every contact), a huge window hung,
+// and a huge rose asked for more memory than exists: all are refused before any work.
+TEST(Labels2contacts, OptionsOutsideTheirRangeAndWindowsLargerThanTheVolumeAreRefused) {
+  test::TempDir dir;
+  const SpherePair p = write_sphere_pair(dir);
+  const std::vector<std::string> in{p.labels.string(), p.scan.string(), (dir / "c.h5").string()};
+  const auto refused = [&](const std::vector<std::string>& options, const std::string& says) {
+    test::expect_option_refused("labels2contacts", dir, in, options, says);
+  };
+  refused({"--gap-tolerance-vox", "nan"}, "--gap-tolerance-vox: must be a finite number in (0, 10] voxels, not nan");
+  refused({"--min-confidence", "nan"}, "--min-confidence: must be a finite number in [0, 1], not nan");
+  refused({"--window-vox", "1e6"}, "--window-vox: must be a finite number in [0, 30] voxels, not 1e6");
+  refused({"--window-vox", "30"}, "--window-vox 30 (with its 2-voxel margin) spans 65 voxels, more than the volume (40 x 40 x 40");
+  refused({"--theta-bins", "1000000000"}, "--theta-bins: must be a whole number in [1, 90]");
+  refused({"--phi-bins", "0"}, "--phi-bins: must be a whole number in [1, 360]");
+  refused({"--min-voxels", "-1"}, "--min-voxels: must be a whole number in [1, 1e+09] voxels");
+  // CLI11's PositiveNumber printed its bounds in full: "not in range 0.000000 to 1797693134862315708...".
+  const auto r = run_tool("labels2contacts", {in[0], in[1], in[2], "--gap-tolerance-vox=-1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("(0, 10] voxels, not -1"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 200u) << r.err;
+  // Without the grey volume no window is fitted, so only its range is checked.
+  EXPECT_EQ(run_tool("labels2contacts", {p.labels.string(), (dir / "plain.h5").string(), "-q", "--window-vox", "30"}).exit_code, 0);
+}

@@ -147,3 +147,26 @@ TEST(Labels2shapes, TooFewDirectionsLowerTheDegreeWithAWarning) {
   EXPECT_NE(r.err.find("SH degree lowered from 12"), std::string::npos) << r.err;
   EXPECT_LT(shape::read_shapes_file(dir / "s.h5").degree, 7);
 }
+
+// A billion directions took 22.9 GB before failing with advice about crops; NaN passed --tol.
+// Ranges refuse them at once; within range, the fitter's size is checked against the memory.
+TEST(Labels2shapes, OptionsOutsideTheirRangeAndFittersBeyondTheMemoryAreRefused) {
+  test::TempDir dir;
+  const auto labels = write_labels(dir);
+  const std::string out = (dir / "out.h5").string();
+  fail(dir, {labels.string(), out, "--directions", "1000000000"}, 2, "--directions: must be a whole number in [0, 1000000], not 1000000000");
+  fail(dir, {labels.string(), out, "--tol", "nan"}, 2, "--tol: must be a finite number in [0, 1], not nan");
+  fail(dir, {labels.string(), out, "--smooth-vox", "1e6"}, 2, "[0, 10] voxels");
+  fail(dir, {labels.string(), out, "--degree", "41"}, 2, "[0, 40]");
+  // Under a 2 GB address-space limit a degree-40 fit over a million directions (54 GB) is refused
+  // with the numbers and the largest count that fits.
+  const auto before = test::list_dir(dir.path());
+  const auto r = test::run_tool_with_memory_limit("labels2shapes", 2000000000,
+                                                  {labels.string(), out, "--degree", "40", "--directions", "1000000"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("labels2shapes needs about 54 GB for 1000000 sample directions x 1681 SH coefficients (degree 40), "
+                       "more than the 2 GB of the address-space limit (ulimit -v); give --directions of at most 37163 or a lower --degree"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(test::list_dir(dir.path()), before);
+}

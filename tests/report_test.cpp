@@ -472,3 +472,9 @@ TEST(ReportPage, BenchChartsAreFoundWithTheirStage) {
   EXPECT_EQ(charts[3].tool, "fdem2forces");
   EXPECT_EQ(charts[3].stage, "forces");
 }
+
+TEST(ReportFailures, OptionsOutsideTheirRangeAreRefused) {
+  test::TempDir out;
+  test::expect_clean_failure("report", out, {out.path().string(), (out / "r.html").string(), "--max-series", "nan"}, 2,
+                             "--max-series: must be a whole number in [1, 20], not nan");
+}

@@ -287,3 +287,21 @@ TEST(Shapes2mesh, BadInputsFailCleanly) {
   test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), (dir / "other.h5").string(), out}, 2,
                              "pass the labels file the shapes were measured from");
 }
+
+// NaN passed CLI11's ranges (--gamma-floor nan); every numeric option is now refused outside its
+// stated range while the command line is read, before any input is opened.
+TEST(Shapes2mesh, OptionsOutsideTheirRangeAreRefused) {
+  test::TempDir dir;
+  const std::vector<std::string> in{(dir / "shapes.h5").string(), (dir / "m.h5").string()};
+  const auto refused = [&](const std::vector<std::string>& options, const std::string& says) {
+    test::expect_option_refused("shapes2mesh", dir, in, options, says);
+  };
+  refused({"--gamma-floor", "nan"}, "--gamma-floor: must be a finite number in [0, 0.9], not nan");
+  refused({"--volume-tol", "inf"}, "[0.0001, 0.5]");
+  refused({"--smooth", "nan"}, "[0, 5] voxels");
+  refused({"--grains", "1e19"}, "--grains: must be a whole number in [0, 50000]");
+  // -1 wrapped round to 2^64 - 1 grains and ended in a bare "cannot create std::vector larger than max_size()".
+  refused({"--grains=-1"}, "--grains: must be a whole number in [0, 50000], not -1");
+  refused({"--membrane-thickness", "nan"}, "--membrane-thickness: the length 'nan' must be a finite length");
+  refused({"--membrane-thickness", "2m"}, "[1 um, 10 mm]");
+}

@@ -193,3 +193,23 @@ TEST(Shapes2tracks, BadInputsFailCleanly) {
   ASSERT_EQ(run_tool("shapes2tracks", {a[0], a[1], out}).exit_code, 0);
   fail({a[0], a[1], out}, 2, "--force");
 }
+
+// NaN passed the range checks (--volume-tol nan gave no match at all with --method paper): every
+// numeric option is now a finite number in a stated range, refused before any table is read.
+TEST(Shapes2tracks, OptionsOutsideTheirRangeAreRefused) {
+  test::TempDir dir;
+  write_series(dir);
+  const auto a = series_args(dir);
+  const std::string out = (dir / "tracks.h5").string();
+  const auto refused = [&](const std::vector<std::string>& options, const std::string& says) {
+    test::expect_option_refused("shapes2tracks", dir, {a[0], a[1], out, "--method", "paper"}, options, says);
+  };
+  refused({"--volume-tol", "nan"}, "--volume-tol: must be a finite number in [-1, 10], not nan");
+  refused({"--window", "nan"}, "--window: must be a finite number in (0, 100] d50");
+  refused({"--window", "0"}, "(0, 100] d50, not 0");
+  refused({"--lost-cost", "inf"}, "--lost-cost");
+  refused({"--symmetry-tol", "nan"}, "[0, 0.99]");
+  refused({"--rotation-margin", "nan"}, "[1, 100]");
+  refused({"--max-gap", "1e9"}, "[0, 100]");
+  refused({"--passes", "nan"}, "[1, 10]");
+}

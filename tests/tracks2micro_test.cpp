@@ -260,3 +260,21 @@ TEST(Tracks2micro, SimulationFramesInAffineMotionGiveTheExactStrain) {
   test::write_lattice_results(dir / "one.h5", run);
   test::expect_clean_failure("tracks2micro", dir, {(dir / "one.h5").string(), (dir / "x.h5").string()}, 2, "single frame");
 }
+
+// Every numeric option is a finite number in a stated range (NaN passed CLI11's own ranges), and
+// the message prints the range readably.
+TEST(Tracks2micro, OptionsOutsideTheirRangeAreRefused) {
+  test::TempDir dir;
+  write_series(dir, lattice_states());
+  const std::string in = (dir / "tracks.h5").string(), out = (dir / "micro.h5").string();
+  const auto refused = [&](const std::vector<std::string>& options, const std::string& says) {
+    test::expect_option_refused("tracks2micro", dir, {in, out}, options, says);
+  };
+  refused({"--top-fraction", "nan"}, "--top-fraction: must be a finite number in (0, 1], not nan");
+  refused({"--contact-factor", "nan"}, "[0.5, 3]");
+  refused({"--pdf-bins-per-decade", "nan"}, "[1, 100]");
+  refused({"--radius-d50", "1e400"}, "(0, 100] d50");
+  refused({"--displacement-range-d50", "-1"}, "[0, 1000] d50");
+  refused({"--rdf-bins", "0"}, "[1, 100000]");
+  refused({"--from", "-1", "--to", "1"}, "--from: must be a whole number in [0, 1e+09]");
+}

@@ -200,7 +200,41 @@ INSTANTIATE_TEST_SUITE_P(
                    const auto m = test::write_mhd(d.path(), "m", test::ramp_volume<std::uint8_t>({2, 3, 4}));
                    return std::vector<std::string>{m.string(), "--cast", "int7"};
                  },
-                 2, "unknown data type"}),
+                 2, "unknown data type"},
+        // 128 x 144115188075856997 x 1 uint16 wraps round to a small byte count in 64 bits: a file of
+        // that size passed the size check and --crop ran off the volume (SIGSEGV).
+        BadInput{"dims_beyond_64_bits",
+                 [](const test::TempDir& d) {
+                   const std::uint64_t wrapped = 128ull * 144115188075856997ull * 2ull;  // unsigned: wraps, defined
+                   std::ofstream(d / "big.raw", std::ios::binary) << std::string(wrapped, '\0');
+                   return std::vector<std::string>{(d / "big.raw").string(), "--dims", "128,144115188075856997,1", "--dtype",
+                                                   "uint16", "--crop", "0:2,0:1000,:", "--voxel-size", "1um"};
+                 },
+                 2, "describes a volume of 1.84e+19 voxels, beyond what a 64-bit size can count"},
+        BadInput{"dims_not_whole_numbers",
+                 [](const test::TempDir& d) {
+                   std::ofstream(d / "t.raw", std::ios::binary) << std::string(60, 'x');
+                   return std::vector<std::string>{(d / "t.raw").string(), "--dims", "2,5,6x", "--voxel-size", "1um"};
+                 },
+                 2, "'6x' is not a positive integer"},
+        BadInput{"negative_header_bytes",
+                 [](const test::TempDir& d) {
+                   std::ofstream(d / "t.raw", std::ios::binary) << std::string(60, 'x');
+                   return std::vector<std::string>{(d / "t.raw").string(), "--dims", "2,5,6", "--header-bytes", "-1"};
+                 },
+                 2, "--header-bytes: must be a whole number in [0, 1.1259e+15] bytes, not -1"},
+        BadInput{"voxel_size_nan",
+                 [](const test::TempDir& d) {
+                   const auto m = test::write_mhd(d.path(), "m", test::ramp_volume<std::uint8_t>({2, 3, 4}));
+                   return std::vector<std::string>{m.string(), "--voxel-size", "nan"};
+                 },
+                 2, "--voxel-size: the length 'nan' must be a finite length"},
+        BadInput{"downsample_beyond_range",
+                 [](const test::TempDir& d) {
+                   const auto m = test::write_mhd(d.path(), "m", test::ramp_volume<std::uint8_t>({2, 3, 4}));
+                   return std::vector<std::string>{m.string(), "--downsample", "1e12"};
+                 },
+                 2, "--downsample: must be a whole number in [1, 1000]"}),
     [](const ::testing::TestParamInfo<BadInput>& i) { return i.param.name; });
 
 TEST(Volconvert, ThreePageTiffBecomesThreeSlices) {
@@ -209,4 +243,22 @@ TEST(Volconvert, ThreePageTiffBecomesThreeSlices) {
   const auto r = run_tool("volconvert", {(dir / "three.tif").string(), (dir / "o.h5").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(shape_of_any(io::read_volume_file(dir / "o.h5")), (Shape3{3, 10, 12}));
+}
+
+// A raw file larger than the memory the process may use is refused from its size, before the
+// allocation that would fail (or be killed): here a sparse 3 GB file under a 2 GB address-space limit.
+TEST(Volconvert, RawLargerThanTheMemoryIsRefusedWithTheNumbers) {
+  test::TempDir dir;
+  { std::ofstream(dir / "huge.raw", std::ios::binary); }
+  fs::resize_file(dir / "huge.raw", 3000000000ull);  // sparse: no disk space used
+  const auto before = test::list_dir(dir.path());
+  const auto r = test::run_tool_with_memory_limit("volconvert", 2000000000,
+                                                  {(dir / "huge.raw").string(), (dir / "out.h5").string(), "--dims", "1000,1000,1500",
+                                                   "--dtype", "uint16", "--voxel-size", "1um"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("huge.raw needs about 3 GB for 1000 x 1000 x 1500 uint16 voxels, more than the 2 GB of the "
+                       "address-space limit (ulimit -v); convert it on a machine with more memory"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(test::list_dir(dir.path()), before);
 }

@@ -9,9 +9,11 @@
 #include <cmath>
 #include <optional>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -77,9 +79,10 @@ SegmentOptions to_segment_options(const Options& o) {
   if (s.region_mode == RegionMode::given_cylinder) {
     const auto parts = split(o.cylinder, ',');
     if (parts.size() != 3) throw UsageError("--region cylinder needs --cylinder X,Y,R (centre and radius, e.g. 1.5mm,1.5mm,1.4mm)");
-    s.region.centre_x = parse_length_m(parts[0], "--cylinder centre x");
-    s.region.centre_y = parse_length_m(parts[1], "--cylinder centre y");
-    s.region.radius = parse_length_m(parts[2], "--cylinder radius");
+    // The centre is a position (any sign, the volume's origin is arbitrary); the radius a length.
+    s.region.centre_x = cli::parse_length_in(parts[0], "--cylinder centre x", -1.0, 1.0);
+    s.region.centre_y = cli::parse_length_in(parts[1], "--cylinder centre y", -1.0, 1.0);
+    s.region.radius = cli::parse_length_in(parts[2], "--cylinder radius", 1e-6, 1.0);
   } else if (!o.cylinder.empty()) {
     throw UsageError("--cylinder is only used with --region cylinder; add it or drop --cylinder");
   }
@@ -168,21 +171,29 @@ int main(int argc, char** argv) {
   tool.add_input("volume", input, "CT volume (.h5, kind=volume; uint8, uint16 or float32)");
   tool.add_output("labels", output, "Labels file to write (.h5, kind=labels)");
   app.add_option("--denoise", o.denoise, "none, median (3x3x3) or gaussian")->capture_default_str();
-  app.add_option("--sigma-vox", o.sigma_vox, "Gaussian denoising: sigma in voxels")->capture_default_str();
-  app.add_option("--threshold", o.threshold, "Grey level; solid is strictly above it (default: Otsu)");
+  using cli::closed, cli::above, cli::number_in;
+  app.add_option("--sigma-vox", o.sigma_vox, "Gaussian denoising: sigma in voxels")
+      ->check(number_in(above(0, 20, "voxels")))->capture_default_str();
+  app.add_option("--threshold", o.threshold, "Grey level; solid is strictly above it (default: Otsu)")
+      ->check(cli::finite_number());
   app.add_flag("--fill-holes,!--no-fill-holes", o.fill_holes, "Fill cavities enclosed in the solid")
       ->capture_default_str();
-  app.add_option("--open-vox", o.open_vox, "Morphological opening radius in voxels (0 = none)")->capture_default_str();
+  app.add_option("--open-vox", o.open_vox, "Morphological opening radius in voxels (0 = none)")
+      ->check(number_in(closed(0, 50, "voxels")))->capture_default_str();
   app.add_option("--markers", o.markers, "h-maxima or peaks")->capture_default_str();
-  app.add_option("--h", o.h, "h-maxima depth in voxels (default: chosen from the image and printed)");
+  app.add_option("--h", o.h, "h-maxima depth in voxels (default: chosen from the image and printed)")
+      ->check(number_in(closed(0, 1000, "voxels")));
   app.add_option("--min-distance-vox", o.min_distance_vox,
-                 "peaks: minimum distance between markers in voxels (default: the reference grain radius)");
+                 "peaks: minimum distance between markers in voxels (default: the reference grain radius)")
+      ->check(number_in(above(0, 1000, "voxels")));
   app.add_option("--d50", o.d50,
                  "Expected median grain diameter (e.g. 0.551mm); bounds the automatic h and the fragment size "
-                 "(default: estimated from the distance map)");
-  app.add_option("--connectivity", o.connectivity, "6, 18 or 26")->capture_default_str();
+                 "(default: estimated from the distance map)")
+      ->check(cli::length_in(1e-6, 0.1));
+  app.add_option("--connectivity", o.connectivity, "6, 18 or 26")->check(CLI::IsMember({6, 18, 26}))->capture_default_str();
   app.add_option("--min-volume-vox", o.min_volume_vox,
-                 "Labels smaller than this are fragments (default: 5 % of a sphere of the reference radius, at least 2)");
+                 "Labels smaller than this are fragments (default: 5 % of a sphere of the reference radius, at least 2)")
+      ->check(number_in(closed(0, 1e9, "voxels")));
   app.add_option("--fragments", o.fragments, "merge (into the neighbour with the largest boundary) or remove")
       ->capture_default_str();
   app.add_flag("--remove-edge-grains", o.remove_edge_grains, "Drop grains cut by a face of the volume");
@@ -190,7 +201,8 @@ int main(int argc, char** argv) {
                  "Where the void ratio is measured: auto (sample cylinder found in the mask), cylinder (--cylinder) "
                  "or volume (the whole volume, for crops from inside a sample)")
       ->capture_default_str();
-  app.add_option("--cylinder", o.cylinder, "X,Y,R: centre (x, y) and radius of the sample, lengths with units");
+  app.add_option("--cylinder", o.cylinder,
+                 "X,Y,R: centre (x, y; any sign, within 1 m) and radius (1 um to 1 m) of the sample, lengths with units");
   app.add_option("--preview", o.preview, "Also write a PNG: mid axial slice and mid vertical section with the labels");
   tool.set_examples({"ct2labels scan_000.h5 labels_000.h5",
                      "ct2labels scan.h5 labels.h5 --d50 0.551mm --preview labels.png",
@@ -201,12 +213,16 @@ int main(int argc, char** argv) {
     if (!o.preview.empty()) io::check_output_allowed(o.preview, ctx.force());
     const io::H5File in = io::open_kind(input, schema::kind::volume, "pass a scan (ctsynth or volconvert output)");
     ctx.add_input_history(in);
+    const io::ImageHeader header = io::read_image_header(in, schema::path::volume);
+    const double unit = std::min({header.voxel_size[0], header.voxel_size[1], header.voxel_size[2]});
+    if (options.denoise == Denoise::gaussian)
+      check_kernel_fits(std::ceil(3.0 * options.gaussian_sigma_vox), header.shape,
+                        fmt::format("--sigma-vox {:g} (a Gaussian cut at 3 sigma)", options.gaussian_sigma_vox),
+                        "give a smaller --sigma-vox");
     io::AtomicOutput out(output, ctx.force());
     std::optional<io::AtomicOutput> preview;
     if (!o.preview.empty()) preview.emplace(o.preview, ctx.force());
 
-    const io::ImageHeader header = io::read_image_header(in, schema::path::volume);
-    const double unit = std::min({header.voxel_size[0], header.voxel_size[1], header.voxel_size[2]});
     AnyVolume grey = io::read_image(in, schema::path::volume);
     const Shape3 shape = header.shape;
     spdlog::info("{}: {} x {} x {} voxels ({})", input.string(), shape[0], shape[1], shape[2],

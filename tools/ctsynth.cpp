@@ -7,9 +7,11 @@
 #include <fstream>
 #include <random>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -102,64 +104,84 @@ int main(int argc, char** argv) {
   auto& app = tool.cli();
   tool.use_positional_config("scene", scene, "Scene file (TOML, keys = option names below)");
   tool.add_output("outdir", outdir, "Output folder (created; refused if it exists, unless --force)");
+  // Every numeric option and scene key is checked while the scene and the command line are read,
+  // against a physical range shown in --help (see docs/conventions.md, "Option ranges").
+  using cli::closed, cli::above, cli::number_in, cli::whole_number_in, cli::length_in;
+  const auto grain_size = length_in(1e-6, 0.1);       // grain diameters: micrometres to centimetres
+  const auto sample_size = length_in(10e-6, 1.0);     // container dimensions
+  const auto grey_level = number_in(closed(0, 10));   // grey levels, in units of the uint16 scale
   app.add_option("--seed", o.seed, "Random seed (same seed, same bytes)")->capture_default_str();
   app.add_option("--grain-shape", o.grain_shape, "sphere, ellipsoid or sand")->capture_default_str();
   app.add_option("--sh-degree", o.sh_degree, "SH degree of sand grains and of the stored coefficients")
-      ->check(CLI::Range(2, 30))->capture_default_str();
-  app.add_option("--aspect-ratio", o.aspect_ratio, "Ellipsoids: longest / shortest axis")->capture_default_str();
-  app.add_option("--d-min", o.d_min, "PSD: smallest grain (volume-equivalent diameter)")->capture_default_str();
-  app.add_option("--d50", o.d50, "PSD: median by mass")->capture_default_str();
-  app.add_option("--d-max", o.d_max, "PSD: largest grain")->capture_default_str();
-  app.add_option("--psd-sigma", o.psd_sigma, "PSD: log-normal spread of the grading (by mass)")->capture_default_str();
+      ->check(whole_number_in(2, 30))->capture_default_str();
+  app.add_option("--aspect-ratio", o.aspect_ratio, "Ellipsoids: longest / shortest axis")
+      ->check(number_in(closed(1, 10)))->capture_default_str();
+  app.add_option("--d-min", o.d_min, "PSD: smallest grain (volume-equivalent diameter)")->check(grain_size)->capture_default_str();
+  app.add_option("--d50", o.d50, "PSD: median by mass")->check(grain_size)->capture_default_str();
+  app.add_option("--d-max", o.d_max, "PSD: largest grain")->check(grain_size)->capture_default_str();
+  app.add_option("--psd-sigma", o.psd_sigma, "PSD: log-normal spread of the grading (by mass)")
+      ->check(number_in(above(0, 2)))->capture_default_str();
   app.add_option("--container", o.container, "cylinder or box")->capture_default_str();
-  app.add_option("--diameter", o.diameter, "Cylinder diameter (sample inside the membrane)")->capture_default_str();
-  app.add_option("--height", o.height, "Cylinder height (platen to platen)")->capture_default_str();
-  app.add_option("--box", o.box, "Box edge lengths X,Y,Z, e.g. 4mm,4mm,4mm (with --container box)");
-  app.add_option("--solid-fraction", o.solid_fraction, "Grain volume / container volume to pack")
-      ->capture_default_str();
+  app.add_option("--diameter", o.diameter, "Cylinder diameter (sample inside the membrane)")->check(sample_size)->capture_default_str();
+  app.add_option("--height", o.height, "Cylinder height (platen to platen)")->check(sample_size)->capture_default_str();
+  app.add_option("--box", o.box, "Box edge lengths X,Y,Z, e.g. 4mm,4mm,4mm (with --container box; each 10 um to 1 m)");
+  app.add_option("--solid-fraction", o.solid_fraction,
+                 "Grain volume / container volume to pack (0.74 is the densest arrangement of equal spheres; random "
+                 "packings of sand stop near 0.64)")
+      ->check(number_in(above(0, 0.74)))->capture_default_str();
   app.add_option("--contact-tolerance", o.contact_tolerance,
                  "Largest interpenetration, as a fraction of the smallest grain radius; pairs within it touch")
-      ->capture_default_str();
+      ->check(number_in(cli::NumberRange{0, 0.5, true, true}))->capture_default_str();
   app.add_option("--pack-degrees", o.pack_degrees,
                  "Sand grains: pack with the roughness off, then on: grow the grains low-passed to the first SH "
                  "degree, then relax at each next degree and at the true shapes (increasing; degrees from --sh-degree "
                  "up are skipped; none: grow the true shapes)")
       ->capture_default_str();
-  app.add_option("--voxel-size", o.voxel_size, "Voxel size of the scans")->capture_default_str();
-  app.add_option("--margin-vox", o.margin_vox, "Air around the sample and membrane (voxels)")->capture_default_str();
+  app.add_option("--voxel-size", o.voxel_size, "Voxel size of the scans")->check(length_in(10e-9, 0.01))->capture_default_str();
+  app.add_option("--margin-vox", o.margin_vox, "Air around the sample and membrane (voxels)")
+      ->check(number_in(closed(0, 1000, "voxels")))->capture_default_str();
   app.add_option("--membrane-thickness", o.membrane_thickness, "Latex membrane around a cylinder (0 = none)")
-      ->capture_default_str();
+      ->check(length_in(1e-6, 0.01, true))->capture_default_str();
   app.add_option("--supersample", o.supersample,
                  "Partial volumes: 0 = analytic (secant plane per boundary voxel, exact for a plane), "
                  "k = k^3 point samples per boundary voxel")
-      ->check(CLI::Range(0, 16))->capture_default_str();
-  app.add_option("--blur", o.blur, "Point-spread sigma (voxels)")->capture_default_str();
-  app.add_option("--noise", o.noise, "Gaussian noise sigma / (grain - void) contrast")->capture_default_str();
+      ->check(whole_number_in(0, 16))->capture_default_str();
+  app.add_option("--blur", o.blur, "Point-spread sigma (voxels)")->check(number_in(closed(0, 20, "voxels")))->capture_default_str();
+  app.add_option("--noise", o.noise, "Gaussian noise sigma / (grain - void) contrast")
+      ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--photons", o.photons, "Mean photon count at grain grey for Poisson noise (0 = none)")
-      ->capture_default_str();
-  app.add_option("--rings", o.rings, "Ring artifact amplitude / contrast (0 = none)")->capture_default_str();
+      ->check(number_in(closed(0, 1e9)))->capture_default_str();
+  app.add_option("--rings", o.rings, "Ring artifact amplitude / contrast (0 = none)")
+      ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--beam-hardening", o.beam_hardening, "Cupping depth / grain grey at the axis (0 = none)")
-      ->capture_default_str();
-  app.add_option("--grey-void", o.grey_void, "Grey level of air and pores")->capture_default_str();
-  app.add_option("--grey-grain", o.grey_grain, "Grey level of grains")->capture_default_str();
-  app.add_option("--grey-membrane", o.grey_membrane, "Grey level of the membrane")->capture_default_str();
-  app.add_option("--grey-scale", o.grey_scale, "uint16 value per unit grey (smaller: fewer levels, smaller files)")
-      ->capture_default_str();
-  app.add_option("--grey-offset", o.grey_offset, "uint16 value of grey 0")->capture_default_str();
+      ->check(number_in(closed(0, 1)))->capture_default_str();
+  app.add_option("--grey-void", o.grey_void, "Grey level of air and pores")->check(grey_level)->capture_default_str();
+  app.add_option("--grey-grain", o.grey_grain, "Grey level of grains (above --grey-void)")->check(grey_level)->capture_default_str();
+  app.add_option("--grey-membrane", o.grey_membrane, "Grey level of the membrane")->check(grey_level)->capture_default_str();
+  app.add_option("--grey-scale", o.grey_scale,
+                 "uint16 value per unit grey (smaller: fewer levels, smaller files); every grey level must land in "
+                 "0..65535")
+      ->check(number_in(above(0, 1e6)))->capture_default_str();
+  app.add_option("--grey-offset", o.grey_offset, "uint16 value of grey 0")
+      ->check(number_in(closed(0, 65535)))->capture_default_str();
   app.add_option("--strains", o.strains, "Nominal axial strain of each scan (compression positive)")
-      ->delimiter(',')->capture_default_str();
-  app.add_option("--bulge", o.bulge, "Mean lateral strain / axial strain (0.5 keeps the volume)")->capture_default_str();
+      ->delimiter(',')->check(number_in(cli::NumberRange{0, 0.5, false, true}))->capture_default_str();
+  app.add_option("--bulge", o.bulge, "Mean lateral strain / axial strain (0.5 keeps the volume)")
+      ->check(number_in(closed(0, 2)))->capture_default_str();
   app.add_option("--band", o.band, "Shear band: none, single or crossed")->capture_default_str();
-  app.add_option("--band-angle", o.band_angle, "Band inclination from horizontal (deg)")->capture_default_str();
-  app.add_option("--band-azimuth", o.band_azimuth, "Dip direction in the x-y plane (deg from x)")->capture_default_str();
-  app.add_option("--band-width", o.band_width, "Band thickness (default 10 d50)");
+  app.add_option("--band-angle", o.band_angle, "Band inclination from horizontal (deg)")
+      ->check(number_in(cli::NumberRange{0, 90, true, true, "deg"}))->capture_default_str();
+  app.add_option("--band-azimuth", o.band_azimuth, "Dip direction in the x-y plane (deg from x)")
+      ->check(number_in(closed(-360, 360, "deg")))->capture_default_str();
+  app.add_option("--band-width", o.band_width, "Band thickness (default 10 d50)")->check(length_in(1e-6, 1.0));
   app.add_option("--band-slip", o.band_slip, "Slip across the band per unit axial strain, in sample heights")
-      ->capture_default_str();
+      ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--nonaffine", o.nonaffine, "Random grain motion in the band per unit slip (std)")
-      ->capture_default_str();
+      ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--rotation-per-shear", o.rotation_per_shear, "Grain rotation (rad) per unit local shear")
-      ->capture_default_str();
-  app.add_option("--contact-search", o.contact_search, "Record pairs closer than this as near-contacts (default 2 voxels)");
+      ->check(number_in(closed(-10, 10, "rad")))->capture_default_str();
+  app.add_option("--contact-search", o.contact_search, "Record pairs closer than this as near-contacts (default 2 voxels)")
+      ->check(length_in(1e-9, 0.01));
   tool.set_examples({"ctsynth pipelines/scenes/sand_small.toml runs/sand_small_truth",
                      "ctsynth pipelines/scenes/sand_small.toml out --grain-shape sphere --noise 0.1 --strains 0,0.01",
                      "ctsynth scene.toml out --container box --box 3mm,3mm,3mm --band none"});
@@ -180,16 +202,10 @@ int main(int argc, char** argv) {
       container.kind = Container::Kind::box;
       const auto parts = split(o.box, ',');
       if (parts.size() != 3) throw UsageError("--box needs three lengths X,Y,Z, e.g. 4mm,4mm,6mm");
-      for (int a = 0; a < 3; ++a) container.box_size[a] = parse_length_m(parts[a], "--box");
+      for (int a = 0; a < 3; ++a) container.box_size[a] = cli::parse_length_in(parts[a], "--box", 10e-6, 1.0);
     } else {
       throw UsageError("--container '" + o.container + "' is not cylinder or box");
     }
-    if (!(o.solid_fraction > 0.0))
-      throw UsageError("--solid-fraction must be positive");
-    if (o.solid_fraction > 0.74)
-      throw UsageError("--solid-fraction " + fmt::format("{:.3g}", o.solid_fraction) +
-                       " cannot be packed: 0.74 is the densest arrangement of equal spheres and random packings of "
-                       "sand stop near 0.64; lower it or enlarge the container");
     if (o.strains.empty()) throw UsageError("--strains needs at least one value (0 for an unloaded scan)");
     const std::vector<int> pack_degrees =
         shape_kind == GrainShape::sand ? parse_pack_degrees(o.pack_degrees, o.sh_degree) : std::vector<int>{};
@@ -205,6 +221,43 @@ int main(int argc, char** argv) {
     if (container.kind == Container::Kind::box && (band != ShearBand::none || o.bulge != 0.0) &&
         o.strains.size() > 1)
       spdlog::info("box container: loading uses the box centre as the sample axis");
+    ScannerParams sp;
+    sp.grey_void = o.grey_void;
+    sp.grey_grain = o.grey_grain;
+    sp.grey_membrane = o.grey_membrane;
+    sp.uint16_scale = o.grey_scale;
+    sp.uint16_offset = o.grey_offset;
+    check_grey_levels(sp, membrane_t > 0.0);
+
+    // --- image geometry: fixed for the series, large enough for the most bulged state ---
+    const bool cyl = container.kind == Container::Kind::cylinder;
+    const double eps_max = *std::max_element(o.strains.begin(), o.strains.end());
+    const double margin = o.margin_vox * voxel;
+    Vec3 lo, hi;  // x y z
+    if (cyl) {
+      const double r_out = container.radius * (1.0 + 1.5 * std::max(0.0, o.bulge) * eps_max) + membrane_t + margin;
+      lo = {-r_out, -r_out, -margin};
+      hi = {r_out, r_out, container.height + margin};
+    } else {
+      lo = {-margin, -margin, -margin};
+      hi = {container.box_size.x() + margin, container.box_size.y() + margin, container.box_size.z() + margin};
+    }
+    const Vec3 voxels{std::ceil((hi[2] - lo[2]) / voxel), std::ceil((hi[1] - lo[1]) / voxel),
+                      std::ceil((hi[0] - lo[0]) / voxel)};  // z y x, as reals until they are known to fit
+    // What the series holds at once: the grains' tables (and one smoothed copy per packing stage)
+    // and one scan being rendered.
+    const double grains_expected = expected_grain_count(psd, o.solid_fraction * container.volume());
+    const double bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel +
+                         grains_expected * grain_bytes(psd.d50, voxel, o.sh_degree) * static_cast<double>(1 + pack_degrees.size());
+    check_memory(bytes, "ctsynth",
+                 fmt::format("scans of {:.3g} x {:.3g} x {:.3g} voxels (z, y, x) and about {:.3g} grains", voxels[0],
+                             voxels[1], voxels[2], grains_expected),
+                 "make the sample smaller (--diameter, --height or --box) or the voxels larger (--voxel-size)");
+    const Shape3 shape{static_cast<std::size_t>(voxels[0]), static_cast<std::size_t>(voxels[1]),
+                       static_cast<std::size_t>(voxels[2])};
+    if (o.blur > 0.0)
+      check_kernel_fits(std::ceil(3.0 * o.blur), shape, fmt::format("--blur {:g} (a Gaussian cut at 3 sigma)", o.blur),
+                        "give a smaller --blur or a larger sample");
     io::AtomicOutput out(outdir, ctx.force());
 
     // --- grains ---
@@ -252,7 +305,6 @@ int main(int argc, char** argv) {
 
     // --- loading states ---
     LoadingParams lp;
-    const bool cyl = container.kind == Container::Kind::cylinder;
     lp.centre_x = cyl ? 0.0 : 0.5 * container.box_size.x();
     lp.centre_y = cyl ? 0.0 : 0.5 * container.box_size.y();
     lp.height = cyl ? container.height : container.box_size.z();
@@ -268,21 +320,6 @@ int main(int argc, char** argv) {
     lp.seed = o.seed;
     const auto states = loading_states(lp, packed, o.strains);
 
-    // --- image geometry: fixed for the series, large enough for the most bulged state ---
-    const double eps_max = *std::max_element(o.strains.begin(), o.strains.end());
-    const double margin = o.margin_vox * voxel;
-    Vec3 lo, hi;  // x y z
-    if (cyl) {
-      const double r_out = container.radius * (1.0 + 1.5 * std::max(0.0, o.bulge) * eps_max) + membrane_t + margin;
-      lo = {-r_out, -r_out, -margin};
-      hi = {r_out, r_out, container.height + margin};
-    } else {
-      lo = {-margin, -margin, -margin};
-      hi = {container.box_size.x() + margin, container.box_size.y() + margin, container.box_size.z() + margin};
-    }
-    const Shape3 shape{static_cast<std::size_t>(std::ceil((hi[2] - lo[2]) / voxel)),
-                       static_cast<std::size_t>(std::ceil((hi[1] - lo[1]) / voxel)),
-                       static_cast<std::size_t>(std::ceil((hi[0] - lo[0]) / voxel))};
     const Vec3 vs{voxel, voxel, voxel};
     const Vec3 origin{lo[2] + 0.5 * voxel, lo[1] + 0.5 * voxel, lo[0] + 0.5 * voxel};
     spdlog::info("scans: {} x {} x {} voxels (z,y,x) at {:.4g} um, {} states", shape[0], shape[1], shape[2],
@@ -317,10 +354,6 @@ int main(int argc, char** argv) {
                                          ctx.progress_callback("render scan " + std::to_string(k)));
       throw_if_interrupted();
       Volume<float> membrane;
-      ScannerParams sp;
-      sp.grey_void = o.grey_void;
-      sp.grey_grain = o.grey_grain;
-      sp.grey_membrane = o.grey_membrane;
       sp.blur_sigma_vox = o.blur;
       sp.noise = o.noise;
       sp.photons = o.photons;
@@ -330,8 +363,6 @@ int main(int argc, char** argv) {
       sp.axis_y = lp.centre_y;
       sp.field_radius = cyl ? hi[0] : 0.5 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
       sp.seed = o.seed * 1000003ull + k;
-      sp.uint16_scale = o.grey_scale;
-      sp.uint16_offset = o.grey_offset;
       if (membrane_t > 0.0) {
         Shell shell;
         shell.inner_radius = [&](double z) { return sample_radius_at(lp, z, eps); };

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <optional>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -76,15 +77,16 @@ int main(int argc, char** argv) {
   auto& app = tool.cli();
   tool.add_input("results", input, "Simulation results (.h5, kind=fdem_results, from fdemrun)");
   tool.add_output("forces", output, "Force statistics file to write (.h5, kind=forces)");
-  app.add_option("--from", from, "First frame analysed (default 0)")->check(CLI::NonNegativeNumber);
-  app.add_option("--to", to, "Last frame analysed (default the last)")->check(CLI::NonNegativeNumber);
+  using cli::above, cli::closed, cli::number_in, cli::whole_number_in;
+  app.add_option("--from", from, "First frame analysed (default 0)")->check(whole_number_in(0, 1000000000));
+  app.add_option("--to", to, "Last frame analysed (default the last)")->check(whole_number_in(0, 1000000000));
   app.add_option("--window", window,
                  "Strain window of the volatility, in frames: windows from, from+W, ... (each W frames, W returns of q); "
                  "0 = one window over every analysed frame")
-      ->capture_default_str();
+      ->check(whole_number_in(0, 1000000000, "frames"))->capture_default_str();
   app.add_option("--chain-threshold", threshold,
                  "Force chains: contacts with f_n >= this x <f_n> (1: the strong network of Radjai et al. 1998)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 1000)))->capture_default_str();
   app.add_option("--chains", chains,
                  "Folder to write the force chains to: chains_<frame>.vtp (VTK lines between contacting grain centroids, "
                  "cell data normal_force in N) and chains.pvd (ParaView time series)");
@@ -92,15 +94,15 @@ int main(int argc, char** argv) {
                  "D2min from this kind=micro file (tracks2micro on the same results file; it needs the increment of each "
                  "window) instead of computing it from the frames' centroids");
   app.add_option("--radius-d50", radius_d50, "D2min neighbourhood radius in d50 (without --micro)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 100, "d50")))->capture_default_str();
   app.add_option("--min-neighbours", min_neighbours, "Fewest neighbours for D2min (without --micro)")
-      ->check(CLI::Range(3, 1000))->capture_default_str();
+      ->check(whole_number_in(3, 1000))->capture_default_str();
   app.add_option("--pdf-bins-per-decade", per_decade, "Log bins per decade of the force PDF")
-      ->check(CLI::Range(1.0, 100.0))->capture_default_str();
+      ->check(number_in(closed(1, 100)))->capture_default_str();
   app.add_option("--rose-theta-bins", theta_bins, "Rose bins of the polar angle from +z over [0, 90] deg")
-      ->check(CLI::Range(1, 180))->capture_default_str();
+      ->check(whole_number_in(1, 180))->capture_default_str();
   app.add_option("--rose-phi-bins", phi_bins, "Rose bins of the azimuth from +x over [0, 360] deg")
-      ->check(CLI::Range(1, 360))->capture_default_str();
+      ->check(whole_number_in(1, 360))->capture_default_str();
   tool.set_examples({"fdem2forces runs/sand_small/results.h5 runs/sand_small/forces.h5 --chains runs/sand_small/chains",
                      "fdem2forces results.h5 forces.h5 --window 4 --micro micro.h5"});
 

@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
@@ -153,7 +154,7 @@ int main(int argc, char** argv) {
   app.add_option("--stop-step", stop_step,
                  "Stop once the run reaches this step (0: run to the end), e.g. to split a long run into jobs with "
                  "--checkpoint and --restart; the results hold the steps taken")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::whole_number_in(0, 1000000000000000LL, "steps"));
   tool.set_examples({"fdemrun pipelines/scenes/fdem_box_drop.toml runs/box_drop.h5",
                      "fdemrun scene.toml results.h5 --checkpoint results.ckpt.h5 --vtk results_frames",
                      "fdemrun scene.toml results.h5 --restart results.ckpt.h5 --force"});

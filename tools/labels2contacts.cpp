@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/contacts/detect.hpp"
 #include "graintwin/contacts/fabric.hpp"
@@ -17,6 +18,7 @@
 #include "graintwin/contacts/refine.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -124,28 +126,29 @@ int main(int argc, char** argv) {
   tool.add_optional_input("volume", volume_path, "kind=volume .h5: the grey scan the labels were made from; enables "
                                                  "the refined normals and the confidence");
   tool.add_output("contacts", output, "Output kind=contacts .h5");
+  using cli::closed, cli::above, cli::number_in, cli::whole_number_in;
   app.add_option("--min-voxels", o.min_voxels, "Contact voxels each grain of a pair needs for a contact")
-      ->check(CLI::PositiveNumber)
+      ->check(whole_number_in(1, 1000000000, "voxels"))
       ->capture_default_str();
   app.add_flag("--no-refine", o.no_refine, "Keep the PCA normals even when VOLUME is given (no confidence then)");
   app.add_option("--window-vox", o.window_vox,
                  "Radius of the voxel ball fitted around each contact (0 = 0.6 x the smaller grain's equivalent "
                  "radius, within 3 to 7 voxels)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(number_in(closed(0, 30, "voxels")))
       ->capture_default_str();
   app.add_option("--gap-tolerance-vox", o.gap_tolerance_vox,
                  "The confidence is the probability that the fitted gap is below this (voxels)")
-      ->check(CLI::PositiveNumber)
+      ->check(number_in(above(0, 10, "voxels")))
       ->capture_default_str();
   app.add_option("--min-confidence", o.min_confidence,
                  "Contacts counted in Z, fabric and roses need at least this confidence (unknown counts)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(number_in(closed(0, 1)))
       ->capture_default_str();
   app.add_option("--theta-bins", o.theta_bins, "Rose bins in the polar angle from +z over 0-90 degrees")
-      ->check(CLI::PositiveNumber)
+      ->check(whole_number_in(1, 90))
       ->capture_default_str();
   app.add_option("--phi-bins", o.phi_bins, "Rose bins in the azimuth from +x over 0-360 degrees")
-      ->check(CLI::PositiveNumber)
+      ->check(whole_number_in(1, 360))
       ->capture_default_str();
   app.add_flag("--include-edge-grains", o.include_edge_grains,
                "Count grains cut by the volume edge in the coordination histogram and mean");
@@ -171,6 +174,11 @@ int main(int argc, char** argv) {
       const io::ImageHeader lh = io::read_image_header(lf, schema::path::labels);
       if (lh.dtype != DType::uint32)
         throw UsageError(labels_path.string() + ":/labels is " + dtype_name(lh.dtype) + ", expected uint32; rewrite it with ct2labels");
+      if (refine && o.window_vox > 0.0)  // the fit reads a box of the window plus the third-grain margin
+        check_kernel_fits(std::ceil(o.window_vox) + contacts::RefineParams{}.exclusion_vox, lh.shape,
+                          fmt::format("--window-vox {:g} (with its {}-voxel margin)", o.window_vox,
+                                      contacts::RefineParams{}.exclusion_vox),
+                          "give a smaller --window-vox, or 0 for the automatic window");
       if (have_grey) {
         const io::H5File vf = io::open_kind(volume_path, schema::kind::volume, "pass the grey scan (kind=volume) the labels were made from");
         ctx.add_input_history(vf);

@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/stl.hpp"
@@ -99,28 +101,31 @@ int main(int argc, char** argv) {
   tool.add_input("labels", labels_path, "Labels file (.h5, kind=labels, from ct2labels)");
   tool.add_optional_input("volume", volume_path, "The scan that was segmented (.h5, kind=volume): sub-voxel surfaces from grey levels");
   tool.add_output("shapes", output, "Shapes file to write (.h5, kind=shapes)");
-  app.add_option("--degree", o.degree, "Largest SH degree")->check(CLI::Range(0, 40))->capture_default_str();
+  using cli::closed, cli::number_in, cli::whole_number_in;
+  app.add_option("--degree", o.degree, "Largest SH degree")->check(whole_number_in(0, 40))->capture_default_str();
   app.add_option("--directions", o.directions, "Sample directions per grain (0 = twice the coefficients)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(whole_number_in(0, 1000000))->capture_default_str();
   app.add_option("--tol", o.tol,
                  "Per-grain degree: the smallest whose RMS radial residual is at most tol x equivalent radius "
                  "(0 = always --degree)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(number_in(closed(0, 1)))->capture_default_str();
   app.add_option("--surface", o.surface, "Sub-voxel surface: auto (grey when VOLUME is given), grey or labels")
       ->capture_default_str();
   app.add_option("--smooth-vox", o.smooth_vox,
                  "Gaussian sigma (voxels) of the grain indicator (labels surface, default 0.7) or of the grey levels "
                  "(grey surface, default 0)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--grey-void", o.grey_void, "grey surface: grey level of void (default: median of interior void)");
-  app.add_option("--grey-grain", o.grey_grain, "grey surface: grey level of grain (default: median of grain interiors)");
+      ->check(number_in(closed(0, 10, "voxels")));
+  app.add_option("--grey-void", o.grey_void, "grey surface: grey level of void (default: median of interior void)")
+      ->check(cli::finite_number());
+  app.add_option("--grey-grain", o.grey_grain, "grey surface: grey level of grain (default: median of grain interiors)")
+      ->check(cli::finite_number());
   app.add_option("--max-multi-exit", o.max_multi_exit,
                  "Share of centroid rays leaving a grain twice above which its fit is flagged unreliable")
-      ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+      ->check(number_in(closed(0, 1)))->capture_default_str();
   app.add_option("--surfaces", o.surfaces, "Also write the reconstructed SH surfaces: .vtp (ParaView) or .stl");
   app.add_option("--surface-subdivisions", o.surface_subdivisions,
                  "Icosphere subdivisions of each reconstructed surface (3: 1280 triangles per grain)")
-      ->check(CLI::Range(0, 6))->capture_default_str();
+      ->check(whole_number_in(0, 6))->capture_default_str();
   tool.set_examples({"labels2shapes labels.h5 shapes.h5",
                      "labels2shapes labels.h5 scan.h5 shapes.h5 --surfaces grains.vtp",
                      "labels2shapes labels.h5 shapes.h5 --degree 20 --tol 0.005"});
@@ -149,6 +154,14 @@ int main(int argc, char** argv) {
                            std::to_string(ls[1]) + " x " + std::to_string(ls[2]) + "; pass the scan that was segmented");
       }
     }
+    // The fitter holds directions x coefficients matrices: check that before building them.
+    const MemoryLimit memory = memory_limit();
+    const double per_direction = ShFitter::memory_bytes(o.degree, 1);
+    check_memory(ShFitter::memory_bytes(o.degree, o.directions), "labels2shapes",
+                 fmt::format("{} sample directions x {} SH coefficients (degree {})",
+                             ShFitter::directions_for(o.degree, o.directions), sh_count(o.degree), o.degree),
+                 fmt::format("give --directions of at most {:.0f} or a lower --degree", std::floor(memory.bytes / per_direction)),
+                 memory);
     const ShFitter fitter(o.degree, o.directions);
     if (!fitter.warning().empty()) spdlog::warn("{}", fitter.warning());
     const segment::LabelsFile labels = segment::read_labels_file(labels_path);

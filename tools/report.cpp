@@ -6,6 +6,7 @@
 
 #include <fstream>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -81,7 +82,7 @@ int main(int argc, char** argv) {
                  "without it the scans' axial strains are measured from the tracks only");
   app.add_option("--bench-img", bench_img, "Folder of the benchmark charts (<tool>_<measure>.png); default: docs/img of the source tree this build came from");
   app.add_option("--max-series", po.max_series, "Scans, increments or frames drawn per chart (evenly spread, first and last always)")
-      ->check(CLI::Range(1, 20))->capture_default_str();
+      ->check(cli::whole_number_in(1, 20))->capture_default_str();
   app.add_option("--title", title, "Page title (default: Experiment against simulation: <RUNDIR name>)");
   app.add_option("--python", python, "Python with matplotlib that runs the chart script")->capture_default_str();
   app.add_option("--chart-script", script, "The chart script; default: pipelines/plots/report_charts.py of the source tree this build came from");

@@ -9,6 +9,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
@@ -134,31 +135,33 @@ int main(int argc, char** argv) {
                           "Labels of the same scan (.h5, kind=labels): voxel surfaces for unreliable SH fits, the sample cylinder");
   tool.add_output("MODEL", model_path, "The model to write (.h5, kind=fdem_model)");
   auto& app = tool.cli();
+  using cli::closed, cli::number_in, cli::whole_number_in;
   app.add_option("--order", mo.order, "Element order: 1 (4-node) or 2 (10-node, the CT-FDEM paper's)")
       ->check(CLI::IsMember({1, 2}))->capture_default_str();
   app.add_option("--elements-per-diameter", mo.size.elements_per_diameter,
                  "Element size = equivalent diameter / this, for every grain (0: automatic)")
-      ->check(CLI::Range(0.0, 100.0))->capture_default_str();
+      ->check(number_in(closed(0, 100)))->capture_default_str();
   app.add_option("--surface-nodes", mo.size.surface_nodes, "Automatic size: surface nodes per grain that contact needs")
-      ->check(CLI::Range(20.0, 1e5))->capture_default_str();
+      ->check(number_in(closed(20, 1e5)))->capture_default_str();
   app.add_option("--volume-tol", mo.size.volume_tolerance, "Automatic size, 4-node: largest relative volume error of the facets")
-      ->check(CLI::Range(1e-4, 0.5))->capture_default_str();
+      ->check(number_in(closed(1e-4, 0.5)))->capture_default_str();
   app.add_option("--gamma-floor", mo.gamma_floor, "Elements below this quality make a grain remeshed (and reported)")
-      ->check(CLI::Range(0.0, 0.9))->capture_default_str();
+      ->check(number_in(closed(0, 0.9)))->capture_default_str();
   app.add_option("--rigid-below", rigid_below_d50, "Grains with equivalent diameter below this many d50 are rigid, coarse, linear")
-      ->check(CLI::Range(0.0, 10.0))->capture_default_str();
+      ->check(number_in(closed(0, 10, "d50")))->capture_default_str();
   app.add_option("--surface-subdivisions", subdivisions, "Icosphere level of the SH surfaces handed to gmsh (4: 5120 triangles)")
-      ->check(CLI::Range(2, 6))->capture_default_str();
+      ->check(whole_number_in(2, 6))->capture_default_str();
   app.add_option("--smooth", mo.smooth_vox, "Gaussian sigma (voxels) of the voxel surfaces")
-      ->check(CLI::Range(0.0, 5.0))->capture_default_str();
+      ->check(number_in(closed(0, 5, "voxels")))->capture_default_str();
   app.add_option("--curving", curving,
                  "10-node grains with an SH surface: snap (boundary nodes moved onto the exact SH surface, inverted "
                  "elements pulled back) or gmsh (gmsh curves onto the triangulated surface, optimize(HighOrder) when "
                  "an element is inverted; slower)")
       ->check(CLI::IsMember({"snap", "gmsh"}))->capture_default_str();
-  app.add_option("--membrane-thickness", membrane_thickness, "Latex membrane thickness (SPEC section 8)")->capture_default_str();
+  app.add_option("--membrane-thickness", membrane_thickness, "Latex membrane thickness")
+      ->check(cli::length_in(1e-6, 0.01))->capture_default_str();
   app.add_option("--platen-friction", platen_friction, "Coulomb friction of the platens (smooth: 0)")
-      ->check(CLI::Range(0.0, 2.0))->capture_default_str();
+      ->check(number_in(closed(0, 2)))->capture_default_str();
   app.add_option("--tracked-only", tracks_path, "Keep only grains tracked from the first scan to the last in this kind=tracks file")
       ->check(CLI::ExistingFile);
   app.add_option("--packing", packing,
@@ -167,12 +170,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"scan", "equivalent"}))->capture_default_str();
   app.add_option("--grains", po.grains,
                  "--packing equivalent: grains drawn from the library with replacement (0: every library grain once)")
-      ->capture_default_str();
+      ->check(whole_number_in(0, 50000))->capture_default_str();
   app.add_option("--solid-fraction", po.solid_fraction,
                  "--packing equivalent: grain volume / cylinder volume (0: the scan's, from LABELS' sample cylinder)")
-      ->check(CLI::Range(0.0, 0.74))->capture_default_str();
+      ->check(number_in(closed(0, 0.74)))->capture_default_str();
   app.add_option("--aspect", po.aspect, "--packing equivalent: cylinder height / diameter (0: the scan's, from LABELS, else 1)")
-      ->check(CLI::Range(0.0, 10.0))->capture_default_str();
+      ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--seed", po.seed, "--packing equivalent: seed of the draw and the packing")->capture_default_str();
   app.add_option("--vtu", vtu_path, "Also write the model for ParaView (.vtu)");
   app.add_option("--msh", msh_path, "Also write the model for gmsh (.msh, format 2.2)");

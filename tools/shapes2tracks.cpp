@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -44,41 +45,43 @@ int main(int argc, char** argv) {
                  "(.h5, kind=tracks)")
       ->required()
       ->expected(3, -1);
+  using cli::closed, cli::above, cli::number_in, cli::whole_number_in;
   app.add_option("--method", method, "Matching: improved, paper, nearest or volume")->capture_default_str();
   app.add_option("--window", co.match.window_d50,
                  "Candidate window (d50 of the reference scan): paper and baselines; improved's first pass and its largest window")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 100, "d50")))->capture_default_str();
   app.add_option("--volume-tol", co.match.volume_tol,
-                 "Largest relative volume change |v_j - v_i| / v_i of a candidate (negative: no filter); default 0.10 "
+                 "Largest relative volume change |v_j - v_i| / v_i of a candidate (negative: no filter, e.g. -1); default 0.10 "
                  "for paper and volume (the paper's), none for improved (its cost weighs the volume change); nearest "
-                 "never filters");
+                 "never filters")
+      ->check(number_in(closed(-1, 10)));
   app.add_option("--passes", co.match.passes, "improved: prediction and assignment passes")
-      ->check(CLI::Range(1, 10))->capture_default_str();
+      ->check(whole_number_in(1, 10))->capture_default_str();
   app.add_option("--local-radius", co.match.local_radius_d50, "improved: radius of the local affine fits (d50)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 100, "d50")))->capture_default_str();
   app.add_option("--window-sigmas", co.match.window_sigmas,
                  "improved: candidate window around the prediction, in local position residual spreads")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 1000)))->capture_default_str();
   app.add_option("--min-window", co.match.min_window_d50, "improved: smallest candidate window (d50)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 100, "d50")))->capture_default_str();
   app.add_option("--lost-cost", co.match.lost_cost,
                  "improved: cost of reporting a grain lost (a right match costs about 5; higher keeps more doubtful matches)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 1e6)))->capture_default_str();
   app.add_flag("!--no-backward-check", co.match.backward_check,
                "Skip matching each step the other way round (confidence then rests on the costs alone; paper: always 1)");
   app.add_option("--max-gap", co.max_gap,
                  "Scans a lost grain may stay missing and still be found again (0: lost is final)")
-      ->check(CLI::Range(0, 100))->capture_default_str();
+      ->check(whole_number_in(0, 100))->capture_default_str();
   app.add_option("--rotation", rotation, "Rotations: sh (axes, then surface alignment), axes (principal axes only) or none")
       ->capture_default_str();
   app.add_option("--symmetry-tol", ro.symmetry_tol,
                  "axes: semi-axes closer than this relative difference make a rotation undefined")
-      ->check(CLI::Range(0.0, 0.99))->capture_default_str();
+      ->check(number_in(closed(0, 0.99)))->capture_default_str();
   app.add_option("--rotation-margin", ro.min_margin,
                  "A rotation is defined when it fits the surfaces at least this much better than any other")
-      ->check(CLI::Range(1.0, 100.0))->capture_default_str();
+      ->check(number_in(closed(1, 100)))->capture_default_str();
   app.add_option("--rotation-degree", ro.degree, "SH degree of the surface comparison for rotations")
-      ->check(CLI::Range(2, 30))->capture_default_str();
+      ->check(whole_number_in(2, 30))->capture_default_str();
   app.add_option("--vtk", vtk, "Also write the tracks as VTK points with displacement vectors (.vtp, ParaView)");
   tool.set_examples({"shapes2tracks scan_000/shapes.h5 scan_001/shapes.h5 tracks.h5",
                      "shapes2tracks runs/sand_small/scan_*/shapes.h5 tracks.h5 --vtk tracks.vtp",

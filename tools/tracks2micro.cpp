@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -149,9 +150,10 @@ int main(int argc, char** argv) {
   auto& app = tool.cli();
   tool.add_input("input", input, "Tracks file (.h5, kind=tracks, from shapes2tracks) or simulation results (.h5, kind=fdem_results, from fdemrun)");
   tool.add_output("micro", output, "Micro-mechanics file to write (.h5, kind=micro)");
+  using cli::closed, cli::above, cli::number_in, cli::whole_number_in;
   app.add_option("--from", from, "First scan (or frame) of one increment (with --to; default: every pair of consecutive scans or frames)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--to", to, "Second scan (or frame) of that increment")->check(CLI::NonNegativeNumber);
+      ->check(whole_number_in(0, 1000000000));
+  app.add_option("--to", to, "Second scan (or frame) of that increment")->check(whole_number_in(0, 1000000000));
   app.add_option("--shapes", shapes_override,
                  "The scans' shapes files in order, in place of the paths stored in the tracks file (when it was moved; tracks only)")
       ->expected(2, -1);
@@ -161,28 +163,29 @@ int main(int argc, char** argv) {
                  "only: simulation frames carry their contacts)")
       ->expected(2, -1);
   app.add_option("--radius-d50", o.radius_d50, "D2min neighbourhood radius (d50 of the first state of the increment)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(number_in(above(0, 100, "d50")))->capture_default_str();
   app.add_option("--min-neighbours", o.min_neighbours, "Fewest neighbours for a local deformation (fewer: flagged, NaN)")
-      ->check(CLI::Range(3, 1000))->capture_default_str();
+      ->check(whole_number_in(3, 1000))->capture_default_str();
   app.add_option("--top-fraction", o.clusters.top_fraction, "Share of grains with the highest D2min that form clusters")
-      ->check(CLI::Range(1e-6, 1.0))->capture_default_str();
+      ->check(number_in(above(0, 1)))->capture_default_str();
   app.add_option("--contact-factor", o.contact_factor,
                  "Grains touch when their centroids are within this factor times the sum of their volume-equivalent "
                  "radii (cluster links; coordination without --contacts)")
-      ->check(CLI::Range(0.5, 3.0))->capture_default_str();
+      ->check(number_in(closed(0.5, 3)))->capture_default_str();
   app.add_option("--min-tail", o.clusters.min_tail, "Fewest clusters in the power-law tail of P(s)")
-      ->check(CLI::Range(2, 1000000))->capture_default_str();
+      ->check(whole_number_in(2, 1000000))->capture_default_str();
   app.add_option("--pdf-bins-per-decade", o.pdf_per_decade, "Log bins per decade of the D2min and eps_q PDFs")
-      ->check(CLI::Range(1.0, 100.0))->capture_default_str();
-  app.add_option("--rdf-max-d50", o.rdf_max_d50, "g(r) up to this distance (d50)")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--rdf-bins", o.rdf_bins, "Bins of g(r)")->check(CLI::Range(1, 100000))->capture_default_str();
+      ->check(number_in(closed(1, 100)))->capture_default_str();
+  app.add_option("--rdf-max-d50", o.rdf_max_d50, "g(r) up to this distance (d50)")
+      ->check(number_in(above(0, 100, "d50")))->capture_default_str();
+  app.add_option("--rdf-bins", o.rdf_bins, "Bins of g(r)")->check(whole_number_in(1, 100000))->capture_default_str();
   app.add_option("--region", region, "Region the grain centres fill, for g(r)'s edge correction: cylinder or box")
       ->capture_default_str();
   app.add_option("--displacement-bins", o.displacement_bins, "Bins of the displacement distributions")
-      ->check(CLI::Range(1, 100000))->capture_default_str();
+      ->check(whole_number_in(1, 100000))->capture_default_str();
   app.add_option("--displacement-range-d50", o.displacement_range_d50,
                  "Displacement distributions over [-range, range] d50 (0: the largest component of each increment)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(number_in(closed(0, 1000, "d50")))->capture_default_str();
   app.add_option("--vtk", vtk, "Also write the grains as VTK points with D2min, eps_q and cluster per increment (.vtp, ParaView)");
   tool.set_examples({"tracks2micro runs/sand_small/tracks.h5 runs/sand_small/micro.h5 --vtk runs/sand_small/micro.vtp",
                      "tracks2micro tracks.h5 micro.h5 --from 0 --to 2 --contacts scan_000/contacts.h5 scan_001/contacts.h5 scan_002/contacts.h5",

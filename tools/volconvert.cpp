@@ -5,9 +5,11 @@
 #include <filesystem>
 #include <optional>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/io/atomic_output.hpp"
@@ -45,9 +47,11 @@ Shape3 parse_dims(const std::string& text) {
   if (parts.size() != 3) throw UsageError("--dims '" + text + "' must be three sizes Z,Y,X (z slowest)");
   Shape3 s{};
   for (int i = 0; i < 3; ++i) {
+    const std::string part = trim(parts[i]);
     try {
-      const long v = std::stol(parts[i]);
-      if (v <= 0) throw 0;
+      std::size_t used = 0;
+      const long long v = std::stoll(part, &used);
+      if (v <= 0 || used != part.size()) throw 0;  // "100abc" and "1e3" are not sizes
       s[i] = static_cast<std::size_t>(v);
     } catch (...) {
       throw UsageError("--dims '" + text + "': '" + parts[i] + "' is not a positive integer");
@@ -76,15 +80,17 @@ int main(int argc, char** argv) {
   tool.add_output("output", output, "Output: .h5 (kind=volume) or .tif/.tiff (multi-page stack)");
   app.add_option("--crop", crop_text, "Keep z0:z1,y0:y1,x0:x1 (half-open voxel ranges; empty = edge, negative = from end)");
   app.add_option("--downsample", downsample, "Block mean over N x N x N voxels (voxel size grows by N)")
-      ->check(CLI::PositiveNumber)
+      ->check(cli::whole_number_in(1, 1000))
       ->capture_default_str();
   app.add_option("--cast", cast_text, "Convert to uint8, uint16 or float32 (rounds, clamps and reports clamping)");
   app.add_option("--voxel-size", voxel_text,
-                 "Voxel size where the input lacks it or to override it, e.g. 27.5um, 0.0607mm, 2.75e-5 (m)");
+                 "Voxel size where the input lacks it or to override it, e.g. 27.5um, 0.0607mm, 2.75e-5 (m)")
+      ->check(cli::length_in(1e-9, 0.1));
   app.add_option("--dims", dims_text, "Raw input: sizes Z,Y,X (z slowest, x fastest)");
   app.add_option("--dtype", dtype_text, "Raw input: uint8, uint16, uint32 or float32")->capture_default_str();
   app.add_option("--endian", endian, "Raw input byte order")->check(CLI::IsMember({"little", "big"}))->capture_default_str();
-  app.add_option("--header-bytes", header_bytes, "Raw input: bytes to skip before the data")->capture_default_str();
+  app.add_option("--header-bytes", header_bytes, "Raw input: bytes to skip before the data")
+      ->check(cli::whole_number_in(0, 1LL << 50, "bytes"))->capture_default_str();
   tool.set_examples({"volconvert soil.mhd soil.h5",
                      "volconvert 'scan/slice_*.tif' scan.h5 --voxel-size 27.5um --crop 100:-100,:,:",
                      "volconvert scan.raw scan.h5 --dims 100,256,256 --dtype uint16 --voxel-size 0.0607mm",
@@ -110,6 +116,8 @@ int main(int argc, char** argv) {
     if (fmt == InputFormat::raw) {
       raw.shape = parse_dims(dims_text);
       raw.dtype = parse_dtype(dtype_text);
+      // A product that wraps round in 64 bits would pass the file-size check and crash later.
+      volume_bytes(raw.shape, dtype_bytes(raw.dtype), "--dims " + dims_text + " with --dtype " + dtype_name(raw.dtype));
       raw.big_endian = endian == "big";
       raw.header_bytes = header_bytes;
       raw.voxel_size = {0.0, 0.0, 0.0};
@@ -121,6 +129,11 @@ int main(int argc, char** argv) {
       case InputFormat::h5: {
         const io::H5File f = io::open_kind(input, schema::kind::volume, "volconvert converts kind=volume files");
         ctx.add_input_history(f);
+        const io::ImageHeader h = io::read_image_header(f, schema::path::volume);
+        check_memory(static_cast<double>(volume_bytes(h.shape, dtype_bytes(h.dtype), input.string())), "volconvert",
+                     fmt::format("the {} x {} x {} {} voxels of {}", h.shape[0], h.shape[1], h.shape[2], dtype_name(h.dtype),
+                                 input.string()),
+                     "convert it on a machine with more memory");
         vol = io::read_image(f, schema::path::volume);
         break;
       }

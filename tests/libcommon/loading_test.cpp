@@ -28,7 +28,27 @@ TEST(Psd, OttawaSamplesHaveTheRightBoundsAndMassMedian) {
 TEST(Psd, RejectsInconsistentSizes) {
   Psd psd;
   psd.d50 = 2e-3;
-  EXPECT_THROW(psd.validate(), UsageError);
+  try {
+    psd.validate();
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_EQ(e.message(), "grain sizes must satisfy 0 < d-min <= d50 <= d-max (got 0.3, 2, 1.03 mm); reorder --d-min, "
+                           "--d50 and --d-max");
+  }
+}
+
+TEST(Psd, ExpectedGrainCountMatchesTheDraw) {
+  // ctsynth checks a sample's cost from this estimate before drawing it.
+  for (const double sigma : {0.1, 0.25, 0.6}) {
+    Psd psd;
+    psd.sigma_ln = sigma;
+    std::mt19937_64 rng(5);
+    const double volume = 2e-6;
+    const auto drawn = static_cast<double>(sample_diameters(psd, volume, rng).size());
+    EXPECT_NEAR(expected_grain_count(psd, volume) / drawn, 1.0, 0.03) << "sigma " << sigma;
+  }
+  Psd one_size{0.5e-3, 0.5e-3, 0.5e-3, 0.25};
+  EXPECT_NEAR(expected_grain_count(one_size, 1e-6), 1e-6 / (M_PI / 6.0 * 0.125e-9), 1e-6);
 }
 
 namespace {

@@ -218,3 +218,42 @@ TEST(Render, RejectsSillySupersampling) {
   EXPECT_THROW(render_grains({}, {2, 2, 2}, kVoxel, {0, 0, 0}, RenderParams{-1}), UsageError);
   EXPECT_THROW(render_grains({}, {2, 2, 2}, kVoxel, {0, 0, 0}, RenderParams{17}), UsageError);
 }
+
+TEST(Scanner, GreyLevelsThatSaturateOrLoseTheContrastAreRefused) {
+  ScannerParams p;  // void 0.10, grain 0.75, membrane 0.35, scale 50000, offset 5000
+  EXPECT_NO_THROW(check_grey_levels(p, true));
+  const auto message = [](const ScannerParams& q, bool membrane) {
+    try {
+      check_grey_levels(q, membrane);
+    } catch (const UsageError& e) {
+      return e.message();
+    }
+    return std::string();
+  };
+  p.uint16_scale = 1e12;  // every grain voxel would be 65535, every pore too: a binary scan
+  EXPECT_EQ(message(p, true), "--grey-scale 1e+12 and --grey-offset 5000 put --grey-void 0.1 at uint16 value 1e+11, outside "
+                              "0..65535, so every such voxel would saturate; give --grey-scale of at most 80713 or lower --grey-offset");
+  p.uint16_scale = 1e-3;
+  EXPECT_NE(message(p, false).find("same value; give --grey-scale of at least 1.54"), std::string::npos);
+  p.uint16_scale = 50000;
+  p.grey_membrane = 2.0;  // only checked when there is a membrane
+  EXPECT_NO_THROW(check_grey_levels(p, false));
+  EXPECT_NE(message(p, true).find("--grey-membrane 2"), std::string::npos);
+  p.grey_membrane = 0.35;
+  p.grey_void = -0.2;
+  EXPECT_NE(message(p, false).find("raise --grey-offset to at least 10000"), std::string::npos);
+  p.grey_void = 0.8;
+  EXPECT_NE(message(p, false).find("--grey-grain 0.75 is not above --grey-void 0.8"), std::string::npos);
+}
+
+TEST(Scanner, NanBlurOrNoiseIsAnErrorNotACrash) {
+  const Volume<float> fraction({4, 4, 4}, kVoxel);
+  for (double ScannerParams::*field : {&ScannerParams::blur_sigma_vox, &ScannerParams::noise, &ScannerParams::photons}) {
+    ScannerParams p;
+    p.*field = std::nan("");
+    EXPECT_THROW(simulate_scan(fraction, nullptr, p), UsageError);
+  }
+  Volume<float> v({4, 4, 4}, kVoxel);
+  EXPECT_THROW(gaussian_blur(v, std::nan("")), UsageError);
+  EXPECT_THROW(gaussian_blur(v, HUGE_VAL), UsageError);
+}

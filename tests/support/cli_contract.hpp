@@ -36,4 +36,12 @@ inline void expect_clean_failure(const std::string& tool, const TempDir& dir, co
   EXPECT_EQ(list_dir(dir.path()), before) << "a failing run left files behind";
 }
 
+/// The option contract's refusal: `tool` with `args` and then `options` exits 2 saying `words`
+/// (the option, its range, the value) and leaves nothing new in `dir`.
+inline void expect_option_refused(const std::string& tool, const TempDir& dir, std::vector<std::string> args,
+                                  const std::vector<std::string>& options, const std::string& words) {
+  args.insert(args.end(), options.begin(), options.end());
+  expect_clean_failure(tool, dir, args, 2, words);
+}
+
 }  // namespace graintwin::test

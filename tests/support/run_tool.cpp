@@ -31,6 +31,12 @@ ToolResult run_tool(const std::string& tool, const std::vector<std::string>& arg
   return run_program(fs::path(GRAINTWIN_TOOL_DIR) / tool, args);
 }
 
+ToolResult run_tool_with_memory_limit(const std::string& tool, std::uint64_t bytes, const std::vector<std::string>& args) {
+  std::vector<std::string> all{"--as=" + std::to_string(bytes), (fs::path(GRAINTWIN_TOOL_DIR) / tool).string()};
+  all.insert(all.end(), args.begin(), args.end());
+  return run_program("/usr/bin/prlimit", all);
+}
+
 ToolResult run_program(const fs::path& exe, const std::vector<std::string>& args) {
   TempDir io;
   const fs::path out = io / "stdout", err = io / "stderr";

@@ -1,6 +1,7 @@
 #pragma once
 // Runs a built tool as a child process and captures its exit code, stdout and stderr, for the
 // CLI-contract tests every tool has.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -15,6 +16,9 @@ struct ToolResult {
 
 /// Runs build/bin/<tool> with `args` (no shell involved).
 ToolResult run_tool(const std::string& tool, const std::vector<std::string>& args);
+/// Runs build/bin/<tool> under an address-space limit of `bytes` (prlimit --as, as `ulimit -v`
+/// would), so that memory checks meet the same limit on every machine.
+ToolResult run_tool_with_memory_limit(const std::string& tool, std::uint64_t bytes, const std::vector<std::string>& args);
 /// Runs the program `exe` (a path, not looked up in PATH) with `args` the same way.
 ToolResult run_program(const std::filesystem::path& exe, const std::vector<std::string>& args);
 

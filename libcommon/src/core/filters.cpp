@@ -4,9 +4,13 @@
 #include <cmath>
 #include <vector>
 
+#include "graintwin/core/error.hpp"
+
 namespace graintwin {
 
 void gaussian_blur(Volume<float>& v, double sigma_vox) {
+  // NaN would make the kernel radius an undefined conversion (a crash, not an error).
+  if (!std::isfinite(sigma_vox)) throw UsageError("the blur sigma must be a finite number of voxels");
   if (sigma_vox <= 0.0) return;
   const int radius = static_cast<int>(std::ceil(3.0 * sigma_vox));
   std::vector<double> w(2 * radius + 1);

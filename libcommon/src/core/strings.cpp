@@ -72,12 +72,14 @@ bool natural_less(const std::string& a, const std::string& b) {
   return a.size() - i < b.size() - j;
 }
 
-double parse_length_m(const std::string& text, const std::string& what) {
+double parse_signed_length_m(const std::string& text, const std::string& what) {
   const std::string t = lower(trim(text));
   std::size_t used = 0;
   double value = 0.0;
   try {
     value = std::stod(t, &used);
+  } catch (const std::out_of_range&) {
+    throw UsageError(what + " '" + text + "' is too large a number; give a length such as 27.5um or 2.75e-5");
   } catch (...) {
     throw UsageError(what + " '" + text + "' is not a number; give a length such as 27.5um or 2.75e-5");
   }
@@ -90,8 +92,13 @@ double parse_length_m(const std::string& text, const std::string& what) {
   else
     throw UsageError(what + " '" + text + "' has unknown unit '" + unit + "'; use m, mm, um or nm");
   const double m = value * scale;
-  if (!std::isfinite(m) || m <= 0.0)
-    throw UsageError(what + " '" + text + "' must be a positive length");
+  if (!std::isfinite(m)) throw UsageError(what + " '" + text + "' must be a finite length");
+  return m;
+}
+
+double parse_length_m(const std::string& text, const std::string& what) {
+  const double m = parse_signed_length_m(text, what);
+  if (m <= 0.0) throw UsageError(what + " '" + text + "' must be a positive length");
   return m;
 }
 

@@ -11,6 +11,7 @@
 #include <map>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/resources.hpp"
 #include "graintwin/core/strings.hpp"
 
 namespace graintwin::io {
@@ -48,20 +49,14 @@ AnyVolume read_stream(std::istream& in, const RawLayout& l, const std::string& w
   throw DataError("unreachable");
 }
 
-/// Bytes of the voxels of `l`; DataError naming `what` when the product does not fit 64 bits (it
-/// would wrap around to a small number and let an absurd shape through the file size check).
-std::size_t expected_bytes(const RawLayout& l, const std::string& what) {
-  std::size_t n = dtype_bytes(l.dtype);
-  for (std::size_t d : l.shape) {
-    if (d != 0 && n > std::numeric_limits<std::size_t>::max() / d)
-      throw DataError(what + ": " + std::to_string(l.shape[0]) + " x " + std::to_string(l.shape[1]) + " x " +
-                      std::to_string(l.shape[2]) + " " + dtype_name(l.dtype) +
-                      " voxels are more bytes than any file holds; check the dimensions");
-    n *= d;
-  }
-  for (std::size_t d : l.shape)
-    if (d == 0) return 0;
-  return n;
+/// Bytes of data the layout describes; DataError when they do not fit in 64 bits (a product that
+/// wrapped round could match a small file and make every later index run off the volume).
+std::size_t expected_bytes(const RawLayout& l, const fs::path& path, const std::string& fix) {
+  const auto bytes = checked_product({l.shape[0], l.shape[1], l.shape[2], dtype_bytes(l.dtype)});
+  if (!bytes || *bytes > std::numeric_limits<std::uint64_t>::max() - l.header_bytes)
+    throw DataError(path.string() + ": " + std::to_string(l.shape[0]) + " x " + std::to_string(l.shape[1]) + " x " +
+                    std::to_string(l.shape[2]) + " " + dtype_name(l.dtype) + " voxels are more bytes than a 64-bit size counts; " + fix);
+  return *bytes;
 }
 
 // Header numbers. std::stoull and std::stod throw exceptions that name no file or key, and stoull
@@ -102,14 +97,18 @@ AnyVolume read_raw_checked(const fs::path& path, const RawLayout& layout, const 
   std::error_code ec;
   const auto size = fs::file_size(path, ec);
   if (ec) throw UsageError(path.string() + ": cannot read (" + ec.message() + ")");
-  const std::size_t data = expected_bytes(layout, path.string());
+  const std::size_t data = expected_bytes(layout, path, fix);
   const std::size_t want = layout.header_bytes + data;
-  if (want < data || size != want)
+  if (size != want)
     throw DataError(path.string() + " has " + std::to_string(size) + " bytes but " +
                     std::to_string(layout.shape[0]) + " x " + std::to_string(layout.shape[1]) + " x " +
                     std::to_string(layout.shape[2]) + " " + dtype_name(layout.dtype) +
                     (layout.header_bytes ? " after a " + std::to_string(layout.header_bytes) + "-byte header" : "") +
                     " needs " + std::to_string(want) + "; " + fix);
+  check_memory(static_cast<double>(data), "reading " + path.string(),
+               std::to_string(layout.shape[0]) + " x " + std::to_string(layout.shape[1]) + " x " +
+                   std::to_string(layout.shape[2]) + " " + dtype_name(layout.dtype) + " voxels",
+               "convert it on a machine with more memory");
   std::ifstream in(path, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(layout.header_bytes));
   return read_stream(in, layout, path.string());
@@ -190,7 +189,7 @@ AnyVolume read_metaimage(const fs::path& path) {
     const std::streamoff at = in.tellg();
     std::error_code ec;
     const auto size = fs::file_size(path, ec);
-    const std::size_t want = expected_bytes(l, path.string());
+    const std::size_t want = expected_bytes(l, path, "check DimSize and ElementType");
     if (at < 0 || ec || size - static_cast<std::uintmax_t>(at) != want)
       throw DataError(path.string() + " holds " + std::to_string(at < 0 || ec ? 0 : size - static_cast<std::uintmax_t>(at)) +
                       " bytes of data after its header but DimSize x ElementType needs " + std::to_string(want) +
@@ -208,7 +207,7 @@ AnyVolume read_metaimage(const fs::path& path) {
     if (header == "-1") {
       std::error_code ec;
       const auto size = fs::file_size(raw, ec);
-      const std::size_t data = expected_bytes(l, path.string());
+      const std::size_t data = expected_bytes(l, path, "check DimSize and ElementType");
       l.header_bytes = !ec && size >= data ? size - data : 0;
     } else {
       const auto h = header_counts(path, "HeaderSize", header);

@@ -32,12 +32,23 @@ SphereQuadrature sphere_quadrature(int n_theta, int n_phi) {
   return q;
 }
 
+long long ShFitter::directions_for(int degree, int n_directions) {
+  return n_directions > 0 ? n_directions : 2LL * sh_count(degree);
+}
+
+double ShFitter::memory_bytes(int degree, int n_directions) {
+  const double n = static_cast<double>(directions_for(degree, n_directions));
+  // Directions (3 doubles), then design, SVD U and pseudo-inverse (n x coefficients each) and
+  // the SVD's workspace of about the same size.
+  return n * (3.0 * 8.0 + 4.0 * 8.0 * sh_count(degree));
+}
+
 ShFitter::ShFitter(int degree, int n_directions) : requested_degree_(degree) {
   // The SVD's products run on Eigen's threads; with -j above the processor count they would spin.
   const EigenThreadCap cap;
   if (degree < 0) throw UsageError("the SH degree must be >= 0; give e.g. 15");
   if (n_directions < 0) throw UsageError("the number of sample directions must be >= 0 (0 = automatic)");
-  const int n = n_directions > 0 ? n_directions : 2 * sh_count(degree);
+  const int n = static_cast<int>(directions_for(degree, n_directions));
   directions_ = fibonacci_directions(n);
   for (degree_ = std::min(degree, static_cast<int>(std::sqrt(static_cast<double>(n))) - 1); degree_ >= 0; --degree_) {
     design_ = sh_design_matrix(degree_, directions_);

@@ -48,6 +48,11 @@ void for_each_grain(std::size_t n, F&& make) {
 }
 }  // namespace
 
+double grain_bytes(double diameter, double voxel_size, int degree) {
+  const double stride = table_nodes(0.5 * diameter / voxel_size) + 2.0;  // nodes plus the ghost ring
+  return 8.0 * (6.0 * stride * stride + shape::sh_count(degree)) + sizeof(shape::RadialTable) + sizeof(shape::ShapeStats);
+}
+
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,
                      const std::function<void(double)>& progress) {
   if (p.aspect_ratio < 1.0) throw UsageError("aspect-ratio must be at least 1");

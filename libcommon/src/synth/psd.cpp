@@ -1,5 +1,7 @@
 #include "graintwin/synth/psd.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -14,8 +16,9 @@ double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 
 void Psd::validate() const {
   if (!(d_min > 0.0 && d_min <= d50 && d50 <= d_max))
-    throw UsageError("grain sizes must satisfy 0 < d-min <= d50 <= d-max (got " + std::to_string(d_min * 1e3) +
-                     ", " + std::to_string(d50 * 1e3) + ", " + std::to_string(d_max * 1e3) + " mm)");
+    throw UsageError(fmt::format("grain sizes must satisfy 0 < d-min <= d50 <= d-max (got {:g}, {:g}, {:g} mm); "
+                                 "reorder --d-min, --d50 and --d-max",
+                                 d_min * 1e3, d50 * 1e3, d_max * 1e3));
   if (!(sigma_ln > 0.0)) throw UsageError("psd-sigma must be positive (log-normal spread of the grading)");
 }
 
@@ -49,6 +52,18 @@ std::vector<double> sample_diameters(const Psd& psd, double target_volume, std::
     total += M_PI / 6.0 * di * di * di;
   }
   return d;
+}
+
+double expected_grain_count(const Psd& psd, double target_volume) {
+  psd.validate();
+  // ln d by number ~ N(mu, s^2) truncated to [ln d_min, ln d_max]; E[d^3] over the truncation is
+  // exp(3 mu + 9 s^2 / 2) times the normal mass of the bounds shifted by 3 s, over their own mass.
+  const double s = psd.sigma_ln, mu = std::log(psd.d50) - 3.0 * s * s;
+  const double a = (std::log(psd.d_min) - mu) / s, b = (std::log(psd.d_max) - mu) / s;
+  const double mass = normal_cdf(b) - normal_cdf(a);
+  const double mean_d3 = mass > 0.0 ? std::exp(3.0 * mu + 4.5 * s * s) * (normal_cdf(b - 3.0 * s) - normal_cdf(a - 3.0 * s)) / mass
+                                    : psd.d50 * psd.d50 * psd.d50;  // d_min = d_max: one size
+  return target_volume / (M_PI / 6.0 * std::max(mean_d3, psd.d_min * psd.d_min * psd.d_min));
 }
 
 double volume_median_diameter(std::vector<double> diameters) {

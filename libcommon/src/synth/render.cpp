@@ -1,8 +1,12 @@
 // Partial-volume rendering of grains and membrane, and the scanner model of synthetic CT scans.
 #include "graintwin/synth/render.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/filters.hpp"
@@ -328,13 +332,44 @@ Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& 
   return out;
 }
 
+void check_grey_levels(const ScannerParams& p, bool with_membrane) {
+  if (!(p.grey_grain > p.grey_void))
+    throw UsageError(fmt::format("--grey-grain {:g} is not above --grey-void {:g}, so grains would not be brighter than "
+                                 "the pores; give a grain grey level above the void's",
+                                 p.grey_grain, p.grey_void));
+  const double steps = (p.grey_grain - p.grey_void) * p.uint16_scale;
+  if (!(steps >= 1.0))
+    throw UsageError(fmt::format("--grey-scale {:g} maps the grain-void contrast {:g} to {:.3g} uint16 steps, so grains "
+                                 "and pores would get the same value; give --grey-scale of at least {:.3g}",
+                                 p.uint16_scale, p.grey_grain - p.grey_void, steps, 1.0 / (p.grey_grain - p.grey_void)));
+  struct Level {
+    const char* option;
+    double grey;
+  };
+  std::vector<Level> levels{{"--grey-void", p.grey_void}, {"--grey-grain", p.grey_grain}};
+  if (with_membrane) levels.push_back({"--grey-membrane", p.grey_membrane});
+  for (const Level& l : levels) {
+    const double value = l.grey * p.uint16_scale + p.uint16_offset;
+    if (value >= 0.0 && value <= 65535.0) continue;
+    double top = 0.0, bottom = 0.0;
+    for (const Level& m : levels) top = std::max(top, m.grey), bottom = std::min(bottom, m.grey);
+    const std::string fix = value > 65535.0 ? fmt::format("give --grey-scale of at most {:.6g} or lower --grey-offset",
+                                                          std::floor((65535.0 - p.uint16_offset) / top))
+                                            : fmt::format("raise --grey-offset to at least {:.6g}", std::ceil(-bottom * p.uint16_scale));
+    throw UsageError(fmt::format("--grey-scale {:g} and --grey-offset {:g} put {} {:g} at uint16 value {:.4g}, outside "
+                                 "0..65535, so every such voxel would saturate; {}",
+                                 p.uint16_scale, p.uint16_offset, l.option, l.grey, value, fix));
+  }
+}
+
 Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,
                                     const ScannerParams& p) {
   const Shape3 s = grain_fraction.shape();
   if (membrane_fraction && membrane_fraction->shape() != s)
     throw DataError("membrane and grain images differ in shape");
-  if (p.noise < 0.0 || p.photons < 0.0 || p.blur_sigma_vox < 0.0)
-    throw UsageError("noise, photons and blur must not be negative");
+  for (const double v : {p.noise, p.photons, p.blur_sigma_vox, p.ring_amplitude, p.beam_hardening})
+    if (!(v >= 0.0 && std::isfinite(v)))
+      throw UsageError("noise, photons, blur, rings and beam hardening must be finite and not negative");
   const double contrast = p.grey_grain - p.grey_void;
   Volume<float> grey(s, grain_fraction.voxel_size(), grain_fraction.origin());
   // Ring artifacts: a few thin concentric rings about the rotation axis with random radii and signs.

@@ -20,6 +20,9 @@ double parse_length_m(const std::string& text, const std::string& what);
 /// The candidate closest to `word` by edit distance, when close enough to be a likely misspelling
 /// (at most a third of its letters, and at least 2, differ); empty otherwise.
 std::string closest_name(const std::string& word, const std::vector<std::string>& candidates);
+/// The same for a signed length, e.g. a position "-1.5mm": throws UsageError naming `what` unless
+/// it is a finite length (zero and negative values pass).
+double parse_signed_length_m(const std::string& text, const std::string& what);
 /// Shell-style quoting of one argument for command lines recorded in provenance.
 std::string shell_quote(const std::string& arg);
 /// Current UTC time as ISO-8601, e.g. 2026-11-22T10:04:05Z.

@@ -38,6 +38,13 @@ class ShFitter {
   /// degree < 0 or n_directions < 0.
   ShFitter(int degree, int n_directions = 0);
 
+  /// Bytes a fitter of `degree` over `n_directions` (0 = automatic, as above) takes while it is
+  /// built: the directions, the design matrix, its SVD and the pseudo-inverse, each directions x
+  /// coefficients. For checking a request against the memory before building it.
+  static double memory_bytes(int degree, int n_directions);
+  /// The sample directions a request resolves to (n_directions, or 0 = twice the coefficients).
+  static long long directions_for(int degree, int n_directions);
+
   int degree() const { return degree_; }
   int requested_degree() const { return requested_degree_; }
   /// Empty unless the degree was lowered; then one sentence saying why.

@@ -34,6 +34,10 @@ struct GrainSet {
   std::vector<const shape::RadialTable*> table_pointers() const;
 };
 
+/// Bytes one grain of `diameter` (m) takes in a GrainSet tabulated at `voxel_size` with SH
+/// `degree` (its radial table and coefficients): lets a caller estimate a sample before making it.
+double grain_bytes(double diameter, double voxel_size, int degree);
+
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,
                      const std::function<void(double)>& progress = {});
 

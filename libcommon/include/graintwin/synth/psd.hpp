@@ -24,6 +24,11 @@ struct Psd {
 /// sphere-equivalent volume reaches `target_volume` (m^3). Deterministic for a given rng state.
 std::vector<double> sample_diameters(const Psd& psd, double target_volume, std::mt19937_64& rng);
 
+/// The number of grains sample_diameters() draws on average to fill `target_volume` (m^3): the
+/// volume over the mean sphere volume of the truncated log-normal by number. Lets a caller check
+/// what a sample will cost before drawing it.
+double expected_grain_count(const Psd& psd, double target_volume);
+
 /// Volume-weighted median of a set of diameters (the d50 a sieve analysis would report).
 double volume_median_diameter(std::vector<double> diameters);
 

@@ -85,6 +85,16 @@ struct ScannerParams {
   std::uint64_t seed = 1;        ///< noise and ring seed; per-voxel noise is hashed, so thread count
                                  ///< does not change the bytes
 };
+/// Refuses grey levels that would make a scan without a word of warning unusable (UsageError
+/// naming ctsynth's options and the numbers): grains not brighter than the pores, a grain-void
+/// contrast below one uint16 step, or a level (void, grain, membrane when `with_membrane`) that
+/// --grey-scale and --grey-offset put beyond 65535, where every such voxel would saturate.
+void check_grey_levels(const ScannerParams& params, bool with_membrane);
+
+/// Peak bytes per voxel of rendering and simulating one scan: grain fraction (float) and labels
+/// (uint32), membrane fraction and grey image (float), the uint16 scan.
+constexpr double kScanBytesPerVoxel = 4 + 4 + 4 + 4 + 2;
+
 Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,
                                     const ScannerParams& params);
 
