@@ -148,3 +148,17 @@ TEST(Ct2labels, WrongInputsAndOptionsAreUsageErrors) {
   fail(dir, {scan.string(), (dir / "x.h5").string(), "--region", "cylinder"}, 2, "--cylinder");
   fail(dir, {scan.string(), (dir / "x.h5").string(), "--preview", (dir / "p.jpg").string()}, 2, ".png");
 }
+
+TEST(Ct2labels, AThousandThreadsGiveTheSameGrains) {
+  // Far more threads than processors, as the --threads cap allows: no crash, and per-thread
+  // histograms and label tables stop at the processors.
+  test::TempDir dir;
+  const auto scan = write_phantom(dir);
+  const auto one = run_tool("ct2labels", {scan.string(), (dir / "one.h5").string(), "-q", "-j", "1"});
+  const auto many = run_tool("ct2labels", {scan.string(), (dir / "many.h5").string(), "-q", "-j", "1024"});
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  ASSERT_EQ(many.exit_code, 0) << many.err;
+  const segment::LabelsFile a = segment::read_labels_file(dir / "one.h5"), b = segment::read_labels_file(dir / "many.h5");
+  ASSERT_EQ(b.grains.size(), a.grains.size());
+  for (std::size_t i = 0; i < a.grains.size(); ++i) EXPECT_EQ(b.grains[i].voxels, a.grains[i].voxels) << "grain " << i + 1;
+}
