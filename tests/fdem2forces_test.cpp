@@ -201,6 +201,14 @@ TEST(Fdem2forces, BadInputsFailCleanly) {
   test::write_lattice_results(dir / "empty.h5", empty);
   test::expect_clean_failure("fdem2forces", dir, {(dir / "empty.h5").string(), out}, 1, "holds no frames");
 
+  // One frame: no return of q, so no volatility (it said "--from/--to must name two frames" though none was given).
+  test::LatticeRun one = lattice();
+  one.frames = 1;
+  test::write_lattice_results(dir / "one.h5", one);
+  set_known_frames(dir / "one.h5", 1);
+  test::expect_clean_failure("fdem2forces", dir, {(dir / "one.h5").string(), out}, 1,
+                             (dir / "one.h5").string() + " holds a single frame, and the grains' volatility needs two frames or more");
+
   // Frames straight from the solver without contact: no grain-grain contacts in frame 0.
   test::write_lattice_results(dir / "bare.h5", lattice());
   test::expect_clean_failure("fdem2forces", dir, {(dir / "bare.h5").string(), out}, 1, "frame 0 has no grain-grain contacts");

@@ -246,3 +246,19 @@ TEST(Labels2contacts, OptionsOutsideTheirRangeAndWindowsLargerThanTheVolumeAreRe
   // Without the grey volume no window is fitted, so only its range is checked.
   EXPECT_EQ(run_tool("labels2contacts", {p.labels.string(), (dir / "plain.h5").string(), "-q", "--window-vox", "30"}).exit_code, 0);
 }
+
+TEST(Labels2contacts, AThousandThreadsGiveTheSameContacts) {
+  // Far more threads than processors, as the --threads cap allows: no crash, the same contacts,
+  // normals and confidences (each contact is independent, the pair sums are integers).
+  test::TempDir dir;
+  const SpherePair p = write_sphere_pair(dir);
+  for (const char* j : {"1", "1024"}) {
+    const auto r = run_tool("labels2contacts", {p.labels.string(), p.scan.string(), (dir / (std::string("c") + j + ".h5")).string(),
+                                                "-q", "-j", j});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const io::H5File a = io::open_kind(dir / "c1.h5", "contacts"), b = io::open_kind(dir / "c1024.h5", "contacts");
+  EXPECT_EQ(b.read<std::uint32_t>("/contacts/pair"), a.read<std::uint32_t>("/contacts/pair"));
+  EXPECT_EQ(b.read<double>("/contacts/normal"), a.read<double>("/contacts/normal"));
+  EXPECT_EQ(b.read<double>("/contacts/confidence"), a.read<double>("/contacts/confidence"));
+}

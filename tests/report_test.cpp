@@ -215,6 +215,23 @@ const std::vector<std::string> kPanels{"stress_ratio", "volumetric_strain", "psd
 
 TEST(ReportCli, StandardCli) { test::expect_standard_cli("report"); }
 
+TEST_F(Report, MicroAndForcesTablesOfUnequalLengthAreRefusedNamingTheFile) {
+  test::TempDir out;
+  const auto refused = [&](const fs::path& file, const std::string& option, const std::string& words) {
+    test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), option, file.string()}, 1,
+                               file.string() + words);
+  };
+  fs::copy_file(g_runs->full / "micro.h5", out / "rdf.h5");
+  test::replace_dataset(out / "rdf.h5", "/states/1/rdf/g", std::vector<double>{1.0, 2.0}, {2});
+  refused(out / "rdf.h5", "--micro", ": state 1's g(r) or PSD columns differ in length; rewrite it with tracks2micro");
+  fs::copy_file(g_runs->full / "micro.h5", out / "clusters.h5");
+  test::replace_dataset(out / "clusters.h5", "/increments/0/clusters/radius_of_gyration", std::vector<double>{}, {0});
+  refused(out / "clusters.h5", "--micro", ": /increments/0/clusters/size and /radius_of_gyration differ in length");
+  fs::copy_file(g_runs->full / "forces.h5", out / "forces.h5");
+  test::replace_dataset(out / "forces.h5", "/frames/0/rose/mean_force", std::vector<double>{1.0}, {1});
+  refused(out / "forces.h5", "--forces", ": /frames/0/rose/mean_force does not have one value per rose bin");
+}
+
 TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   ASSERT_EQ(full_report().exit_code, 0) << full_report().err;
   const fs::path out = g_runs->page.parent_path();

@@ -213,3 +213,22 @@ TEST(Shapes2tracks, OptionsOutsideTheirRangeAreRefused) {
   refused({"--max-gap", "1e9"}, "[0, 100]");
   refused({"--passes", "nan"}, "[1, 10]");
 }
+
+TEST(Shapes2tracks, ShapesFileWhoseTablesDisagreeIsRefused) {
+  test::TempDir dir;
+  auto scans = write_series(dir);
+  const auto a = series_args(dir);
+  const std::string out = (dir / "tracks.h5").string();
+  // A grain label twice: tracks would name one grain for two, and readers by label would pick one.
+  shape::ShapesFile twice = scans[1].shapes;
+  twice.grains[3].label = twice.grains[2].label;
+  shape::write_shapes_file(dir / "twice.h5", twice, {"a label twice"});
+  test::expect_clean_failure("shapes2tracks", dir, {a[0], (dir / "twice.h5").string(), out}, 1,
+                             (dir / "twice.h5").string() + ": /grains/label names grain 1002 twice; rewrite it with labels2shapes");
+  // A size distribution whose columns differ in length.
+  shape::ShapesFile psd = scans[1].shapes;
+  psd.psd.percent_passing.pop_back();
+  shape::write_shapes_file(dir / "psd.h5", psd, {"a short PSD column"});
+  test::expect_clean_failure("shapes2tracks", dir, {a[0], (dir / "psd.h5").string(), out}, 1,
+                             "/psd/diameter and /psd/percent_passing differ in length");
+}

@@ -10,6 +10,7 @@
 
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/shape/shapes_file.hpp"
 #include "graintwin/track/tracks_file.hpp"
 #include "support/cli_contract.hpp"
@@ -206,6 +207,17 @@ TEST(Tracks2micro, BadInputsFailCleanly) {
   fail({(dir / "one.h5").string(), out}, 2, "single scan");
   ASSERT_EQ(run_tool("tracks2micro", {in, out}).exit_code, 0);
   fail({in, out}, 2, "--force");
+}
+
+TEST(Tracks2micro, TracksFileWithAGrainInTwoTracksIsRefused) {
+  test::TempDir dir;
+  write_series(dir, lattice_states());
+  // Track 1 takes track 0's grain in scan 2: both would get that grain's volume and coordination.
+  track::TracksTable t = track::read_tracks_file(dir / "tracks.h5");
+  t.label[1 * t.scans + 2] = t.label[0 * t.scans + 2];
+  test::replace_dataset(dir / "tracks.h5", schema::tracks::label, t.label, {t.tracks, t.scans});
+  test::expect_clean_failure("tracks2micro", dir, {(dir / "tracks.h5").string(), (dir / "micro.h5").string()}, 1,
+                             "grain 100 of scan 2 is in two tracks; rewrite it with shapes2tracks");
 }
 
 TEST(Tracks2micro, SimulationFramesInAffineMotionGiveTheExactStrain) {

@@ -67,3 +67,13 @@ TEST(Volinfo, ReadsOptionsFromATomlConfig) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["kind"], "volume");
   EXPECT_TRUE(r.err.empty()) << r.err;
 }
+
+TEST(Volinfo, AThousandThreadsGiveTheSameReport) {
+  // Far more threads than processors, as the --threads cap allows: no crash, the same numbers.
+  test::TempDir dir;
+  io::write_volume_file(dir / "v.h5", test::ramp_volume<std::uint16_t>({20, 21, 22}), {"ramp"});
+  const auto one = run_tool("volinfo", {(dir / "v.h5").string(), "--json", "-q", "-j", "1"});
+  const auto many = run_tool("volinfo", {(dir / "v.h5").string(), "--json", "-q", "-j", "1024"});
+  ASSERT_EQ(many.exit_code, 0) << many.err;
+  EXPECT_EQ(many.out, one.out);
+}

@@ -118,6 +118,9 @@ int main(int argc, char** argv) {
     const SimulationGrains grains = read_simulation_grains(input);
     const std::size_t frame_count = fdem::results_frame_count(input);
     if (frame_count == 0) throw DataError(input.string() + " holds no frames; run fdemrun with a frame_interval that saves some");
+    if (frame_count == 1)
+      throw DataError(input.string() + " holds a single frame, and the grains' volatility needs two frames or more; run fdemrun "
+                      "with a frame_interval that saves more");
     const std::size_t first = from < 0 ? 0 : std::size_t(from), last = to < 0 ? frame_count - 1 : std::size_t(to);
     if (last >= frame_count || first >= last)
       throw UsageError("--from/--to must name two frames first < last among 0.." + std::to_string(frame_count - 1) + " of " + input.string());

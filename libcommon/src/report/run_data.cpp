@@ -226,6 +226,9 @@ MicroData read_micro_data(const fs::path& path) {
       st.psd.percent_passing = f.read<double>(g + "/psd/percent_passing");
       st.psd.d50 = attr_double(f, g + "/psd", "d50");
     }
+    // Each pair is drawn as x against y: unequal columns would reach the charts as nonsense.
+    if (st.rdf_r.size() != st.rdf_g.size() || st.psd.diameter.size() != st.psd.percent_passing.size())
+      throw DataError(path.string() + ": state " + std::to_string(t) + "'s g(r) or PSD columns differ in length; rewrite it with tracks2micro");
     m.states.push_back(std::move(st));
   }
   const auto from = f.read<std::uint64_t>(sm::increment_from), to = f.read<std::uint64_t>(sm::increment_to);
@@ -251,6 +254,8 @@ MicroData read_micro_data(const fs::path& path) {
     inc.size_tail = static_cast<std::size_t>(f.attr_int(c, "size_tail").value_or(0));
     inc.fractal_dimension = attr_double(f, c, "fractal_dimension");
     inc.fractal_dimension_error = attr_double(f, c, "fractal_dimension_error");
+    if (inc.cluster_size.size() != inc.cluster_rg.size())
+      throw DataError(path.string() + ": " + c + "/size and /radius_of_gyration differ in length; rewrite it with tracks2micro");
     m.increments.push_back(std::move(inc));
   }
   return m;
@@ -271,6 +276,8 @@ ForcesData read_forces_data(const fs::path& path) {
     fr.pdf = read_histogram(f, g + "/pdf");
     fr.rose = read_rose(f, g + "/rose", sf::rose_count);
     fr.rose.mean_force = f.read<double>(g + "/rose/" + sf::rose_mean_force);
+    if (fr.rose.mean_force.size() != fr.rose.counts.size())
+      throw DataError(path.string() + ": " + g + "/rose/" + sf::rose_mean_force + " does not have one value per rose bin; rewrite it with fdem2forces");
     d.frames.push_back(std::move(fr));
   }
   const auto from = f.read<std::uint64_t>(sf::window_from), to = f.read<std::uint64_t>(sf::window_to);

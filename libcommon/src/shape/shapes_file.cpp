@@ -1,5 +1,7 @@
 #include "graintwin/shape/shapes_file.hpp"
 
+#include <algorithm>
+
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -106,6 +108,13 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
   const auto flags = f.read<std::uint8_t>("/sh/flags");
   if (voxels.size() != n || degree.size() != n || flags.size() != n)
     throw DataError(path.string() + " has grain columns of different lengths; rewrite it with labels2shapes");
+  // Grains are found by label (tracks, meshes, the report): a label twice would make one of them win silently.
+  std::vector<std::uint32_t> sorted = label;
+  std::sort(sorted.begin(), sorted.end());
+  if (!sorted.empty() && sorted[0] == 0)
+    throw DataError(path.string() + ": /grains/label holds label 0, which is background; rewrite it with labels2shapes");
+  if (const auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end())
+    throw DataError(path.string() + ": /grains/label names grain " + std::to_string(*twice) + " twice; rewrite it with labels2shapes");
   c.grains.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     GrainShape& s = c.grains[i];
@@ -132,6 +141,9 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
   }
   c.psd.diameter = f.read<double>("/psd/diameter");
   c.psd.percent_passing = f.read<double>("/psd/percent_passing");
+  if (c.psd.diameter.size() != c.psd.percent_passing.size())
+    throw DataError(path.string() + ": /psd/diameter and /psd/percent_passing differ in length (" + std::to_string(c.psd.diameter.size()) +
+                    " and " + std::to_string(c.psd.percent_passing.size()) + "); rewrite it with labels2shapes");
   c.psd.d50 = f.read_scalar<double>("/psd/d50");
   c.parameters_json = f.read_string("/shapes/parameters");
   return c;

@@ -1,5 +1,6 @@
 #include "graintwin/track/tracks_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "graintwin/core/error.hpp"
@@ -126,6 +127,16 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
   r.parameters_json = f.read_string(st::parameters);
   if (r.rotation_defined.size() != cells || r.scan_files.size() != r.scans)
     throw DataError(path.string() + " has tables of different sizes; rewrite it with shapes2tracks");
+  // A grain is in at most one track per scan: readers look tracks up by (scan, label).
+  for (std::size_t t = 0; t < r.scans; ++t) {
+    std::vector<std::uint32_t> present;
+    for (std::size_t i = 0; i < r.tracks; ++i)
+      if (r.label[i * r.scans + t] != 0) present.push_back(r.label[i * r.scans + t]);
+    std::sort(present.begin(), present.end());
+    if (const auto twice = std::adjacent_find(present.begin(), present.end()); twice != present.end())
+      throw DataError(path.string() + ": grain " + std::to_string(*twice) + " of scan " + std::to_string(t) +
+                      " is in two tracks; rewrite it with shapes2tracks");
+  }
   return r;
 }
 
