@@ -370,8 +370,10 @@ struct ContactModel::State {
       const double slack = kRigidRoundOff * (reference_radius[g] + box.hi.cwiseAbs().maxCoeff());
       sphere_centre[g] = 0.5 * (box.lo + box.hi);
       sphere_radius[g] = reference_radius[g] + slack;
+      if (!check_moved) return false;
+      // built_pose is empty until the first build, which calls this with check_moved false.
       const RigidPose& b = built_pose[g];
-      if (!check_moved || !b.rigid) return check_moved && moved_nodes(g, x);
+      if (!b.rigid) return moved_nodes(g, x);
       const Eigen::Matrix3d turn = pose->rotation - b.rotation;
       const double bound = turn.norm() * reference_radius[g] +
                            (turn * reference_centre[g] + pose->translation - b.translation).norm() + slack;
