@@ -14,13 +14,16 @@ SECONDS_PER_TARGET="${1:-60}"
 shift || true
 BUILD="$ROOT/build-fuzz"
 
-# clang and libFuzzer (in libclang-rt-14-dev), with the project's own packages.
-bash "$ROOT/scripts/deps.sh" clang-14 libclang-rt-14-dev
-cmake -S "$ROOT" -B "$BUILD" -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" \
-  -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
-  -DGRAINTWIN_FUZZ=ON -DGRAINTWIN_BUILD_TESTS=OFF -DGRAINTWIN_BUILD_BENCH=OFF >/dev/null
-cmake --build "$BUILD" -j "$(nproc)" --target fuzz_targets
+# clang and libFuzzer (in libclang-rt-14-dev), with the project's own packages. FUZZ_SKIP_BUILD=1
+# fuzzes with the programs already in build-fuzz/bin.
+if [ "${FUZZ_SKIP_BUILD:-0}" != 1 ]; then
+  bash "$ROOT/scripts/deps.sh" clang-14 libclang-rt-14-dev
+  cmake -S "$ROOT" -B "$BUILD" -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" \
+    -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+    -DGRAINTWIN_FUZZ=ON -DGRAINTWIN_BUILD_TESTS=OFF -DGRAINTWIN_BUILD_BENCH=OFF >/dev/null
+  cmake --build "$BUILD" -j "$(nproc)" --target fuzz_targets
+fi
 
 if (($# > 0)); then targets=("$@"); else
   mapfile -t targets < <(cd "$BUILD/bin" && ls -- *_fuzz | sed 's/_fuzz$//')

@@ -46,7 +46,7 @@ std::filesystem::path base_file(const std::string& name);
 /// Aborts with a message naming `reader` and what went wrong (the fuzzer keeps the input).
 [[noreturn]] void defect(const std::string& reader, const std::string& what);
 /// Checks the message of a graintwin::Error a reader threw: one readable sentence, not empty, not
-/// pages long, no 309-digit numbers.
+/// pages long, no 309-digit numbers (more than 64 digits in a row).
 void check_message(const std::string& reader, const std::string& message);
 
 /// A volume a reader returned must be whole: as many values as its shape says.

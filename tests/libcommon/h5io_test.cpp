@@ -171,3 +171,23 @@ TEST(KindCheck, AKindOfThousandsOfCharactersIsQuotedAsAnExcerpt) {
   EXPECT_NE(msg.find("kind=" + std::string(60, 'x') + "..., expected kind=volume"), std::string::npos) << msg;
   EXPECT_LT(msg.size(), 300u);
 }
+
+TEST(KindCheck, AKindAttributeHoldingSeveralStringsIsRefusedNotOverrun) {
+  test::TempDir dir;
+  {
+    // What h5py writes for attrs["kind"] = ["volume", "labels"]: an array of two strings, which
+    // attr_string used to read into room for one (a stack overrun found by the fuzz targets).
+    const hid_t file = H5Fcreate((dir / "two.h5").c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, H5T_VARIABLE);
+    const hsize_t n = 2;
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const char* values[2] = {"volume", "labels"};
+    const hid_t attr = H5Acreate2(file, "kind", type, space, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(attr, type, values);
+    H5Aclose(attr), H5Sclose(space), H5Tclose(type), H5Fclose(file);
+  }
+  const std::string msg = message_of([&] { open_kind(dir / "two.h5", schema::kind::volume); });
+  EXPECT_NE(msg.find("attribute 'kind' holds 2 strings where one is expected"), std::string::npos) << msg;
+}
+

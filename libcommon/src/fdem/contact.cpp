@@ -370,8 +370,10 @@ struct ContactModel::State {
       const double slack = kRigidRoundOff * (reference_radius[g] + box.hi.cwiseAbs().maxCoeff());
       sphere_centre[g] = 0.5 * (box.lo + box.hi);
       sphere_radius[g] = reference_radius[g] + slack;
+      if (!check_moved) return false;
+      // built_pose is empty until the first build, which calls this with check_moved false.
       const RigidPose& b = built_pose[g];
-      if (!check_moved || !b.rigid) return check_moved && moved_nodes(g, x);
+      if (!b.rigid) return moved_nodes(g, x);
       const Eigen::Matrix3d turn = pose->rotation - b.rotation;
       const double bound = turn.norm() * reference_radius[g] +
                            (turn * reference_centre[g] + pose->translation - b.translation).norm() + slack;
@@ -1227,16 +1229,19 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
   };
   const auto entries = file.attr_int(group, "entries");
   if (!entries || *entries < 0) throw bad("has no 'entries' count");
-  std::vector<HistoryEntry> history(static_cast<std::size_t>(*entries));
-  if (!history.empty()) {
+  // Each count is checked against its tables before it sizes anything: a damaged count must
+  // not allocate (a record_entries of 2^32 asked for 377 GB).
+  std::vector<HistoryEntry> history;
+  if (*entries > 0) {
     std::vector<hsize_t> pair_dims, node_dims, spring_dims;
     const auto pair = file.read<std::uint32_t>(group + "/pair", &pair_dims);
     const auto node = file.read<std::uint32_t>(group + "/node", &node_dims);
     const auto spring = file.read<double>(group + "/spring", &spring_dims);
-    const hsize_t n = history.size();
+    const auto n = static_cast<hsize_t>(*entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || node_dims != std::vector<hsize_t>{n} ||
         spring_dims != std::vector<hsize_t>{n, 3})
       throw bad(fmt::format("does not hold {} entries in pair (n x 2), node (n) and spring (n x 3)", n));
+    history.resize(n);
     for (std::size_t i = 0; i < history.size(); ++i)
       history[i] = {pair[2 * i], pair[2 * i + 1], node[i], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
   }
@@ -1249,14 +1254,15 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
   }
   const auto ball_entries = file.attr_int(group, "ball_entries").value_or(0);
   if (ball_entries < 0) throw bad("has a negative 'ball_entries' count");
-  std::vector<BallHistoryEntry> ball_history(static_cast<std::size_t>(ball_entries));
-  if (!ball_history.empty()) {
+  std::vector<BallHistoryEntry> ball_history;
+  if (ball_entries > 0) {
     std::vector<hsize_t> pair_dims, spring_dims;
     const auto ball_grain = file.read<std::uint32_t>(group + "/ball_grain", &pair_dims);
     const auto spring = file.read<double>(group + "/ball_spring", &spring_dims);
-    const hsize_t n = ball_history.size();
+    const auto n = static_cast<hsize_t>(ball_entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || spring_dims != std::vector<hsize_t>{n, 3})
       throw bad(fmt::format("does not hold {} ball entries in ball_grain (n x 2) and ball_spring (n x 3)", n));
+    ball_history.resize(n);
     for (std::size_t i = 0; i < ball_history.size(); ++i) {
       ball_history[i] = {ball_grain[2 * i], ball_grain[2 * i + 1], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
       const BallHistoryEntry& h = ball_history[i];
@@ -1267,14 +1273,15 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
   }
   const auto record_entries = file.attr_int(group, "record_entries").value_or(0);
   if (record_entries < 0) throw bad("has a negative 'record_entries' count");
-  std::vector<ContactRecord> records(static_cast<std::size_t>(record_entries));
-  if (!records.empty()) {
+  std::vector<ContactRecord> records;
+  if (record_entries > 0) {
     std::vector<hsize_t> pair_dims, value_dims;
     const auto pair = file.read<std::uint32_t>(group + "/record_pair", &pair_dims);
     const auto values = file.read<double>(group + "/record_values", &value_dims);
-    const hsize_t n = records.size();
+    const auto n = static_cast<hsize_t>(record_entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || value_dims != std::vector<hsize_t>{n, 10})
       throw bad(fmt::format("does not hold {} contact records in record_pair (n x 2) and record_values (n x 10)", n));
+    records.resize(n);
     for (std::size_t i = 0; i < records.size(); ++i) {
       const double* v = values.data() + 10 * i;
       records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9]};

@@ -224,6 +224,12 @@ std::optional<std::string> H5File::attr_string(const std::string& object, const 
   H5Id a(H5Aopen_by_name(file_.get(), object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   H5Id ft(H5Aget_type(a.get()), H5Tclose);
   if (H5Tget_class(ft.get()) != H5T_STRING) return std::nullopt;
+  // H5Aread writes every element: an array of strings would overrun the one string read here.
+  H5Id sp(H5Aget_space(a.get()), H5Sclose);
+  const hssize_t count = H5Sget_simple_extent_npoints(sp.get());
+  if (count != 1)
+    throw DataError(fmt::format("{}: attribute '{}' holds {} strings where one is expected; the file is damaged, "
+                                "rewrite it with the tool that made it", where(object), name, count));
   if (H5Tis_variable_str(ft.get()) > 0) {
     H5Id t = string_type();
     char* p = nullptr;
