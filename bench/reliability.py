@@ -689,9 +689,9 @@ EITHER_VALUES = ["-1", "0", "1e6", "1e12"]
 QUICK_VALUES = {"nan", "1e308"}
 
 
-def numeric_options(runner, tool):
-    """The tool's numeric options from its --help, with their type."""
-    out = subprocess.run([os.path.join(runner.bin, tool), "--help"], capture_output=True, text=True).stdout
+def numeric_options(bin_dir, tool):
+    """The tool's numeric options from its --help."""
+    out = subprocess.run([os.path.join(bin_dir, tool), "--help"], capture_output=True, text=True).stdout
     opts = []
     for line in out.splitlines():
         m = OPTION_LINE.match(line)
@@ -999,10 +999,10 @@ def concurrency_cases(tool):
                  outputs, special="race", params={"variants": variants}, quick=tool in ("ct2labels", "report"))]
 
 
-def all_cases(runner, tools, kinds):
+def all_cases(bin_dir, tools, kinds):
     cases = []
     for tool in tools:
-        options = numeric_options(runner, tool)
+        options = numeric_options(bin_dir, tool)
         cases += (valid_cases(tool) + input_cases(tool) + option_cases(tool, options) + config_cases(tool, options)
                   + resource_cases(tool) + output_cases(tool) + signal_cases(tool) + concurrency_cases(tool))
     cases = [c for c in cases if c.kind in kinds]
@@ -1383,15 +1383,12 @@ def main():
     missing = [t for t in TOOLS if not os.access(os.path.join(bin_dir, t), os.X_OK)]
     if missing:
         sys.exit(f"reliability.py: {bin_dir} lacks {', '.join(missing)}; build them first or pass --build DIR")
-    work = os.path.abspath(a.work) if a.work else tempfile.mkdtemp(prefix="graintwin-reliability-")
-    os.makedirs(work, exist_ok=True)
-    runner = Runner(bin_dir, work, a.timeout, a.memory_gb)
     tools = a.tool or TOOLS
     kinds = a.kind or KINDS
     # the signal cases time themselves against the valid run: keep it when signals are asked for
     if "signal" in kinds and "valid" not in kinds:
         kinds = ["valid"] + kinds
-    cases = all_cases(runner, tools, kinds)
+    cases = all_cases(bin_dir, tools, kinds)
     if a.quick:
         cases = [c for c in cases if c.quick]
     if a.case:
@@ -1401,8 +1398,12 @@ def main():
             print(f"{c.id:70s} {c.kind:12s} {c.tool}")
         print(f"{len(cases)} cases")
         return 0
+    work = os.path.abspath(a.work) if a.work else tempfile.mkdtemp(prefix="graintwin-reliability-")
+    os.makedirs(work, exist_ok=True)
+    runner = Runner(bin_dir, work, a.timeout, a.memory_gb)
     inputs = Inputs(work, runner)
     if not inputs.make():
+        print(f"work folder kept for a look: {work}")
         return 3
     shutil.rmtree(os.path.join(work, "cases"), ignore_errors=True)
     harness = Harness(runner, inputs, work, a.keep)
