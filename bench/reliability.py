@@ -72,10 +72,10 @@ RULES = """\
 A case is **handled** when all of these hold:
 - no crash: the tool was not ended by a signal (other than a SIGKILL the harness sent) and printed
   no sanitizer report;
-- no hang: it finished within the per-case timeout of CPU time ({timeout:g} s, or three times the
-  tool's valid run when that is longer; {wall:g} times that in wall time, so a busy machine does not
-  make a hang but a deadlock does) under an address-space cap of {memory:g} GB (RLIMIT_AS), so absurd
-  memory or time must be refused up front;
+- no hang: it finished within the per-case timeout of CPU time, summed over its processes ({timeout:g} s,
+  or three times the tool's valid run when that is longer; {wall:g} times that in wall time, so a
+  busy machine does not make a hang but a deadlock does), under an address-space cap of {memory:g} GB
+  (RLIMIT_AS), so absurd memory or time must be refused up front;
 - the right exit code: 1 or 2 for bad input (2 where the contract says usage error: an existing
   output without --force, an unknown option, the loser of a race); 0 only where the input is
   legitimately acceptable (such cases accept either a clean refusal or a complete run): every
@@ -357,14 +357,17 @@ class Runner:
         return self.finish(self.start(tool, args, cwd, tmpdir, log, unprivileged), timeout)
 
 
-def cpu_seconds(pid):
-    """CPU time of a running process: all its threads and the children it has reaped."""
-    try:
-        s = open(f"/proc/{pid}/stat").read()
-    except OSError:
-        return 0.0
-    f = s[s.rfind(")") + 2:].split()
-    return sum(int(x) for x in f[11:15]) / CLOCK_TICKS
+def cpu_seconds(sid):
+    """CPU time of a tool run: every live process of its session (all threads, and the children each
+    has reaped), so gmsh workers and report's chart script count too."""
+    total = 0
+    for pid in session_members(sid):
+        try:
+            s = open(f"/proc/{pid}/stat").read()
+        except OSError:
+            continue
+        total += sum(int(x) for x in s[s.rfind(")") + 2:].split()[11:15])
+    return total / CLOCK_TICKS
 
 
 def with_session(sid, sig):
@@ -686,9 +689,9 @@ EITHER_VALUES = ["-1", "0", "1e6", "1e12"]
 QUICK_VALUES = {"nan", "1e308"}
 
 
-def numeric_options(runner, tool):
-    """The tool's numeric options from its --help, with their type."""
-    out = subprocess.run([os.path.join(runner.bin, tool), "--help"], capture_output=True, text=True).stdout
+def numeric_options(bin_dir, tool):
+    """The tool's numeric options from its --help."""
+    out = subprocess.run([os.path.join(bin_dir, tool), "--help"], capture_output=True, text=True).stdout
     opts = []
     for line in out.splitlines():
         m = OPTION_LINE.match(line)
@@ -802,10 +805,10 @@ def resource_cases(tool):
                       names, outputs, quick=quick))
     if tool == "volconvert":
         raw = ["{raw}", "out.h5", "--dtype", "uint16", "--voxel-size", "20um"]
-        rc("dims_overflow_crop", ["--dims", "128,144115188075856997,1", "--crop", "0:2,0:1000,:"], ["--dims"],
-           args=raw, quick=True)
-        rc("dims_overflow", ["--dims", "128,144115188075856997,1"], ["--dims"], args=raw)
-        rc("dims_huge", ["--dims", "100000,100000,100000"], ["--dims"], args=raw)
+        rc("dims_overflow_crop", ["--dims", "128,144115188075856997,1", "--crop", "0:2,0:1000,:"],
+           ["--dims", "big.raw"], args=raw, quick=True)
+        rc("dims_overflow", ["--dims", "128,144115188075856997,1"], ["--dims", "big.raw"], args=raw)
+        rc("dims_huge", ["--dims", "100000,100000,100000"], ["--dims", "big.raw"], args=raw)
         rc("downsample_huge", ["--downsample", "1000000"], ["--downsample"], expect="either")
     if tool == "ctsynth":
         rc("blur_huge", ["--blur", "1e6"], ["--blur"], quick=True)
@@ -996,10 +999,10 @@ def concurrency_cases(tool):
                  outputs, special="race", params={"variants": variants}, quick=tool in ("ct2labels", "report"))]
 
 
-def all_cases(runner, tools, kinds):
+def all_cases(bin_dir, tools, kinds):
     cases = []
     for tool in tools:
-        options = numeric_options(runner, tool)
+        options = numeric_options(bin_dir, tool)
         cases += (valid_cases(tool) + input_cases(tool) + option_cases(tool, options) + config_cases(tool, options)
                   + resource_cases(tool) + output_cases(tool) + signal_cases(tool) + concurrency_cases(tool))
     cases = [c for c in cases if c.kind in kinds]
@@ -1380,15 +1383,12 @@ def main():
     missing = [t for t in TOOLS if not os.access(os.path.join(bin_dir, t), os.X_OK)]
     if missing:
         sys.exit(f"reliability.py: {bin_dir} lacks {', '.join(missing)}; build them first or pass --build DIR")
-    work = os.path.abspath(a.work) if a.work else tempfile.mkdtemp(prefix="graintwin-reliability-")
-    os.makedirs(work, exist_ok=True)
-    runner = Runner(bin_dir, work, a.timeout, a.memory_gb)
     tools = a.tool or TOOLS
     kinds = a.kind or KINDS
     # the signal cases time themselves against the valid run: keep it when signals are asked for
     if "signal" in kinds and "valid" not in kinds:
         kinds = ["valid"] + kinds
-    cases = all_cases(runner, tools, kinds)
+    cases = all_cases(bin_dir, tools, kinds)
     if a.quick:
         cases = [c for c in cases if c.quick]
     if a.case:
@@ -1398,8 +1398,12 @@ def main():
             print(f"{c.id:70s} {c.kind:12s} {c.tool}")
         print(f"{len(cases)} cases")
         return 0
+    work = os.path.abspath(a.work) if a.work else tempfile.mkdtemp(prefix="graintwin-reliability-")
+    os.makedirs(work, exist_ok=True)
+    runner = Runner(bin_dir, work, a.timeout, a.memory_gb)
     inputs = Inputs(work, runner)
     if not inputs.make():
+        print(f"work folder kept for a look: {work}")
         return 3
     shutil.rmtree(os.path.join(work, "cases"), ignore_errors=True)
     harness = Harness(runner, inputs, work, a.keep)
