@@ -152,7 +152,7 @@ TEST(MetaImage, HeaderNumbersAreCheckedAndNamed) {
   EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 1 1 1\nElementSpacing = 1 0 1\nElementDataFile = LOCAL\nA").find("must be positive"),
             std::string::npos);
   // 2^32 x 2^32 x 1 bytes wraps to 0 in 64 bits: no longer taken for an empty volume.
-  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 4294967296 4294967296 1\nElementDataFile = LOCAL\n").find("more bytes than any file holds"),
+  EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 4294967296 4294967296 1\nElementDataFile = LOCAL\n").find("more bytes than a 64-bit size counts"),
             std::string::npos);
   // A DimSize beyond the inline data is refused before anything is allocated.
   EXPECT_NE(metaimage_error(dir.path(), head + "DimSize = 100000 100000 100\nElementDataFile = LOCAL\nABCD")
@@ -177,7 +177,7 @@ TEST(Raw, DimsWhoseByteCountOverflowsAreRefused) {
   RawLayout l;
   l.shape = {std::size_t{1} << 32, std::size_t{1} << 32, 1};
   const std::string msg = test::message_of([&] { read_raw(dir / "empty.raw", l); });
-  EXPECT_NE(msg.find("more bytes than any file holds"), std::string::npos) << "a 2^32 x 2^32 x 1 volume matched an empty file: " << msg;
+  EXPECT_NE(msg.find("more bytes than a 64-bit size counts"), std::string::npos) << "a 2^32 x 2^32 x 1 volume matched an empty file: " << msg;
 }
 
 // Headers declaring far more pixels than their files hold (tests/fuzz/regression): refused before

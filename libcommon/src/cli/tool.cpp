@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "graintwin/cli/option_checks.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/strings.hpp"
@@ -56,7 +57,7 @@ Tool::Tool(std::string name, std::string description) : name_(std::move(name)), 
   app_.add_flag("-v,--verbose", verbosity_, "More messages (repeat for debug output)");
   app_.add_flag("-f,--force", force_, "Overwrite existing outputs");
   app_.add_option("-j,--threads", threads_, "Worker threads (0 = all cores)")
-      ->check(CLI::Range(0, kMaxThreads))
+      ->check(whole_number_in(0, kMaxThreads))
       ->capture_default_str();
   app_.set_config("--config", "", "Read options from a TOML file (keys = long option names)");
   app_.allow_config_extras(CLI::config_extras_mode::error);  // a misspelt key must not pass silently
