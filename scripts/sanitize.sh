@@ -2,6 +2,8 @@
 # Builds the library, tools and tests with AddressSanitizer and UndefinedBehaviorSanitizer (gcc,
 # like the normal build; -O1 -g1, assertions on) in build-sanitize/, then runs ctest there (docs/testing.md).
 #   scripts/sanitize.sh [CTEST_ARGS...]      e.g. scripts/sanitize.sh -L volconvert
+# SANITIZE_TARGETS="h5io_test graintwin_fuzz_replay" builds only those targets (with the ctest
+# arguments that select their tests, e.g. -L 'fuzz|libcommon:h5io') instead of everything.
 # Tools that the tests start as processes are sanitized too: a report in any of them fails its test.
 set -euo pipefail
 launcher=()
@@ -13,7 +15,12 @@ cmake -S "$ROOT" -B "$BUILD" -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWit
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" -DGRAINTWIN_SANITIZE=ON \
   -DGRAINTWIN_BUILD_BENCH=OFF >/dev/null
 start=$(date +%s)
-cmake --build "$BUILD" -j "$(nproc)"
+if [ -n "${SANITIZE_TARGETS:-}" ]; then
+  # shellcheck disable=SC2086
+  cmake --build "$BUILD" -j "$(nproc)" --target $SANITIZE_TARGETS
+else
+  cmake --build "$BUILD" -j "$(nproc)"
+fi
 built=$(date +%s)
 # Leaks are reported (LeakSanitizer); libgomp's and libhdf5's process-lifetime allocations are not
 # leaks of ours and are suppressed by name.
