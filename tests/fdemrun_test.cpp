@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <regex>
 
@@ -258,6 +259,21 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   std::filesystem::create_directory(dir / "old_frames");
   test::expect_clean_failure("fdemrun", dir, {good.string(), (dir / "new.h5").string(), "--vtk", (dir / "old_frames").string()},
                              2, "old_frames");
+  // An existing checkpoint is a user's file like any output: refused without --force, byte for byte
+  // as it was; with --force the run replaces it.
+  const auto bytes_of = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const std::string ckpt_before = bytes_of(ckpt);
+  test::expect_clean_failure("fdemrun", dir,
+                             {good.string(), (dir / "c.h5").string(), "--stop-step", "5", "--checkpoint", ckpt.string()}, 2,
+                             "ckpt.h5");
+  EXPECT_EQ(bytes_of(ckpt), ckpt_before);
+  const auto forced = run_tool("fdemrun", {good.string(), (dir / "c.h5").string(), "-q", "--stop-step", "5", "--checkpoint",
+                                           ckpt.string(), "--force"});
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_NE(bytes_of(ckpt), ckpt_before);
 }
 
 namespace {
