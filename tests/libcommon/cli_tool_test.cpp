@@ -107,6 +107,19 @@ TEST(Tool, AConfigFileWithBrokenSyntaxIsNamedWithItsLine) {
   EXPECT_EQ(err.find("not in range"), std::string::npos) << "CLI11's misleading message leaked: " << err;
 }
 
+TEST(Tool, AConfigKeyGivenTwiceIsRefusedNotResolvedSilently) {
+  test::TempDir dir;
+  std::ofstream(dir / "twice.toml") << "downsample = 2\ngrain-shape = \"sand\"\ndownsample = 4\n";
+  std::string err;
+  bool ran = false;
+  EXPECT_EQ(run_small_tool({(dir / "o").string(), "--config", (dir / "twice.toml").string()}, err,
+                           [&](cli::RunContext&, const std::filesystem::path&) { ran = true; }),
+            2);
+  EXPECT_FALSE(ran);
+  EXPECT_NE(err.find("twice.toml line 3"), std::string::npos) << err;
+  EXPECT_NE(err.find("downsample"), std::string::npos) << err;
+}
+
 TEST(Tool, AnUnknownConfigKeyGetsTheClosestOptionName) {
   test::TempDir dir;
   std::ofstream(dir / "typo.toml") << "grain-shpae = \"sand\"\n";

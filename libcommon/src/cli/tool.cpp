@@ -155,6 +155,12 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
               << name_ << ": run '" << name_ << " --help' for the options\n";
     return static_cast<int>(ExitCode::usage_error);
   }
+  // CLI11 reads a key given twice as its last value; TOML forbids it, and a silent choice between two
+  // values the user wrote is no choice.
+  if (const std::string config_error = config_file_problem(argc, argv); !config_error.empty()) {
+    std::cerr << name_ << ": " << config_error << "\n" << name_ << ": run '" << name_ << " --help' for the options\n";
+    return static_cast<int>(ExitCode::usage_error);
+  }
   if (config_positional_) *config_target_ = config_positional_->as<std::string>();
   if (optional_input_) {
     // One argument short: the optional input took what belongs to the outputs.
