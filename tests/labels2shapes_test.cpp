@@ -118,6 +118,12 @@ TEST(Labels2shapes, BadInputsFailCleanly) {
   nan(3, 3, 3) = std::numeric_limits<float>::quiet_NaN();
   io::write_volume_file(dir / "nan.h5", nan, {"nan"});
   fail(dir, {labels.string(), (dir / "nan.h5").string(), out}, 1, "NaN");
+  // Grey levels out of order or outside the scan's values (0 to about 4000) would put every surface
+  // where the data say nothing.
+  fail(dir, {labels.string(), scan.string(), out, "--grey-void", "3000", "--grey-grain", "1000"}, 2,
+       "the grain grey level 1000 must exceed the void grey level 3000 (--grey-grain, --grey-void)");
+  fail(dir, {labels.string(), scan.string(), out, "--grey-grain", "1e308"}, 2, "must lie within the grey values of");
+  fail(dir, {labels.string(), scan.string(), out, "--grey-void", "-1"}, 2, "--grey-void -1");
   // No grain at all.
   segment::LabelsFile empty;
   empty.labels = Volume<std::uint32_t>({8, 8, 8}, {kVoxel, kVoxel, kVoxel});

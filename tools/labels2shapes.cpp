@@ -2,6 +2,7 @@
 // (SPEC.md sections 2 and 5).
 //   labels2shapes labels.h5 shapes.h5
 //   labels2shapes labels.h5 scan.h5 shapes.h5 --surfaces grains.vtp
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
@@ -72,6 +73,23 @@ void write_surfaces(const fs::path& path, bool stl, const std::vector<GrainShape
 
 std::size_t count_flag(const std::vector<GrainShape>& g, std::uint8_t bit) {
   return static_cast<std::size_t>(std::count_if(g.begin(), g.end(), [&](const GrainShape& s) { return s.flags & bit; }));
+}
+
+/// The surface lies where the grey level crosses the middle of the void and grain levels: they must
+/// be in order and inside the scan's own range, or every surface sits somewhere the data never says.
+template <class T>
+void check_grey_levels(const MeasureOptions& mo, const Volume<T>& grey, const fs::path& volume_path) {
+  const auto [lo, hi] = std::minmax_element(grey.values().begin(), grey.values().end());
+  const double low = lo == grey.values().end() ? 0.0 : static_cast<double>(*lo), high = hi == grey.values().end() ? 0.0 : static_cast<double>(*hi);
+  const auto outside = [&](double v) { return v < low || v > high; };
+  if (outside(mo.grey_void) || outside(mo.grey_grain))
+    throw UsageError(fmt::format("--grey-void {:.6g} and --grey-grain {:.6g} must lie within the grey values of {} ({:.6g} to {:.6g}); "
+                                 "give the void and grain levels of that scan, or leave them out to take its medians",
+                                 mo.grey_void, mo.grey_grain, volume_path.string(), low, high));
+  if (!(mo.grey_grain > mo.grey_void))
+    throw UsageError(fmt::format("the grain grey level {:.6g} must exceed the void grey level {:.6g} (--grey-grain, --grey-void); "
+                                 "give the levels of {} in that order, or leave them out to take its medians",
+                                 mo.grey_grain, mo.grey_void, volume_path.string()));
 }
 
 template <class T>
@@ -195,6 +213,7 @@ int main(int argc, char** argv) {
               mo.grey_grain = o.grey_grain.value_or(levels.grain_level);
               spdlog::info("grey levels: void {:.6g}, grain {:.6g}{}", mo.grey_void, mo.grey_grain,
                            o.grey_void || o.grey_grain ? " (given)" : " (medians of interior voxels)");
+              check_grey_levels(mo, g, volume_path);
               return measure_all<T>(labels, &g, fitter, mo, ctx);
             }
           },
