@@ -178,6 +178,8 @@ TEST(Ctsynth, OptionsOutsideTheirRangeAreRefusedBeforeAnyWork) {
   refused({"--box", "1mm,nan,1mm", "--container", "box"}, {"--box", "finite length"});
   // Inside every range but too large together: the scans alone would be petabytes.
   refused({"--diameter", "1m", "--height", "1m"}, {"ctsynth needs about", "voxels", "--voxel-size"});
+  // Hundreds of millions of micron grains in a small sample: the advice is the grain sizes.
+  refused({"--d-min", "1um", "--d50", "2um", "--d-max", "3um"}, {"ctsynth needs about", "grains", "give larger grains (--d-min, --d50"});
   // Grey levels that would saturate uint16, or leave no contrast.
   refused({"--grey-scale", "1e12"}, {"--grey-scale", "(0, 1e+06]"});
   refused({"--grey-scale", "1e6"}, {"--grey-scale 1e+06", "65535", "at most 80713"});

@@ -247,12 +247,16 @@ int main(int argc, char** argv) {
     // What the series holds at once: the grains' tables (and one smoothed copy per packing stage)
     // and one scan being rendered.
     const double grains_expected = expected_grain_count(psd, o.solid_fraction * container.volume());
-    const double bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel +
-                         grains_expected * grain_bytes(psd.d50, voxel, o.sh_degree) * static_cast<double>(1 + pack_degrees.size());
-    check_memory(bytes, "ctsynth",
+    const double scan_bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel;
+    const double grain_table_bytes =
+        grains_expected * grain_bytes(psd.d50, voxel, o.sh_degree) * static_cast<double>(1 + pack_degrees.size());
+    // The advice names first what dominates: millions of tiny grains are fixed by the PSD, not the voxels.
+    check_memory(scan_bytes + grain_table_bytes, "ctsynth",
                  fmt::format("scans of {:.3g} x {:.3g} x {:.3g} voxels (z, y, x) and about {:.3g} grains", voxels[0],
                              voxels[1], voxels[2], grains_expected),
-                 "make the sample smaller (--diameter, --height or --box) or the voxels larger (--voxel-size)");
+                 grain_table_bytes > scan_bytes
+                     ? "give larger grains (--d-min, --d50, --d-max), a smaller sample (--diameter, --height or --box) or larger voxels (--voxel-size)"
+                     : "make the sample smaller (--diameter, --height or --box), the voxels larger (--voxel-size) or the grains larger (--d-min, --d50, --d-max)");
     const Shape3 shape{static_cast<std::size_t>(voxels[0]), static_cast<std::size_t>(voxels[1]),
                        static_cast<std::size_t>(voxels[2])};
     if (o.blur > 0.0)
