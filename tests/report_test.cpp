@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <regex>
@@ -21,12 +22,14 @@
 #include <thread>
 
 #include "graintwin/contacts/fabric.hpp"
+#include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/report/charts.hpp"
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/run_data.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "support/cli_contract.hpp"
+#include "support/cube_sample.hpp"
 #include "support/processes.hpp"
 #include "support/phantoms.hpp"
 #include "support/simulation_results.hpp"
@@ -213,23 +216,56 @@ const std::vector<std::string> kPanels{"stress_ratio", "volumetric_strain", "psd
 
 }  // namespace
 
+namespace {
+
+/// The full run with `option` naming `file` in place of the run's own is refused (exit 1) with a
+/// message that starts with the file's name followed by `words`, leaving nothing in `out`.
+void expect_run_file_refused(const test::TempDir& out, const fs::path& file, const std::string& option, const std::string& words) {
+  test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), option, file.string()}, 1,
+                             file.string() + words);
+}
+
+}  // namespace
+
 TEST(ReportCli, StandardCli) { test::expect_standard_cli("report"); }
 
 TEST_F(Report, MicroAndForcesTablesOfUnequalLengthAreRefusedNamingTheFile) {
   test::TempDir out;
-  const auto refused = [&](const fs::path& file, const std::string& option, const std::string& words) {
-    test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), option, file.string()}, 1,
-                               file.string() + words);
-  };
   fs::copy_file(g_runs->full / "micro.h5", out / "rdf.h5");
   test::replace_dataset(out / "rdf.h5", "/states/1/rdf/g", std::vector<double>{1.0, 2.0}, {2});
-  refused(out / "rdf.h5", "--micro", ": state 1's g(r) or PSD columns differ in length; rewrite it with tracks2micro");
+  expect_run_file_refused(out, out / "rdf.h5", "--micro", ": state 1's g(r) or PSD columns differ in length; rewrite it with tracks2micro");
   fs::copy_file(g_runs->full / "micro.h5", out / "clusters.h5");
   test::replace_dataset(out / "clusters.h5", "/increments/0/clusters/radius_of_gyration", std::vector<double>{}, {0});
-  refused(out / "clusters.h5", "--micro", ": /increments/0/clusters/size and /radius_of_gyration differ in length");
+  expect_run_file_refused(out, out / "clusters.h5", "--micro", ": /increments/0/clusters/size and /radius_of_gyration differ in length");
   fs::copy_file(g_runs->full / "forces.h5", out / "forces.h5");
   test::replace_dataset(out / "forces.h5", "/frames/0/rose/mean_force", std::vector<double>{1.0}, {1});
-  refused(out / "forces.h5", "--forces", ": /frames/0/rose/mean_force does not have one value per rose bin");
+  expect_run_file_refused(out, out / "forces.h5", "--forces", ": /frames/0/rose/mean_force does not have one value per rose bin");
+}
+
+TEST_F(Report, TablesOfUnequalLengthOrValuesNoToolWritesAreRefusedNamingTheFile) {
+  test::TempDir out;
+  // A column the report does not draw still makes the table, and the file, damaged.
+  fs::copy_file(g_runs->full / "tracks.h5", out / "tracks.h5");
+  test::replace_dataset(out / "tracks.h5", "/tracks/confidence", std::vector<double>{0.5}, {1});
+  expect_run_file_refused(out, out / "tracks.h5", "--tracks", ": the table /tracks has columns of different lengths");
+  fs::copy_file(g_runs->full / "micro.h5", out / "d50.h5");
+  std::vector<double> d50 = io::H5File::open(out / "d50.h5").read<double>("/increments/d50");
+  d50.back() = std::numeric_limits<double>::infinity();
+  test::replace_dataset(out / "d50.h5", "/increments/d50", d50, {d50.size()});
+  expect_run_file_refused(out, out / "d50.h5", "--micro",
+          ": /increments/d50 holds infinity in row " + std::to_string(d50.size() - 1) +
+              ", a value no GrainTwin tool writes there; rewrite it with tracks2micro");
+  fs::copy_file(g_runs->full / "simulation.h5", out / "simulation.h5");
+  const std::string frame = "/frames/000001/grains/centroid";
+  std::vector<hsize_t> dims;
+  std::vector<double> centroid = io::H5File::open(out / "simulation.h5").read<double>(frame, &dims);
+  centroid[4] = std::nan("");
+  test::replace_dataset(out / "simulation.h5", frame, centroid, dims);
+  expect_run_file_refused(out, out / "simulation.h5", "--simulation", ": " + frame + " holds NaN in row 1");
+  // The report shows only the model's provenance, but it vouches for a model fdemrun would refuse.
+  fdem::write_model_file(out / "model.h5", test::cube_sample(1e-3), {"a cube"});
+  test::replace_dataset(out / "model.h5", "/materials/young", std::vector<double>{std::numeric_limits<double>::infinity()}, {1});
+  expect_run_file_refused(out, out / "model.h5", "--model", "");
 }
 
 TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {

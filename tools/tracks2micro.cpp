@@ -12,6 +12,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/micro_file.hpp"
 #include "graintwin/micro/simulation.hpp"
@@ -98,9 +99,10 @@ MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std:
     for (std::size_t t = 0; t < tr.scans; ++t) {
       const io::H5File cf = io::open_kind(contacts[t], schema::kind::contacts, "pass the labels2contacts output of that scan");
       ctx.add_input_history(cf);
+      // Only the grains' coordination is used, but a contacts table that disagrees with itself is a damaged file.
+      for (const char* table : {"/grains", "/contacts"}) io::table_rows(cf, table, "rewrite it with labels2contacts");
       const auto labels = cf.read<std::uint32_t>(schema::contacts::grain_label);
       const auto z = cf.read<std::uint32_t>(schema::contacts::grain_coordination);
-      if (labels.size() != z.size()) throw DataError(contacts[t].string() + ": /grains/label and /grains/coordination differ in length; rewrite it with labels2contacts");
       s.coordination[t].assign(tr.tracks, 0);
       by_label<std::uint32_t>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.coordination[t][i] = z[k]; });
     }

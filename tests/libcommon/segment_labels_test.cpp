@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <limits>
 #include <random>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "support/errors.hpp"
 #include "support/run_tool.hpp"
 
 using namespace graintwin;
@@ -213,4 +215,18 @@ TEST(LabelsFile, ReadingRefusesAGrainTableThatDisagreesWithTheImage) {
                                " does not match its label image: 1 grain of the label image has no row in the grain "
                                "table (label 2); rewrite the file with ct2labels");
   }
+}
+
+TEST(LabelsFile, ReadingRefusesANonFiniteCentroid) {
+  test::TempDir dir;
+  LabelsFile c;
+  c.labels = Volume<std::uint32_t>({5, 5, 5});
+  fill_box(c.labels, 1, {0, 0, 0}, {2, 2, 2});
+  c.grains = grain_table(c.labels);
+  c.grains[0].centroid_xyz[1] = std::numeric_limits<double>::quiet_NaN();
+  c.parameters_json = "{}";
+  write_labels_file(dir / "nan.h5", c, {"test"});
+  EXPECT_EQ(test::message_of([&] { read_labels_file(dir / "nan.h5"); }),
+            (dir / "nan.h5").string() + ": /grains/centroid holds NaN in row 0, a value no GrainTwin tool writes there; "
+                                        "rewrite it with ct2labels");
 }

@@ -8,6 +8,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 
 namespace graintwin::fdem {
@@ -225,6 +226,9 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   r.normal = f.read<double>(at(sr::contact_normal));
   r.force = f.read<double>(at(sr::contact_force));
   r.overlap = f.read<double>(at(sr::contact_overlap));
+  // fdemrun stops before a state goes non-finite (its health checks), so such a frame is damage.
+  io::require_finite(f, at(sr::frame_centroid), r.centroid, 3, "rerun fdemrun");
+  io::require_finite(f, at(sr::frame_rotation), r.rotation, 4, "rerun fdemrun");
   return r;
 }
 

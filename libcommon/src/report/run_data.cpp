@@ -8,11 +8,13 @@
 
 #include "graintwin/contacts/fabric.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/micro/micro_file.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/local_deformation.hpp"
 #include "graintwin/micro/simulation.hpp"
@@ -121,6 +123,39 @@ std::string check_hint(const std::string& kind) {
   return "pass the output of fdem2forces";
 }
 
+/// The tables of a run file of kind `kind` agree in length and hold only values their tool writes
+/// (io/table_checks), before the report draws anything from them. Columns where NaN means "not
+/// measured" (a contact not refined, a strain before shearing) may hold NaN; none may hold infinity.
+void check_tables(const io::H5File& f, const std::string& kind) {
+  const auto tables = [&](std::initializer_list<std::string> groups, const std::string& tool) {
+    for (const std::string& g : groups) io::table_rows(f, g, "rewrite it with " + tool);
+  };
+  const auto finite = [&](const std::string& group, std::initializer_list<std::string_view> never_nan, const std::string& tool) {
+    io::require_finite_table(f, group, never_nan, "rewrite it with " + tool);
+  };
+  if (kind == schema::kind::labels) {
+    tables({"/grains"}, "ct2labels");
+    finite("/grains", {"centroid", "volume"}, "ct2labels");
+  } else if (kind == schema::kind::contacts) {
+    tables({"/contacts", "/grains", "/coordination"}, "labels2contacts");
+    finite("/contacts", {"normal", "normal_pca", "branch", "point", "centroid", "area", "vector_area"}, "labels2contacts");
+  } else if (kind == schema::kind::tracks) {
+    tables({"/tracks", "/steps", "/scans"}, "shapes2tracks");
+    finite("/tracks", {}, "shapes2tracks");
+  } else if (kind == schema::kind::micro) {
+    tables({"/grains", "/increments", "/states"}, "tracks2micro");
+    for (const char* g : {"/grains", "/increments", "/states"}) finite(g, {"d50"}, "tracks2micro");
+  } else if (kind == schema::kind::fdem_results) {
+    tables({"/grains", "/series", "/stages"}, "fdemrun");
+    finite("/series", {"time", "kinetic"}, "fdemrun");
+    if (f.exists("/frames"))
+      for (const std::string& frame : f.list("/frames")) finite("/frames/" + frame + "/grains", {"centroid", "rotation"}, "fdemrun");
+  } else if (kind == schema::kind::forces) {
+    tables({"/frames", "/grains", "/windows"}, "fdem2forces");
+    for (const char* g : {"/frames", "/grains", "/windows"}) finite(g, {}, "fdem2forces");
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -192,6 +227,7 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
   const auto check = [&](const fs::path& p, const char* kind) {
     if (p.empty()) return;
     const io::H5File f = io::open_kind(p, kind, check_hint(kind));
+    check_tables(f, kind);
     history.emplace_back(p.string(), io::read_history(f));
   };
   for (std::size_t s = 0; s < files.labels.size(); ++s) {
@@ -202,6 +238,8 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
   check(files.tracks, schema::kind::tracks);
   check(files.micro, schema::kind::micro);
   check(files.model, schema::kind::fdem_model);
+  // The report shows only the model's provenance, but a model it vouches for must be one fdemrun would run.
+  if (!files.model.empty()) fdem::read_model_file(files.model);
   check(files.simulation, schema::kind::fdem_results);
   check(files.simulation_micro, schema::kind::micro);
   check(files.forces, schema::kind::forces);

@@ -7,6 +7,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 
 namespace graintwin::segment {
@@ -67,6 +68,8 @@ LabelsFile read_labels_file(const std::filesystem::path& path) {
   const std::size_t n = label.size();
   if (voxels.size() != n || volume.size() != n || centroid.size() != 3 * n || bbox.size() != 6 * n || edge.size() != n)
     throw DataError(path.string() + " has grain table columns of different lengths; rewrite it with ct2labels");
+  io::require_finite(f, "/grains/volume", volume, 1, "rewrite it with ct2labels");
+  io::require_finite(f, "/grains/centroid", centroid, 3, "rewrite it with ct2labels");
   c.grains.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     GrainRecord& g = c.grains[i];

@@ -6,6 +6,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
@@ -95,6 +96,8 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
     if (v.size() != n * k)
       throw DataError(path.string() + ": " + name + " has " + std::to_string(v.size()) + " values for " + std::to_string(n) +
                       " grains; rewrite it with labels2shapes");
+    // labels2shapes writes finite numbers only: a NaN centroid or coefficient would reach meshes and tracks.
+    io::require_finite(f, name, v, k, "rewrite it with labels2shapes");
     return v;
   };
   const auto voxels = f.read<std::uint64_t>("/grains/voxels");

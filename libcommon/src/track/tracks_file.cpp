@@ -7,6 +7,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/io/vtk.hpp"
 
@@ -118,6 +119,8 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
   r.rotation_step = need(st::rotation_step, 4);
   r.confidence = need(st::confidence, 1);
   r.rotation_defined = f.read<std::uint8_t>(st::rotation_defined);
+  // NaN is a track's "not in this scan"; infinity is no value any tool writes.
+  io::require_finite_table(f, "/tracks", {}, "rewrite it with shapes2tracks");
   for (auto [out, name] : {std::pair{&r.grains, "grains"}, {&r.matched, "matched"}, {&r.lost, "lost"},
                            {&r.found, "found"}, {&r.started, "started"}}) {
     *out = f.read<std::uint64_t>(step_path(name));
