@@ -247,6 +247,20 @@ TEST(MatchImproved, TinyAndEmptyScans) {
   EXPECT_THROW(match_grains(ref, def, bad), UsageError);
 }
 
+TEST(MatchImproved, GrainsWithoutAnShFitAreMatchedByPositionAndVolume) {
+  // labels2shapes leaves the invariants of grains too small to fit at zero (||R_0|| = 0).
+  ScanGrains ref = hand_scan({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}}, {1.0, 1.2, 0.8, 1.1, 0.05},
+                             {0.1, 0.2, 0.3, 0.15, 0.0});
+  ScanGrains def = hand_scan({{0.02, 0, 0}, {1.02, 0, 0}, {0.02, 1, 0}, {1.02, 1, 0}, {0.02, 0, 1}}, {1.0, 1.2, 0.8, 1.1, 0.05},
+                             {0.1, 0.2, 0.3, 0.15, 0.0});
+  ref.invariants.row(4).setZero();
+  def.invariants.row(4).setZero();
+  def.invariants.row(0).setZero();  // and a fitted grain whose partner has no fit
+  const Matching m = match_grains(ref, def, MatchOptions{});
+  EXPECT_EQ(m.partner, (std::vector<int>{0, 1, 2, 3, 4}));
+  for (double c : m.confidence) EXPECT_TRUE(std::isfinite(c));
+}
+
 TEST(MatchImproved, LargeStepWithShearBandWhereTheBaselinesFail) {
   const ScanGrains ref = synthetic_grains(4000, 1.0, 15, 1);
   SyntheticMotion mo;

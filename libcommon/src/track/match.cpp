@@ -106,8 +106,13 @@ Matching greedy_match(const ScanGrains& ref, const ScanGrains& def, const MatchO
 
 // ---- the improved mode -------------------------------------------------------------------------
 
+/// D / ||R_0||; 0 (no evidence either way) when either grain has no SH fit: labels2shapes leaves
+/// the invariants of grains too small to fit at zero, and dividing by their zero ||R_0|| gave
+/// costs of 1e593 that no assignment can hold.
 double shape_term(const ScanGrains& ref, std::size_t i, const ScanGrains& def, std::size_t j) {
-  return invariant_distance(ref, i, def, j) / std::max(ref.invariants(static_cast<Eigen::Index>(i), 0), 1e-300);
+  const double r0 = ref.invariants(static_cast<Eigen::Index>(i), 0), r0_def = def.invariants(static_cast<Eigen::Index>(j), 0);
+  if (!(r0 > 0.0) || !(r0_def > 0.0)) return 0.0;
+  return invariant_distance(ref, i, def, j) / r0;
 }
 
 /// Pairs believed matched: the prediction and the cost scales rest on them.
