@@ -3,7 +3,7 @@
 # like the normal build; -O1 -g1, assertions on) in build-sanitize/, then runs ctest there (docs/testing.md).
 #   scripts/sanitize.sh [CTEST_ARGS...]      e.g. scripts/sanitize.sh -L volconvert
 # SANITIZE_TARGETS="h5io_test graintwin_fuzz_replay" builds only those targets (with the ctest
-# arguments that select their tests, e.g. -L 'fuzz|libcommon:h5io') instead of everything.
+# arguments that select their tests, e.g. -L 'fuzz|h5io') instead of everything.
 # Tools that the tests start as processes are sanitized too: a report in any of them fails its test.
 set -euo pipefail
 launcher=()
