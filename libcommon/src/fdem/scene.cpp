@@ -10,6 +10,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/primitives.hpp"
@@ -514,10 +515,7 @@ double contact_element_size(const Model& model, std::uint32_t material) {
     const auto& c = model.triangles[t];
     for (int i = 0; i < 3; ++i) edges.push_back(split * (model.nodes[c[i]] - model.nodes[c[(i + 1) % 3]]).norm());
   }
-  if (edges.empty()) return 0;
-  const auto middle = edges.begin() + static_cast<std::ptrdiff_t>(edges.size() / 2);
-  std::nth_element(edges.begin(), middle, edges.end());
-  return *middle;
+  return median(std::move(edges));
 }
 
 }  // namespace graintwin::fdem

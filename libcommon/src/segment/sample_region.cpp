@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 
 namespace graintwin::segment {
 namespace {
@@ -62,8 +63,7 @@ Cylinder fit_from_counts(const Volume<std::uint8_t>& solid, const std::vector<st
   std::vector<double> inner;
   for (std::size_t i = 0; i < rings && (i < inner_rings || inner.empty()); ++i)
     if (cnt[i]) inner.push_back(profile[i]);
-  std::nth_element(inner.begin(), inner.begin() + static_cast<std::ptrdiff_t>(inner.size() / 2), inner.end());
-  const double level = inner[inner.size() / 2];
+  const double level = median(inner);
   const double lo = 0.5 * level, hi = 0.5 * (1.0 + level);
   std::size_t edge = std::min(inner_rings, rings);  // rings [0, edge) are inside
   while (edge < rings && (cnt[edge] == 0 || (profile[edge] >= lo && profile[edge] <= hi))) ++edge;
@@ -96,8 +96,7 @@ void fit_axial_extent(const Volume<std::uint8_t>& solid, Cylinder& c) {
   }
   std::vector<double> middle(fraction.begin() + static_cast<std::ptrdiff_t>(s[0] / 4),
                              fraction.begin() + static_cast<std::ptrdiff_t>(std::max(s[0] / 4 + 1, 3 * s[0] / 4)));
-  std::nth_element(middle.begin(), middle.begin() + static_cast<std::ptrdiff_t>(middle.size() / 2), middle.end());
-  const double level = middle[middle.size() / 2];
+  const double level = median(middle);
   const auto in_sample = [&](std::size_t z) { return fraction[z] >= 0.1 * level && fraction[z] <= 0.5 * (1.0 + level); };
   const std::size_t mid = s[0] / 2;
   std::size_t top = mid, bottom = mid;

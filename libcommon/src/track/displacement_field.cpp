@@ -7,19 +7,12 @@
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 
 namespace graintwin::track {
 namespace {
 
 double weight_at(const std::vector<double>& w, std::size_t i) { return w.empty() ? 1.0 : w[i]; }
-
-/// Median of a copy (nth_element); 0 for an empty list.
-double median_of(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 }  // namespace
 
@@ -93,7 +86,7 @@ Affine robust_affine(const std::vector<Eigen::Vector3d>& from, const std::vector
   std::vector<double> r(n);
   for (int it = 0; it < 6 && n > 0; ++it) {
     for (std::size_t i = 0; i < n; ++i) r[i] = (best(from[i]) - to[i]).norm();
-    const double sigma = std::max(median_of(r) / 1.538, inlier_distance / 4.0);
+    const double sigma = std::max(median(r) / 1.538, inlier_distance / 4.0);
     const double c = 4.685 * sigma;
     for (std::size_t i = 0; i < n; ++i) {
       const double u = r[i] / c;

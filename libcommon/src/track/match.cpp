@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/track/assignment.hpp"
 #include "graintwin/track/displacement_field.hpp"
 #include "graintwin/track/point_grid.hpp"
@@ -15,13 +16,6 @@ namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t none = DisplacementField::none;
-
-double median_of(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 /// Candidate lists row by row, each sorted by (score, column).
 struct Candidates {
@@ -188,7 +182,7 @@ Predictor build_predictor(const Anchors& an, double d50, const MatchOptions& o) 
     std::vector<double> kept;
     for (std::size_t a = 0; a < n; ++a)
       if (p.weight[a] > 0.5) kept.push_back(p.error[a]);
-    p.sigma = std::max(median_of(kept.empty() ? p.error : kept) / 1.538, p.floor);  // median |3-D Gaussian| = 1.538 sigma
+    p.sigma = std::max(median(kept.empty() ? p.error : kept) / 1.538, p.floor);  // median |3-D Gaussian| = 1.538 sigma
     if (round == 1) break;
     for (std::size_t a = 0; a < n; ++a) {
       const double u = p.error[a] / (6.0 * p.sigma);
@@ -208,10 +202,10 @@ Scales cost_scales(const Anchors& an, const std::vector<double>& weight) {
   for (std::size_t a = 0; a < an.size(); ++a)
     if (weight[a] > 0.5) s.push_back(an.shape[a]), v.push_back(an.log_volume[a]);
   Scales k;
-  k.shape = std::max(1.4826 * median_of(s), 0.005);  // D / ||R_0|| >= 0: half-normal median
-  k.volume_mean = median_of(v);
+  k.shape = std::max(1.4826 * median(s), 0.005);  // D / ||R_0|| >= 0: half-normal median
+  k.volume_mean = median(v);
   for (double& x : v) x = std::abs(x - k.volume_mean);
-  k.volume = std::max(1.4826 * median_of(v), 0.005);
+  k.volume = std::max(1.4826 * median(v), 0.005);
   return k;
 }
 
