@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
       "fdem_contact_bench", "FDEM contact: broad-phase scaling and narrow-phase throughput",
       "Grains with 242 surface nodes (480 triangles; a structured 6 x 6 x 7-cell box mesh mapped onto a "
       "0.5 mm ball, random rotations) on a cubic lattice 1 % closer than a diameter, so each grain touches "
-      "its six neighbours (default material, SPEC section 0). One thread, thread CPU time, best of 3-5. "
+      "its six neighbours (default material). One thread, thread CPU time, best of 3-5. "
       "*broad phase*: the cell-grid pair search over the skin-inflated grain boxes; *step*: one "
       "ContactModel::add_forces without rebuild (tree refits, node-in-box tests, closest-triangle searches, "
       "forces). Time per grain should stay flat if the cost is linear in the number of grains. "

@@ -20,7 +20,7 @@ namespace {
 
 const std::string kSource = GRAINTWIN_SOURCE_DIR;
 constexpr double kPi = std::numbers::pi;
-constexpr double kSampleRadius = 6e-3;  // the reference experiment's 12 mm sample (SPEC section 0)
+constexpr double kSampleRadius = 6e-3;  // the reference experiment's 12 mm sample (docs/methods.md)
 constexpr double kTolerance = 1e-8;     // relaxation ends at this share of the peak kinetic energy
 
 struct RingMean {

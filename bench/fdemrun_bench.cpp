@@ -4,7 +4,7 @@
 // issue states its rigid target for about 250 surface nodes per grain).
 // The packing: synth::pack_grains places them at random in a cylinder (solid fraction 0.55, every
 // pair within 0.5 % of the smallest radius of touching); then, as rigid grains, they are
-// consolidated isotropically to sigma_3 = 300 kPa (the reference test's, SPEC section 0) between
+// consolidated isotropically to sigma_3 = 300 kPa (the reference test's, docs/methods.md) between
 // two platens inside the servo wall by fdem::consolidate_in_wall, under gravity with the
 // pipeline's damping, until the stresses hold within 1 % and the kinetic energy stays below 5 % of
 // the elastic energy for 100 steps. Every kind is then timed on that settled packing: its own
@@ -223,7 +223,7 @@ int run_bench(int argc, char** argv) {
                   "random in a cylinder (solid fraction {}) by synth::pack_grains, then consolidated as rigid grains to "
                   "300 kPa inside the servo wall between two platens by fdem::consolidate_in_wall ({} steps, {:.0f} s; "
                   "solid fraction {:.3f}); each kind timed on that packing inside the wall held at its radius, gravity, "
-                  "damping {} /s, contact on (penalty SPEC 0 defaults). {} steps timed after 10, {} times (rigid: {}) on a "
+                  "damping {} /s, contact on (the default penalty). {} steps timed after 10, {} times (rigid: {}) on a "
                   "fresh solver, the thread counts taking turns: the median run is shown, with the range of the rates. "
                   "Per core = per thread used. Machine: {}. The CPU column is process CPU time.",
                   kGrains, kRigidElementSize, kSolidFraction, consolidation_steps, consolidation_seconds, solid_fraction,

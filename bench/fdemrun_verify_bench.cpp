@@ -2,7 +2,7 @@
 // at the touching pole (fdem::SizeGrading), stable time step, one thread, no contact damping:
 //  1. Hertz: glass sphere R = 1 mm (E = 48 GPa, nu = 0.2, rho = 2500) at 1 m/s onto a rigid wall;
 //     contact time, peak force and approach against Hertz over the element size at the pole (in
-//     units of the Hertz contact radius a) and over the normal penalty p_n (the SPEC's 100 E per
+//     units of the Hertz contact radius a) and over the normal penalty p_n (the default 100 E per
 //     metre, and 1 / 10 / 100 x E / h, h the element size at the pole). Chart: error against cost.
 //  2. Chung & Ooi (2011) test 1: two glass spheres R = 10 mm (E = 48 GPa, nu = 0.2, rho = 2800) at
 //     +-10 m/s: max overlap 274 um, peak force 10.7 kN, duration 40.3 us (Hertz).
@@ -60,7 +60,7 @@ ImpactSetup graded(ImpactSetup s, double cells) {
 double ratio_error(double measured, double exact) { return std::abs(measured / exact - 1); }
 
 std::string penalty_name(const ImpactSetup& s) {
-  return s.penalty_per_size > 0 ? fmt::format("p_n = {:g} E/h", s.penalty_per_size) : "p_n = 100 E/m (SPEC default)";
+  return s.penalty_per_size > 0 ? fmt::format("p_n = {:g} E/h", s.penalty_per_size) : "p_n = 100 E/m (the default)";
 }
 
 struct Writer {
@@ -127,7 +127,7 @@ void hertz_study(Writer& w, bool quick) {
   }
   if (quick) return;
   pole_size(4);
-  // The penalty at a/2, growth 0.1: the SPEC's absolute 100 E per metre, then per element size.
+  // The penalty at a/2, growth 0.1: the default absolute 100 E per metre, then per element size.
   for (double factor : {0.0, 1.0, 100.0}) {
     ImpactSetup c = graded(s, 2);
     c.growth = 0.1;

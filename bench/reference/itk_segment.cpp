@@ -1,4 +1,4 @@
-// Reference for ct2labels_bench: the ct2labels chain (SPEC.md section 1) built from ITK 5.2 filters
+// Reference for ct2labels_bench: the ct2labels chain (docs/methods.md, segmentation) built from ITK 5.2 filters
 // (Debian libinsighttoolkit5-dev) as an ITK user would write it, one filter per step, each updated
 // and timed on its own, intermediates released as soon as the next step has its input (ITK's best
 // memory, not a pipeline that keeps every output alive):

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Reference for ct2labels_bench: the same chain as ct2labels (SPEC.md section 1) written the way
+"""Reference for ct2labels_bench: the same chain as ct2labels (docs/methods.md, segmentation) written the way
 a researcher writes it with scikit-image + scipy (Debian python3-skimage 0.19, python3-scipy 1.10):
 Gaussian smoothing of sigma SIGMA_VOX voxel (GrainTwin's default denoising), Otsu on the exact
 integer histogram of the whole volume, hole filling, exact EDT, h-maxima markers with
