@@ -1,4 +1,4 @@
-// ct2labels: segment a CT volume into labelled grains (SPEC.md sections 1-2): denoise, threshold,
+// ct2labels: segment a CT volume into labelled grains (docs/methods.md, segmentation): denoise, threshold,
 // EDT, markers, watershed of -EDT, fragments, grain table, sample cylinder and void ratio.
 //   ct2labels scan_000.h5 labels_000.h5
 //   ct2labels scan.h5 labels.h5 --d50 0.551mm --preview labels.png

@@ -1,4 +1,4 @@
-// fdem2forces: contact-force and grain-stress statistics of a simulation (SPEC.md section 9, issue 11).
+// fdem2forces: contact-force and grain-stress statistics of a simulation (docs/methods.md, micro-mechanics).
 //   fdem2forces runs/sand_small/results.h5 runs/sand_small/forces.h5 --chains runs/sand_small/chains
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>

@@ -1,4 +1,4 @@
-// fdemrun: run an FDEM scene (SPEC.md section 7, issue 9).
+// fdemrun: run an FDEM scene (docs/methods.md, FDEM).
 //   fdemrun scene.toml results.h5 --checkpoint run.ckpt.h5
 //   fdemrun scene.toml results.h5 --restart run.ckpt.h5 --force
 #include <nlohmann/json.hpp>
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
       "against a spring-dashpot bounce (restitution, contact time), a block on an incline, and on spheres meshed fine "
       "at the contact against Hertz and Chung & Ooi (2011) tests 1, 2, 6, 7 and LIGGGHTS (docs/fdemrun.md); a scene "
       "grades a sphere's or ellipsoid's mesh towards points with refine_at, fine_element_size and size_growth. The "
-      "SPEC's default penalty (100 E per metre) is far too soft for mm grains: about 10 E / h (h: element size at the "
+      "default penalty (the paper's 100 E per metre) is far too soft for mm grains: about 10 E / h (h: element size at the "
       "contact) reproduces Hertz; a material's penalty_per_size = 10 sets that (h: penalty_element_size, or the median "
       "surface edge of its grains). A scene with [triaxial] runs the triaxial test instead of [[stages]] (docs/fdem_triaxial.md): "
       "isotropic consolidation to sigma_3 inside a rigid servo wall, the membrane's forming procedure (bonded-ball "

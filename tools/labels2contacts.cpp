@@ -1,4 +1,4 @@
-// labels2contacts: the contacts between labelled grains (SPEC.md sections 3-4): detection in the
+// labels2contacts: the contacts between labelled grains (docs/methods.md, contacts and fabric): detection in the
 // 26-neighbourhood, PCA normals, sub-voxel normals and a contact confidence from the grey levels,
 // branch vectors, coordination numbers, fabric tensors, anisotropy and rose counts.
 //   labels2contacts labels_000.h5 scan_000.h5 contacts_000.h5
@@ -107,7 +107,7 @@ void write_rose(io::H5File& f, const std::string& group, const contacts::Rose& r
 int main(int argc, char** argv) {
   cli::Tool tool(
       "labels2contacts",
-      "Contacts between the grains of a labels file (SPEC.md sections 3-4). Grains i < j touch where their voxels "
+      "Contacts between the grains of a labels file (method: docs/methods.md). Grains i < j touch where their voxels "
       "are 26-neighbours; each pair is one contact (all its regions together) when both grains have at least "
       "--min-voxels contact voxels. Per contact: PCA normal of the contact voxel pairs (low -> high label), area "
       "from the oriented voxel faces, centroid, branch vector. With the grey VOLUME the normal is refined to "

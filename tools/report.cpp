@@ -1,4 +1,4 @@
-// report: experiment against simulation on one self-contained HTML page (SPEC.md section 9, issue 11).
+// report: experiment against simulation on one self-contained HTML page (docs/report.md).
 //   report runs/sand_small runs/sand_small/report.html --scan-strains sample_volumes/sand_small/series.json
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -1,4 +1,4 @@
-// shapes2tracks: follow every grain through a series of scans (SPEC.md section 6, issue 7).
+// shapes2tracks: follow every grain through a series of scans (docs/methods.md, matching and tracking).
 //   shapes2tracks scan0/shapes.h5 scan1/shapes.h5 scan2/shapes.h5 tracks.h5 --vtk tracks.vtp
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>

@@ -1,4 +1,4 @@
-// tracks2micro: micro-mechanics of a tracked series (SPEC.md section 9, issue 11).
+// tracks2micro: micro-mechanics of a tracked series (docs/methods.md, micro-mechanics).
 //   tracks2micro runs/sand_small/tracks.h5 micro.h5 --vtk micro.vtp
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>

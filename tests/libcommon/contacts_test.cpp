@@ -386,11 +386,11 @@ void expect_refined_normals(double diameter, int cases, double target_deg) {
 }  // namespace
 
 TEST(ContactsRefine, NormalsOfTouchingSpheresAt8VoxelsPerDiameter) {
-  expect_refined_normals(8.0, 16, 4.0);  // issue 5 target; plain PCA about 13, spam's random walker 4.6
+  expect_refined_normals(8.0, 16, 4.0);  // the target; plain PCA about 13, spam's random walker 4.6
 }
 
 TEST(ContactsRefine, NormalsOfTouchingSpheresAt20VoxelsPerDiameter) {
-  expect_refined_normals(20.0, 10, 1.5);  // issue 5 target; plain PCA about 5, spam's random walker 1.9
+  expect_refined_normals(20.0, 10, 1.5);  // the target; plain PCA about 5, spam's random walker 1.9
 }
 
 TEST(ContactsRefine, SpheresAVoxelApartThatTheThresholdMergesGetLowConfidence) {

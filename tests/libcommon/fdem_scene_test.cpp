@@ -311,7 +311,7 @@ TEST(FdemScene, AGradedSphereIsFineOnlyNearItsRefinePoint) {
   EXPECT_LT(near / n_near, 0.3 * far / n_far);
 }
 
-// A [triaxial] table: defaults from SPEC sections 0 and 8, the membrane thickness from the model
+// A [triaxial] table: defaults of docs/methods.md (reference experiment, membrane), the membrane thickness from the model
 // file's sample cylinder unless the table sets it, the model file replaced by read_scene's argument
 // (fdemrun --model), and the rate as a strain rate or an inertial number, not both.
 TEST(FdemScene, TriaxialTableTakesTheModelsMembraneThicknessAndItsDefaults) {

@@ -51,7 +51,7 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-// Grains drawn from the Ottawa-sand size spread of SPEC section 0: equivalent diameters 0.30 to
+// Grains drawn from the Ottawa-sand size spread of the reference experiment (docs/methods.md): equivalent diameters 0.30 to
 // 1.03 mm, log-normal with sigma 0.25 and a volume-weighted d50 of 0.551 mm (number median
 // ln d50 - 3 sigma^2). Diameters are binned into 40 classes that share one table each.
 struct GrainSet {

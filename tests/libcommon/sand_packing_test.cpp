@@ -32,7 +32,7 @@ RadialTable sphere(double r) {
 }  // namespace
 
 TEST(PackInStages, RoughSandMeetsTheToleranceWithItsTrueShapes) {
-  // Ottawa-like degree-15 sand grains (SPEC section 0 sizes) in a small cylinder at 0.45 of its
+  // Ottawa-like degree-15 sand grains (the reference experiment's sizes) in a small cylinder at 0.45 of its
   // volume, low-passed to degree 7 (roughness off) for the growth, the roughness back in two
   // relaxations. The guarantee is for the true shapes: no pair or wall beyond the tolerance, most
   // grains touching. (0.58 at 6.5 d50 is measured on the bundled series: minutes, not a test.)

@@ -116,7 +116,7 @@ Panel stress_ratio_panel(const ExperimentData& e, const SimulationData& s) {
     std::string names;
     for (const auto& m : s.series.missing) names += (names.empty() ? "" : ", ") + m;
     p.simulation = missing("The simulation results hold no " + names +
-                           ": fdemrun writes these columns with its triaxial test (issue 10), which this run's simulation did not use.");
+                           ": fdemrun writes these columns with its triaxial test (a scene with a [triaxial] table, docs/fdem_triaxial.md), which this run's simulation did not use.");
   } else {
     Chart c = chart(p.id, SideName::simulation, "Simulation", "axial strain eps_1 (%)", "sigma_1 / sigma_3");
     c.add({"simulation", "line", scaled(s.series.axial_strain, 100.0), s.series.stress_ratio});
@@ -145,7 +145,7 @@ Panel volumetric_strain_panel(const ExperimentData& e, const SimulationData& s) 
     p.simulation = missing(kNoSimulation);
   } else if (!s.series.missing.empty()) {
     p.simulation = missing("The simulation results hold no triaxial strains (/series/axial_strain, /series/volumetric_strain): "
-                           "fdemrun writes them with its triaxial test (issue 10).");
+                           "fdemrun writes them with its triaxial test (a scene with a [triaxial] table, docs/fdem_triaxial.md).");
   } else {
     Chart sc = chart(p.id, SideName::simulation, "Simulation", "axial strain eps_1 (%)", "volumetric strain eps_v (%)");
     sc.add({"simulation", "line", scaled(s.series.axial_strain, 100.0), scaled(s.series.volumetric_strain, 100.0)});
