@@ -1,5 +1,5 @@
 #pragma once
-// Contacts between labelled grains (SPEC.md section 3). Grains i < j touch when a voxel of i and a
+// Contacts between labelled grains (docs/methods.md, contacts and normals). Grains i < j touch when a voxel of i and a
 // voxel of j are neighbours in the 26-neighbourhood; the contact voxels of the pair are the voxels
 // of i that neighbour j and the voxels of j that neighbour i. All contact regions of one pair form
 // one contact. One raster pass gathers exact integer sums per pair, from which come the PCA normal,
@@ -56,7 +56,7 @@ struct Contact {
 
 struct DetectParams {
   /// A contact needs at least this many contact voxels on each side (2 = "more than 1 contact
-  /// voxel" of SPEC.md: a single voxel of one grain touching the other is not a contact).
+  /// voxel" of the published method: a single voxel of one grain touching the other is not a contact).
   std::uint64_t min_voxels = 2;
 };
 
@@ -64,7 +64,7 @@ struct DetectParams {
 /// label; every label of a pair must have a row (DataError naming the label otherwise). Geometry
 /// (voxel size, origin) comes from `like`.
 ///
-/// Normal (SPEC.md section 3, PCA): eigenvector of the smallest eigenvalue of the covariance of the
+/// Normal (PCA, docs/methods.md): eigenvector of the smallest eigenvalue of the covariance of the
 /// midpoints of the neighbouring contact-voxel pairs (physical units), signed so that
 /// n . (c_high - c_low) > 0 with the grain centroids; when that product is zero, the side means of
 /// the contact voxels decide. The midpoints lie on the interface; the contact voxels themselves form

@@ -1,5 +1,5 @@
 #pragma once
-// Fabric of a contact network (SPEC.md section 4): second-order fabric tensors of directions
+// Fabric of a contact network (docs/methods.md, fabric): second-order fabric tensors of directions
 // (contact normals, branch vectors) with principal values and directions, the degree of
 // anisotropy a of a distribution symmetric about z, rose-diagram counts per direction bin, and
 // coordination numbers. Directions are axial: d and -d are the same direction.
@@ -28,7 +28,7 @@ Fabric fabric_tensor(const std::vector<Vec3>& directions);
 
 /// Degree of anisotropy of a fabric tensor phi (trace 1) for a distribution symmetric about z,
 /// E(gamma) = 3 (1 + a cos 2 gamma) / (4 pi (3 - a)) with gamma the angle from z, fitted by least
-/// squares (SPEC.md section 4, membrane paper eqs. 31-41):
+/// squares (docs/methods.md, membrane paper eqs. 31-41):
 ///   a = 15 (phi_xx + phi_yy - 2 phi_zz) / (-8 + 5 phi_xx + 5 phi_yy - 10 phi_zz).
 /// a = 0 for an isotropic fabric, a > 0 when directions gather about z; a > 1 (phi_zz > 0.6) is
 /// beyond what E(gamma) can describe with a non-negative density.

@@ -1,5 +1,5 @@
 #pragma once
-// FDEM contact (SPEC.md section 7): surface nodes of one grain against the surface triangles of
+// FDEM contact (docs/methods.md, FDEM): surface nodes of one grain against the surface triangles of
 // another, penalty normal force with a dashpot (never attractive), Coulomb friction with a
 // tangential spring history per node contact, rigid platens with friction. Broad phase: a uniform
 // cell grid over skin-inflated grain boxes, rebuilt only when a node moved more than skin / 2.
@@ -92,7 +92,7 @@ struct ContactRecord {
 };
 
 /// A rigid vertical cylindrical wall around the sample (the servo wall of the forming procedure,
-/// SPEC section 8): grain surface nodes farther than `radius` from the axis are pushed back with
+/// docs/methods.md, flexible membrane): grain surface nodes farther than `radius` from the axis are pushed back with
 /// the platen law (the grain's penalty and dashpot), frictionless.
 struct CylinderWallState {
   Eigen::Vector2d axis_xy = Eigen::Vector2d::Zero();  ///< m

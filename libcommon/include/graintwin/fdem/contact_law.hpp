@@ -1,5 +1,5 @@
 #pragma once
-// The FDEM node contact law (SPEC.md section 7), one node against one surface point or plane:
+// The FDEM node contact law (docs/methods.md, FDEM), one node against one surface point or plane:
 //   normal      F_n = max(0, k_n delta - 2 beta sqrt(m k_n) v_n),  k_n = p_n A
 //   tangential  s <- R s - k_t v_t dt (R rotates the spring into the current tangent plane),
 //               F_t = s - 2 beta sqrt(m k_t) v_t,  k_t = p_t A,  capped at mu F_n (slip).

@@ -1,5 +1,5 @@
 #pragma once
-// Elastic tetrahedra for FDEM grains (SPEC.md section 7): total-Lagrangian St Venant-Kirchhoff
+// Elastic tetrahedra for FDEM grains (docs/methods.md, FDEM): total-Lagrangian St Venant-Kirchhoff
 // 4-node (one quadrature point) and 10-node (4-point degree-2 rule) tetrahedra. Reference shape-
 // function gradients dN/dX are precomputed per quadrature point, so a step needs only the current
 // node positions: F = sum_a x_a (dN_a/dX)^T, E = (F^T F - I) / 2, S = lambda tr(E) I + 2 mu E,

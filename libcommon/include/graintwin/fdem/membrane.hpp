@@ -1,5 +1,5 @@
 #pragma once
-// The flexible membrane of the triaxial test (SPEC.md section 8, Qu et al. 2019): one layer of equal
+// The flexible membrane of the triaxial test (docs/methods.md, Qu et al. 2019): one layer of equal
 // balls on a hexagonal lattice wrapped on the sample cylinder, each bonded to its six neighbours by
 // a normal and a shear spring (eq. 24), no friction and no moment between bonded balls; the
 // confining pressure acts on the triangles of neighbouring balls (eq. 26); the enclosed volume by
@@ -16,7 +16,7 @@
 
 namespace graintwin::fdem {
 
-/// Latex defaults of SPEC.md section 8.
+/// Latex defaults (docs/methods.md, flexible membrane).
 struct MembraneMaterial {
   double young = 1.25e6;      ///< Pa
   double poisson = 0.2;       ///< at most 1/3 (a triangular spring lattice cannot go beyond)
@@ -37,10 +37,10 @@ BondStiffness bond_stiffness(const MembraneMaterial& material);
 double lattice_poisson(const BondStiffness& k);
 double lattice_young_thickness(const BondStiffness& k);
 
-/// Limits of the ratio membrane radius / ball radius (SPEC section 8): below 35 the stiffness is off
+/// Limits of the ratio membrane radius / ball radius (docs/methods.md): below 35 the stiffness is off
 /// by more than 5 %, above 100 the membrane costs more than it brings.
 inline constexpr double kMinRadiusRatio = 35, kMaxRadiusRatio = 100;
-/// The ball radius: a third of d50 (SPEC section 8), moved into the radius-ratio window.
+/// The ball radius: a third of d50 (docs/methods.md), moved into the radius-ratio window.
 double choose_ball_radius(double membrane_radius, double d50);
 
 /// The membrane's lattice. Ball (ring k, position i) has index k * per_ring + i; rings are

@@ -16,7 +16,7 @@ namespace graintwin::fdem {
 /// and inertia) and a closed outward surface (contact works on surfaces for all three).
 enum class GrainKind : std::uint8_t { rigid = 0, tet4 = 1, tet10 = 2 };
 
-/// SPEC.md section 0 defaults: Ottawa sand in the CT-FDEM paper.
+/// The reference experiment's defaults (docs/methods.md): Ottawa sand in the CT-FDEM paper.
 struct Material {
   std::string name = "ottawa_sand";
   double density = 2650.0;               ///< kg/m^3
@@ -43,7 +43,7 @@ struct Platen {
   std::string name;             ///< "bottom", "top"
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< m, a point on the plane
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); ///< unit, pointing into the sample
-  double friction = 0.0;        ///< SPEC section 7: smooth platens by default
+  double friction = 0.0;        ///< smooth platens by default (docs/methods.md, FDEM)
 };
 
 /// The sample region of the reference scan: a vertical cylinder (z axial).
@@ -51,7 +51,7 @@ struct SampleCylinder {
   Eigen::Vector2d axis_xy = Eigen::Vector2d::Zero();  ///< m
   double radius = 0.0;                                ///< m
   double z_min = 0.0, z_max = 0.0;                    ///< m
-  double membrane_thickness = 0.3e-3;                 ///< m (latex, SPEC section 8)
+  double membrane_thickness = 0.3e-3;                 ///< m (latex, docs/methods.md)
 };
 
 struct Model {

@@ -1,5 +1,5 @@
 #pragma once
-// The explicit FDEM step (SPEC.md section 7): M a + C v = F_ext + F_con - F_int with a lumped mass
+// The explicit FDEM step (docs/methods.md, FDEM): M a + C v = F_ext + F_con - F_int with a lumped mass
 // M, mass-proportional damping C = alpha M and central differences (velocities at half steps,
 // positions at whole steps). Deformable grains (tet4/tet10) move node by node; rigid grains are
 // 6-DOF bodies whose nodes follow the body, so contact sees every grain as a moving surface. The

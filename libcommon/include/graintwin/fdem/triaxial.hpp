@@ -1,5 +1,5 @@
 #pragma once
-// The triaxial test's lateral boundary and its control (SPEC.md sections 7-8): a rigid servo-
+// The triaxial test's lateral boundary and its control (docs/methods.md, FDEM and flexible membrane): a rigid servo-
 // controlled cylindrical wall, then the bonded-ball membrane (fdem/membrane.hpp) carrying the
 // confining pressure, with its ends clamped to the platens; servo laws for the wall and the
 // platens, and the measurements of the time series (axial and lateral stress, sample volume by
@@ -17,8 +17,8 @@
 namespace graintwin::fdem {
 
 struct TriaxialOptions {
-  double confining_pressure = 300e3;  ///< sigma_3, Pa (SPEC section 0)
-  MembraneMaterial membrane;          ///< latex, SPEC section 8
+  double confining_pressure = 300e3;  ///< sigma_3, Pa (the reference experiment, docs/methods.md)
+  MembraneMaterial membrane;          ///< latex, docs/methods.md
   double ball_radius = 0;             ///< m; 0 = choose_ball_radius(sample radius, grains' d50)
   double membrane_friction = 0.0;     ///< Coulomb coefficient between membrane balls and grains
   /// Fastest servo motion, as an inertial number I = strain rate x d50 sqrt(rho / sigma_3) of the
@@ -120,7 +120,7 @@ TriaxialMeasure measure(const Solver& solver, const TriaxialBoundary& boundary, 
 using TriaxialObserver = std::function<void(const TriaxialMeasure&, const StepReport&)>;
 
 /// Kinetic energy below this share of the elastic energy (contact and strain) counts as
-/// quasi-static (SPEC section 7).
+/// quasi-static (docs/methods.md, FDEM).
 inline constexpr double kQuasiStaticRatio = 0.05;
 /// The inertial number of a sample sheared at `strain_rate` (1/s): strain rate x d50 x
 /// sqrt(density / mean stress); quasi-static below 1e-3.
@@ -144,7 +144,7 @@ struct TriaxialProgress {
 /// target, proportional below (m/s, positive = the boundary should open).
 double servo_velocity(double stress, double target, double fastest);
 
-/// The forming procedure's second half (SPEC section 8): the grains are stopped, the membrane
+/// The forming procedure's second half (docs/methods.md, flexible membrane): the grains are stopped, the membrane
 /// replaces the wall and is held fixed while the grains settle against it, then it is released
 /// between the platens under the confining pressure (ramped up over `ramp_steps`), while the
 /// platens servo to sigma_3, until the axial stress is within options.stress_tolerance of
@@ -154,7 +154,7 @@ std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, 
                                     double dt, std::size_t ramp_steps, std::size_t max_steps,
                                     const TriaxialObserver& on_step = {}, TriaxialProgress* progress = nullptr);
 
-/// Strain-controlled shearing (SPEC section 8): both platens move towards each other at
+/// Strain-controlled shearing (docs/methods.md, flexible membrane): both platens move towards each other at
 /// strain_rate x H0 / 2 each, under the membrane pressure (or inside the wall, which servos to
 /// sigma_3 as in consolidation), until the axial strain ln(H0 / H) reaches target_axial_strain.
 /// `on_step` gets every step's measurement and report. Returns the steps taken.

@@ -1,5 +1,5 @@
 #pragma once
-// The whole micro-mechanics analysis of a series of states (SPEC.md section 9), as tracks2micro
+// The whole micro-mechanics analysis of a series of states (docs/methods.md, micro-mechanics), as tracks2micro
 // runs it: per increment (a pair of states) every grain's D2min, local strain and eps_q, their
 // log-binned PDFs, the clusters of the highest D2min and the incremental displacement
 // distributions; per state g(r), the coordination-number distribution and the PSD.

@@ -1,5 +1,5 @@
 #pragma once
-// Clusters of the most non-affine grains (SPEC.md section 9): the grains with the highest D2min,
+// Clusters of the most non-affine grains (docs/methods.md, micro-mechanics): the grains with the highest D2min,
 // joined where two of them are nearest neighbours, their sizes s, volume-weighted radii of gyration
 // (the corrected formula), the power-law fit of P(s) and the fractal dimension from R_g ~ s^(1/d_f).
 //

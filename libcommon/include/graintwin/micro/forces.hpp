@@ -1,5 +1,5 @@
 #pragma once
-// Contact-force and grain-stress statistics of a simulated state (SPEC.md section 9), as plain
+// Contact-force and grain-stress statistics of a simulated state (docs/methods.md, micro-mechanics), as plain
 // functions for fdem2forces: the PDF of f_n / <f_n> with an exponential fit of the strong forces
 // (above the mean) and a power-law fit of the weak ones (below), the rose of mean normal force per
 // direction, the grain stress q, its volatility over a strain window, and Pearson's r with its

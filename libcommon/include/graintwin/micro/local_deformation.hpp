@@ -1,5 +1,5 @@
 #pragma once
-// Non-affine motion and local strain of each grain between two states (SPEC.md section 9, Falk and
+// Non-affine motion and local strain of each grain between two states (docs/methods.md, Falk and
 // Langer 1998): the best affine map Lambda of the grain's neighbourhood, the residual D2min, the
 // local strain eps^L = I - (Lambda + Lambda^T)/2 (compression positive, the corrected form) and its
 // deviatoric invariant eps_q = sqrt(2/3 e_dev : e_dev).

@@ -1,5 +1,5 @@
 #pragma once
-// Structure of one state (SPEC.md section 9): pair correlation g(r) with an edge correction for a
+// Structure of one state (docs/methods.md, micro-mechanics): pair correlation g(r) with an edge correction for a
 // box or cylinder sample, coordination numbers and their distribution, and distributions of the
 // incremental displacements.
 #include <Eigen/Core>

@@ -120,7 +120,7 @@ struct ForcesData {
 ForcesData read_forces_data(const fs::path& path);
 
 /// The triaxial time series of a kind=fdem_results file: log axial and volumetric strains and the
-/// stress ratio sigma_1 / sigma_3 (fdemrun's triaxial test, issue 10). `missing` names the columns
+/// stress ratio sigma_1 / sigma_3 (fdemrun's triaxial test). `missing` names the columns
 /// the file lacks (then the vectors are empty).
 struct TriaxialSeries {
   std::vector<double> axial_strain, volumetric_strain, stress_ratio;

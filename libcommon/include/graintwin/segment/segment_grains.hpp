@@ -1,5 +1,5 @@
 #pragma once
-// The whole ct2labels chain as one function (SPEC.md section 1): denoise -> threshold -> hole
+// The whole ct2labels chain as one function (docs/methods.md, segmentation): denoise -> threshold -> hole
 // filling / opening -> sample region and void ratio -> EDT -> markers -> watershed of -EDT ->
 // fragments -> edge grains -> sequential labels -> grain table. The tool and the benchmarks call
 // this, so what is measured is what users run.

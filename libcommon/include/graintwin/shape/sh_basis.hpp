@@ -1,5 +1,5 @@
 #pragma once
-// Real orthonormal spherical harmonics (SPEC section 5) for radial surfaces r(theta, phi):
+// Real orthonormal spherical harmonics (docs/methods.md, spherical harmonics) for radial surfaces r(theta, phi):
 // evaluation, least-squares fitting, rotation invariants ||R_n|| and exact volume/centroid.
 //
 // Convention (fixed here, used by every coefficient vector in the project):

@@ -8,7 +8,7 @@ namespace graintwin::synth {
 
 /// Grain sizes as volume-equivalent diameters (m). By mass, log(d) is normal with median `d50`
 /// and standard deviation `sigma_ln`, truncated to [d_min, d_max]. Default: Ottawa sand of the
-/// reference experiment (SPEC.md section 0: 0.30-1.03 mm, d50 0.551 mm).
+/// reference experiment (docs/methods.md: 0.30-1.03 mm, d50 0.551 mm).
 struct Psd {
   double d_min = 0.30e-3;
   double d50 = 0.551e-3;

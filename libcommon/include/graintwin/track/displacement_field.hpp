@@ -1,5 +1,5 @@
 #pragma once
-// Predicting where a grain went from grains already matched around it (issue 7, improved mode):
+// Predicting where a grain went from grains already matched around it (the improved matcher):
 // a robust global affine map (axial compression, bulging on average) and, on top of it, a local
 // weighted least-squares affine fit of the matched neighbours' residual displacements (shear bands,
 // barrelling), evaluated leave-one-out so that a grain never predicts itself.

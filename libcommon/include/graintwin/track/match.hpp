@@ -1,5 +1,5 @@
 #pragma once
-// Matching the grains of two scans (SPEC.md section 6, issue 7).
+// Matching the grains of two scans (docs/methods.md, matching and tracking).
 //   paper     the CT-FDEM paper's Algorithm 1 exactly: candidates within 3 d50 of the reference
 //             grain's own position (C1), volume change at most 10 % (C2), score D(i, j) = the
 //             L2 distance of the SH rotation invariants, conflicts resolved by letting the smallest

@@ -1,5 +1,5 @@
 #pragma once
-// A grain's rotation between two scans (issue 7, item 3). Principal axes first: the inertia
+// A grain's rotation between two scans (docs/shapes2tracks.md). Principal axes first: the inertia
 // ellipsoids' axes give the rotation up to the sign of each axis (4 right-handed choices); the SH
 // surfaces decide the signs (the rotated first surface must match the second). Then, optionally,
 // the rotation is refined by aligning the SH surfaces themselves (Gauss-Newton on the radial misfit

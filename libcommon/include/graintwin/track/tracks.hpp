@@ -1,5 +1,5 @@
 #pragma once
-// Trajectories across a series of scans (issue 7, item 3): consecutive scans are matched, the
+// Trajectories across a series of scans (docs/shapes2tracks.md): consecutive scans are matched, the
 // matches chain into tracks, a grain lost at one step may be found again in a later scan by
 // matching the lost grains against the unclaimed grains of that scan (seeded by the tracks present
 // in both), and unclaimed grains start new tracks. Then each track's kinematics: displacement
