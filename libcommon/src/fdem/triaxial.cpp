@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
 
@@ -42,15 +43,7 @@ double grains_d50(const Solver& solver) {
   const std::size_t n = solver.model().grains.size();
   std::vector<double> volume(n);
   for (std::size_t g = 0; g < n; ++g) volume[g] = solver.body(g).volume;
-  std::sort(volume.begin(), volume.end());
-  double total = 0;
-  for (double v : volume) total += v;
-  double below = 0;
-  for (double v : volume) {
-    below += v;
-    if (below >= 0.5 * total) return std::cbrt(6 * v / kPi);
-  }
-  return 0;
+  return d50_of_volumes(std::move(volume));
 }
 
 TriaxialBoundary::TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50) : options_(options) {

@@ -40,6 +40,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "packing_geometry.hpp"
 
 namespace graintwin::synth {
@@ -181,19 +182,6 @@ struct PairSlot {
   double travel_a = 0.0, travel_b = 0.0;  // travel counters when `bound` was taken
   double bound = -HUGE_VAL;               // lower bound of the gap at that time
 };
-
-// Volume-weighted median of the equivalent-sphere diameters (the d50 of a sieve curve).
-double d50_of_volumes(const std::vector<double>& volumes) {
-  std::vector<double> v = volumes;
-  std::sort(v.begin(), v.end());
-  const double total = std::accumulate(v.begin(), v.end(), 0.0);
-  double acc = 0.0;
-  for (double x : v) {
-    acc += x;
-    if (acc >= 0.5 * total) return std::cbrt(6.0 * x / M_PI);
-  }
-  return v.empty() ? 0.0 : std::cbrt(6.0 * v.back() / M_PI);
-}
 
 class Packer {
  public:

@@ -16,4 +16,14 @@ double median(std::vector<T> values) {
   return static_cast<double>(*middle);
 }
 
+/// d50 read off a sieve curve: the diameter at which `percent_passing` (ascending, by volume)
+/// reaches 50 %, interpolated linearly between the points on either side; the first diameter when
+/// the curve starts at or above 50 %. 0 for an empty curve. The one definition of d50
+/// (docs/conventions.md).
+double d50_of_curve(const std::vector<double>& diameter, const std::vector<double>& percent_passing);
+
+/// d50 of grains given by their volumes: the sieve curve of their equivalent-sphere diameters
+/// d = (6 V / pi)^(1/3), each grain's volume passing from its own diameter on, read by d50_of_curve.
+double d50_of_volumes(std::vector<double> volumes);
+
 }  // namespace graintwin

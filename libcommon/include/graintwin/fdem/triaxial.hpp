@@ -33,7 +33,7 @@ struct PlatenPair {
 };
 PlatenPair find_platens(const Model& model);
 
-/// Median diameter by volume of the model's grains (equivalent spheres), m.
+/// d50 of the model's grains (d50_of_volumes: equivalent spheres, by volume), m.
 double grains_d50(const Solver& solver);
 
 /// The lateral boundary: first the rigid wall at the sample radius (or just outside the outermost
