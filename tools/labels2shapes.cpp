@@ -35,7 +35,10 @@ struct Options {
   std::string surface = "auto";
   std::optional<double> smooth_vox;
   std::optional<double> grey_void, grey_grain;
-  double max_multi_exit = 0.02;
+  double min_reentry_depth = 0.5;
+  double max_hidden_void = 0.01;
+  double max_reentry_depth = 1.0;
+  bool no_blur_correction = false;
   fs::path surfaces;
   int surface_subdivisions = 3;
 };
@@ -72,6 +75,25 @@ void write_surfaces(const fs::path& path, bool stl, const std::vector<GrainShape
 
 std::size_t count_flag(const std::vector<GrainShape>& g, std::uint8_t bit) {
   return static_cast<std::size_t>(std::count_if(g.begin(), g.end(), [&](const GrainShape& s) { return s.flags & bit; }));
+}
+
+/// The star-shape test in numbers: how many grains re-enter beyond the noise floor, and why the
+/// unreliable ones are unreliable; the median edge width behind the blur correction.
+void log_star_shape_summary(const std::vector<GrainShape>& g, double max_hidden_void, double max_depth_m) {
+  std::size_t by_volume = 0, by_depth = 0;
+  std::vector<double> sigma;
+  for (const GrainShape& s : g) {
+    by_volume += s.hidden_void_fraction > max_hidden_void;
+    by_depth += s.reentry_depth > max_depth_m;
+    if (s.edge_sigma > 0.0) sigma.push_back(s.edge_sigma);
+  }
+  spdlog::info("star shape: {} grains with re-entrant rays above the noise floor; {} enclose more than {:.3g} % of "
+               "their volume as void, {} miss a surface deeper than {:.3g} um",
+               count_flag(g, shape_flag::not_star_shaped), by_volume, 100.0 * max_hidden_void, by_depth, max_depth_m * 1e6);
+  if (!sigma.empty()) {
+    std::nth_element(sigma.begin(), sigma.begin() + static_cast<std::ptrdiff_t>(sigma.size() / 2), sigma.end());
+    spdlog::info("edge width (Gaussian sigma, median over grains) {:.3g} um", sigma[sigma.size() / 2] * 1e6);
+  }
 }
 
 template <class T>
@@ -119,9 +141,19 @@ int main(int argc, char** argv) {
       ->check(cli::finite_number());
   app.add_option("--grey-grain", o.grey_grain, "grey surface: grey level of grain (default: median of grain interiors)")
       ->check(cli::finite_number());
-  app.add_option("--max-multi-exit", o.max_multi_exit,
-                 "Share of centroid rays leaving a grain twice above which its fit is flagged unreliable")
+  app.add_option("--min-reentry-depth", o.min_reentry_depth,
+                 "Star-shape noise floor (voxels): a centroid ray's re-entry counts only where the surface it misses "
+                 "lies at least this far inside the radial surface")
+      ->check(number_in(closed(0, 100, "voxels")))->capture_default_str();
+  app.add_option("--max-hidden-void", o.max_hidden_void,
+                 "Flag the fit unreliable when the radial surface encloses more than this share of the grain's volume "
+                 "as void")
       ->check(number_in(closed(0, 1)))->capture_default_str();
+  app.add_option("--max-reentry-depth", o.max_reentry_depth,
+                 "Flag the fit unreliable when it misses a surface deeper than this (voxels) inside the radial surface")
+      ->check(number_in(closed(0, 100, "voxels")))->capture_default_str();
+  app.add_flag("--no-blur-correction", o.no_blur_correction,
+               "Keep the iso-surface as found: do not undo the inward shift that the edge blur gives curved surfaces");
   app.add_option("--surfaces", o.surfaces, "Also write the reconstructed SH surfaces: .vtp (ParaView) or .stl");
   app.add_option("--surface-subdivisions", o.surface_subdivisions,
                  "Icosphere subdivisions of each reconstructed surface (3: 1280 triangles per grain)")
@@ -177,7 +209,10 @@ int main(int argc, char** argv) {
     mo.source = use_grey ? SurfaceSource::grey : SurfaceSource::labels;
     mo.smooth_vox = o.smooth_vox.value_or(use_grey ? 0.0 : 0.7);
     mo.tol = o.tol;
-    mo.max_multi_exit_fraction = o.max_multi_exit;
+    mo.min_reentry_depth_vox = o.min_reentry_depth;
+    mo.max_hidden_void_fraction = o.max_hidden_void;
+    mo.max_reentry_depth_vox = o.max_reentry_depth;
+    mo.correct_blur = !o.no_blur_correction;
     std::vector<GrainShape> grains;
     try {
       grains = std::visit(
@@ -215,7 +250,10 @@ int main(int argc, char** argv) {
                         {"condition_number", fitter.condition_number()},
                         {"tol", o.tol},
                         {"surface", use_grey ? "grey" : "labels"},
-                        {"max_multi_exit", o.max_multi_exit}};
+                        {"min_reentry_depth_vox", o.min_reentry_depth},
+                        {"max_hidden_void", o.max_hidden_void},
+                        {"max_reentry_depth_vox", o.max_reentry_depth},
+                        {"blur_correction", !o.no_blur_correction}};
     if (use_grey) p["grey_levels"] = {mo.grey_void, mo.grey_grain};
     p["smooth_vox"] = mo.smooth_vox;
     content.parameters_json = p.dump();
@@ -231,6 +269,9 @@ int main(int argc, char** argv) {
                  count_flag(g, shape_flag::not_star_shaped), count_flag(g, shape_flag::unreliable_fit),
                  count_flag(g, shape_flag::touches_edge), count_flag(g, shape_flag::small),
                  count_flag(g, shape_flag::tolerance_not_met));
+    log_star_shape_summary(g, o.max_hidden_void, o.max_reentry_depth * std::min({labels.labels.voxel_size()[0],
+                                                                                  labels.labels.voxel_size()[1],
+                                                                                  labels.labels.voxel_size()[2]}));
     write_shapes_file(out.temp_path(), content, ctx.history());
     if (surfaces) write_surfaces(surfaces->temp_path(), o.surfaces.extension() == ".stl", g, content.degree, o.surface_subdivisions);
     io::commit_outputs({&out, surfaces ? &*surfaces : nullptr});
