@@ -20,7 +20,10 @@
 #include <iostream>
 #include <numbers>
 
+#include "graintwin/io/h5file.hpp"
+#include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
+#include "graintwin/segment/labels_file.hpp"
 #include "graintwin/shape/grain_measure.hpp"
 #include "graintwin/shape/sand_shape.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -107,6 +110,53 @@ std::vector<Result> run_scene(const Scene& scene, const std::vector<Method>& met
     }
   }
   return out;
+}
+
+/// sand_small's first scan against ctsynth's exact SH surfaces: medians over grains of the SH volume
+/// and I0 over the true ones, I2/I0 error and the invariant distance (n >= 2), full degree 15.
+struct PackedErrors {
+  double volume = 0.0, i0 = 0.0, i2 = 0.0, distance = 0.0, cpu_ms = 0.0;
+};
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+PackedErrors packed_errors(const Volume<std::uint32_t>& labels, const Volume<std::uint16_t>& scan, const io::H5File& truth,
+                           const ShFitter& fitter, const MeasureOptions& o) {
+  std::vector<hsize_t> dims;
+  const auto coeffs = truth.read<double>("/sh/coeffs", &dims);
+  const auto volume = truth.read<double>("/grains/volume");
+  const auto centroid = truth.read<double>("/grains/centroid");
+  const auto table = segment::grain_table(labels);
+  std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> boxes;
+  for (const auto& g : table) boxes.push_back({g.label, g.bbox});
+  const std::clock_t c0 = std::clock();
+  const auto shapes = measure_grains(labels, &scan, boxes, fitter, o);
+  PackedErrors e;
+  e.cpu_ms = 1e3 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC / static_cast<double>(shapes.size());
+  std::vector<double> vol, i0, i2, dist;
+  for (const GrainShape& g : shapes) {
+    // The true grain: the nearest true centroid (labels may be ct2labels', numbered otherwise).
+    std::size_t k = 0;
+    double best = INFINITY;
+    for (std::size_t t = 0; t < volume.size(); ++t) {
+      const double d = (g.centroid - Eigen::Vector3d(centroid[3 * t], centroid[3 * t + 1], centroid[3 * t + 2])).norm();
+      if (d < best) best = d, k = t;
+    }
+    const Eigen::VectorXd tc = Eigen::Map<const Eigen::VectorXd>(coeffs.data() + k * dims[1], static_cast<Eigen::Index>(dims[1]));
+    const Eigen::VectorXd ti = sh_invariants(tc, fitter.degree());
+    vol.push_back(fitter.moments(g.coeffs).volume / volume[k]);
+    i0.push_back(g.invariants[0] / ti[0]);
+    i2.push_back(g.invariants[2] / g.invariants[0] / (ti[2] / ti[0]) - 1.0);
+    dist.push_back((g.invariants.tail(fitter.degree() - 1) / g.invariants[0] - ti.tail(fitter.degree() - 1) / ti[0]).norm());
+  }
+  e.volume = median(vol);
+  e.i0 = median(i0);
+  e.i2 = median(i2);
+  e.distance = median(dist);
+  return e;
 }
 
 /// ct2labels and labels2shapes on a bundled scan with the pipeline's parameters; the shares of
@@ -201,6 +251,56 @@ int main(int argc, char** argv) {
                             s.grains, s.not_star, pct(s.not_star), s.unreliable, pct(s.unreliable), s.by_void,
                             1e3 * s.seconds / static_cast<double>(std::max<std::size_t>(1, s.grains)))});
     std::cout << series << ": " << s.not_star << " not star, " << s.unreliable << " unreliable of " << s.grains << std::endl;
+  }
+  // Packed grains: sand_small's first scan with the exact labels and with ct2labels' (from the
+  // flag run above), against the true SH surfaces.
+  {
+    const fs::path dir = fs::path(kSource) / "sample_volumes/sand_small";
+    const io::H5File truth = io::H5File::open(dir / "truth_000.h5");
+    const auto exact_labels = io::read_image_as<std::uint32_t>(truth, "/labels");
+    const auto scan = io::read_image_as<std::uint16_t>(io::H5File::open(dir / "scan_000.h5"), "/volume");
+    const segment::LabelsFile ct = segment::read_labels_file(work / "sand_small_labels.h5");
+    for (const auto& [labels_name, labels] :
+         std::vector<std::pair<std::string, const Volume<std::uint32_t>*>>{{"exact labels", &exact_labels}, {"ct2labels", &ct.labels}}) {
+      const auto table = segment::grain_table(*labels);
+      std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> boxes;
+      for (const auto& g : table) boxes.push_back({g.label, g.bbox});
+      MeasureOptions grey;
+      grey.source = SurfaceSource::grey;
+      grey.smooth_vox = 0.0;
+      const GreyLevels levels = grey_levels(*labels, scan);
+      grey.grey_void = levels.void_level;
+      grey.grey_grain = levels.grain_level;
+      const double psf = estimate_point_spread(*labels, scan, boxes, fitter, grey);
+      struct Variant {
+        std::string name;
+        MeasureOptions o;
+      };
+      std::vector<Variant> variants;
+      for (const bool neighbours : {false, true})
+        for (const bool correct : {false, true}) {
+          MeasureOptions o = grey;
+          o.point_spread_vox = neighbours ? psf : 0.0;
+          o.correct_blur = correct;
+          variants.push_back({fmt::format("grey, {}, {}", neighbours ? "neighbours taken off" : "neighbours' light kept",
+                                          correct ? "corrected" : "raw iso-surface"),
+                              o});
+        }
+      for (const bool correct : {false, true}) {
+        MeasureOptions o;
+        o.correct_blur = correct;
+        variants.push_back({fmt::format("labels, {}", correct ? "corrected" : "raw iso-surface"), o});
+      }
+      for (const Variant& v : variants) {
+        const PackedErrors e = packed_errors(*labels, scan, truth, fitter, v.o);
+        report.add({fmt::format("sand_small scan 0, {} ({} grains; point spread {:.2f} vox)", labels_name, boxes.size(), psf), v.name,
+                    0.0, 0.0,
+                    fmt::format("median SH volume / true {:.4f}, I0 / true {:.4f}, I2/I0 {:+.2f} %, invariant distance {:.4f}, "
+                                "{:.2f} ms CPU per grain",
+                                e.volume, e.i0, 100 * e.i2, e.distance, e.cpu_ms)});
+        std::cout << labels_name << " | " << v.name << ": volume " << e.volume << ", distance " << e.distance << std::endl;
+      }
+    }
   }
   if (quick) {
     std::cout << report.markdown("grey, corrected") << std::endl;

@@ -94,8 +94,11 @@ TEST(Labels2shapes, GreyLevelsStlAndTolerance) {
                                             (dir / "g.stl").string(), "--surface-subdivisions", "1", "--tol", "0.03"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("grey levels: void"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("point spread"), std::string::npos) << r.err;
   const shape::ShapesFile s = shape::read_shapes_file(dir / "s.h5");
   EXPECT_EQ(nlohmann::json::parse(s.parameters_json)["surface"], "grey");
+  // The phantom's blur of 0.8 voxel (test::scan_balls), read off the grains' edges.
+  EXPECT_NEAR(nlohmann::json::parse(s.parameters_json)["point_spread_vox"].get<double>(), 0.8, 0.25);
   for (const auto& g : s.grains) EXPECT_LT(g.sh_degree, 15);  // spheres need few degrees at 3 % tolerance
   // Binary STL: 80-byte header, count, 50 bytes per triangle (8 grains x 80 triangles).
   EXPECT_EQ(std::filesystem::file_size(dir / "g.stl"), 84u + 50u * 8u * 80u);
@@ -218,4 +221,5 @@ TEST(Labels2shapes, HollowGrainIsFlaggedWithItsMeasuresAndTheThresholdsAreOption
   EXPECT_FALSE(l.grains[0].flags & shape::shape_flag::unreliable_fit);
   EXPECT_EQ(nlohmann::json::parse(l.parameters_json)["max_hidden_void"], 0.1);
   fail(dir, {(dir / "labels.h5").string(), (dir / "x.h5").string(), "--max-hidden-void", "2"}, 2, "[0, 1]");
+  fail(dir, {(dir / "labels.h5").string(), (dir / "x.h5").string(), "--point-spread", "-1"}, 2, "[0, 10] voxels");
 }

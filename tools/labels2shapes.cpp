@@ -39,6 +39,7 @@ struct Options {
   double max_hidden_void = 0.01;
   double max_reentry_depth = 1.0;
   bool no_blur_correction = false;
+  std::optional<double> point_spread;
   fs::path surfaces;
   int surface_subdivisions = 3;
 };
@@ -96,13 +97,17 @@ void log_star_shape_summary(const std::vector<GrainShape>& g, double max_hidden_
   }
 }
 
-template <class T>
-std::vector<GrainShape> measure_all(const segment::LabelsFile& labels, const Volume<T>* grey, const ShFitter& fitter,
-                                    const MeasureOptions& options, cli::RunContext& ctx) {
+std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> grain_boxes(const segment::LabelsFile& labels) {
   std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> grains;
   grains.reserve(labels.grains.size());
   for (const auto& r : labels.grains) grains.push_back({r.label, r.bbox});
-  return measure_grains(labels.labels, grey, grains, fitter, options, ctx.progress_callback("grains"));
+  return grains;
+}
+
+template <class T>
+std::vector<GrainShape> measure_all(const segment::LabelsFile& labels, const Volume<T>* grey, const ShFitter& fitter,
+                                    const MeasureOptions& options, cli::RunContext& ctx) {
+  return measure_grains(labels.labels, grey, grain_boxes(labels), fitter, options, ctx.progress_callback("grains"));
 }
 
 }  // namespace
@@ -152,6 +157,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-reentry-depth", o.max_reentry_depth,
                  "Flag the fit unreliable when it misses a surface deeper than this (voxels) inside the radial surface")
       ->check(number_in(closed(0, 100, "voxels")))->capture_default_str();
+  app.add_option("--point-spread", o.point_spread,
+                 "grey surface: the scanner's point spread (Gaussian sigma, voxels) whose share from neighbouring grains is "
+                 "taken off each grain's grey levels (default: estimated from the grains' edges; 0 = keep the neighbours' light)")
+      ->check(number_in(closed(0, 10, "voxels")));
   app.add_flag("--no-blur-correction", o.no_blur_correction,
                "Keep the iso-surface as found: do not undo the inward shift that the edge blur gives curved surfaces");
   app.add_option("--surfaces", o.surfaces, "Also write the reconstructed SH surfaces: .vtp (ParaView) or .stl");
@@ -230,6 +239,9 @@ int main(int argc, char** argv) {
               mo.grey_grain = o.grey_grain.value_or(levels.grain_level);
               spdlog::info("grey levels: void {:.6g}, grain {:.6g}{}", mo.grey_void, mo.grey_grain,
                            o.grey_void || o.grey_grain ? " (given)" : " (medians of interior voxels)");
+              mo.point_spread_vox = o.point_spread ? *o.point_spread : estimate_point_spread(labels.labels, g, grain_boxes(labels), fitter, mo);
+              spdlog::info("point spread {:.3g} voxel{}", mo.point_spread_vox,
+                           o.point_spread ? " (given)" : " (edge width of up to 64 grains, less the voxel's own)");
               return measure_all<T>(labels, &g, fitter, mo, ctx);
             }
           },
@@ -255,6 +267,7 @@ int main(int argc, char** argv) {
                         {"max_reentry_depth_vox", o.max_reentry_depth},
                         {"blur_correction", !o.no_blur_correction}};
     if (use_grey) p["grey_levels"] = {mo.grey_void, mo.grey_grain};
+    if (use_grey) p["point_spread_vox"] = mo.point_spread_vox;
     p["smooth_vox"] = mo.smooth_vox;
     content.parameters_json = p.dump();
     content.grains = std::move(grains);

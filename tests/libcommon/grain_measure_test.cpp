@@ -364,3 +364,47 @@ TEST(StarShape, BlurredNoisyEllipsoidKeepsItsInvariantRatio) {
     }
   }
 }
+
+TEST(StarShape, NeighboursLightDoesNotMoveTheSurface) {
+  // Two spheres of radius 8 voxels, 1.5 voxels apart, blurred by a point spread of 1 voxel without
+  // noise: between them the grey never falls to the void level, so each grain's 0.5 level leans
+  // towards the other. Taking the other's blurred labels off the grey levels removes that; the
+  // point spread itself is read off the grains' edges.
+  const double R = 8.0, blur = 1.0;
+  const RadialTable ball = ellipsoid_table(R * kVoxel, R * kVoxel, R * kVoxel, 32);
+  std::vector<synth::PlacedGrain> grains(2);
+  for (int k = 0; k < 2; ++k) {
+    grains[k].shape = &ball;
+    grains[k].position = Eigen::Vector3d(12.3 + k * (2 * R + 1.5), 12.6, 12.1) * kVoxel;
+    grains[k].label = static_cast<std::uint32_t>(k + 1);
+  }
+  const std::size_t nx = 44, n = 25;
+  const auto images = synth::render_grains(grains, {n, n, nx}, {kVoxel, kVoxel, kVoxel}, {0, 0, 0}, synth::RenderParams{});
+  synth::ScannerParams scanner;
+  scanner.blur_sigma_vox = blur;
+  scanner.noise = 0.0;
+  const Volume<std::uint16_t> scan = synth::simulate_scan(images.fraction, nullptr, scanner);
+  const auto table_of = segment::grain_table(images.labels);
+  ASSERT_EQ(table_of.size(), 2u);
+  std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> boxes{{1u, table_of[0].bbox}, {2u, table_of[1].bbox}};
+  MeasureOptions o;
+  o.source = SurfaceSource::grey;
+  o.smooth_vox = 0.0;
+  o.grey_void = scanner.grey_void * scanner.uint16_scale + scanner.uint16_offset;
+  o.grey_grain = scanner.grey_grain * scanner.uint16_scale + scanner.uint16_offset;
+  const double psf = estimate_point_spread(images.labels, scan, boxes, fitter15(), o);
+  EXPECT_NEAR(psf, blur, 0.1);
+  // The radius towards the neighbour (+x) against the one away from it (-x), from the SH surface.
+  const auto towards_minus_away = [&](const GrainShape& g, double sign) {
+    return (sh_radius(g.coeffs, 15, Eigen::Vector3d(sign, 0, 0)) - sh_radius(g.coeffs, 15, Eigen::Vector3d(-sign, 0, 0))) / kVoxel;
+  };
+  const auto with_light = measure_grains(images.labels, &scan, boxes, fitter15(), o);
+  o.point_spread_vox = psf;
+  const auto without_light = measure_grains(images.labels, &scan, boxes, fitter15(), o);
+  for (int k = 0; k < 2; ++k) {
+    const double sign = k == 0 ? 1.0 : -1.0;
+    EXPECT_GT(towards_minus_away(with_light[k], sign), 0.3) << k;
+    EXPECT_NEAR(towards_minus_away(without_light[k], sign), 0.0, 0.08) << k;
+    EXPECT_NEAR(without_light[k].coeffs[0] / std::sqrt(4 * kPi) / kVoxel, R, 0.05) << k;
+  }
+}
