@@ -54,7 +54,7 @@ struct MeasureOptions {
   /// ... or misses a surface deeper than this (voxels; GrainShape::reentry_depth).
   double max_reentry_depth_vox = 1.0;
   /// Undo the inward shift of the iso-surface on curved surfaces (sigma^2 times the mean curvature,
-  /// sigma the edge width measured along the rays), see correct_edge_blur().
+  /// sigma the edge width measured along the rays, GrainShape::edge_sigma), see correct_edge_blur().
   bool correct_blur = true;
 };
 
@@ -85,8 +85,9 @@ struct GrainShape {
   /// Largest distance (m) between a missed surface and the radial surface over the rays: (last exit -
   /// first exit) times |cos| of the angle between the ray and the surface normal at the last exit.
   double reentry_depth = 0.0;
-  /// Edge width (m): Gaussian sigma of the grey (or smoothed-label) profile across the surface,
-  /// median over the rays; 0 when unmeasured. The blur correction uses it.
+  /// Edge width (m): Gaussian sigma of the grey (or smoothed-label) profile across the surface as
+  /// read through the trilinear field (which adds 1/6 voxel^2), median over the rays; 0 when
+  /// unmeasured. The blur correction uses it.
   double edge_sigma = 0.0;
   std::uint8_t flags = 0;
 };
