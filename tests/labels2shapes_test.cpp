@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
@@ -93,8 +94,11 @@ TEST(Labels2shapes, GreyLevelsStlAndTolerance) {
                                             (dir / "g.stl").string(), "--surface-subdivisions", "1", "--tol", "0.03"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("grey levels: void"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("point spread"), std::string::npos) << r.err;
   const shape::ShapesFile s = shape::read_shapes_file(dir / "s.h5");
   EXPECT_EQ(nlohmann::json::parse(s.parameters_json)["surface"], "grey");
+  // The phantom's blur of 0.8 voxel (test::scan_balls), read off the grains' edges.
+  EXPECT_NEAR(nlohmann::json::parse(s.parameters_json)["point_spread_vox"].get<double>(), 0.8, 0.25);
   for (const auto& g : s.grains) EXPECT_LT(g.sh_degree, 15);  // spheres need few degrees at 3 % tolerance
   // Binary STL: 80-byte header, count, 50 bytes per triangle (8 grains x 80 triangles).
   EXPECT_EQ(std::filesystem::file_size(dir / "g.stl"), 84u + 50u * 8u * 80u);
@@ -175,4 +179,53 @@ TEST(Labels2shapes, OptionsOutsideTheirRangeAndFittersBeyondTheMemoryAreRefused)
             std::string::npos)
       << r.err;
   EXPECT_EQ(test::list_dir(dir.path()), before);
+}
+
+// The star-shape test through the tool: a hollow grain (a closed cavity holding 5 % of its volume)
+// beside a solid one; the measures are stored, the log counts the reasons, and the thresholds are
+// options.
+TEST(Labels2shapes, HollowGrainIsFlaggedWithItsMeasuresAndTheThresholdsAreOptions) {
+  test::TempDir dir;
+  segment::LabelsFile c;
+  c.labels = Volume<std::uint32_t>({40, 40, 72}, {kVoxel, kVoxel, kVoxel});
+  const Eigen::Vector3d hollow(19.7, 20.2, 19.9), cavity = hollow + Eigen::Vector3d(7.5, 0, 0), solid(52.3, 19.8, 20.1);
+  for (std::size_t z = 0; z < 40; ++z)
+    for (std::size_t y = 0; y < 40; ++y)
+      for (std::size_t x = 0; x < 72; ++x) {
+        const Eigen::Vector3d p{double(x), double(y), double(z)};
+        if ((p - hollow).norm() <= 15 && (p - cavity).norm() > 5.5) c.labels(z, y, x) = 1;
+        if ((p - solid).norm() <= 12) c.labels(z, y, x) = 2;
+      }
+  c.grains = segment::grain_table(c.labels);
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / "labels.h5", c, {"phantom labels"});
+  const auto r = run_tool("labels2shapes", {(dir / "labels.h5").string(), (dir / "s.h5").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("star shape: 1 grains with re-entrant rays above the noise floor; 1 enclose more than 1 % of their "
+                       "volume as void, 1 miss a surface deeper than 20 um"),
+            std::string::npos)
+      << r.err;
+  const shape::ShapesFile s = shape::read_shapes_file(dir / "s.h5");
+  ASSERT_EQ(s.grains.size(), 2u);
+  const double expected = std::pow(5.5, 3) / (std::pow(15.0, 3) - std::pow(5.5, 3));
+  EXPECT_NEAR(s.grains[0].hidden_void_fraction / expected, 1.0, 0.1);
+  EXPECT_GT(s.grains[0].reentry_depth, 10 * kVoxel);
+  EXPECT_TRUE(s.grains[0].flags & shape::shape_flag::unreliable_fit);
+  EXPECT_EQ(s.grains[1].hidden_void_fraction, 0.0);
+  EXPECT_EQ(s.grains[1].reentry_depth, 0.0);
+  EXPECT_EQ(s.grains[1].flags & (shape::shape_flag::not_star_shaped | shape::shape_flag::unreliable_fit), 0);
+  // The smoothed labels' edge width: sigma 0.7 and the voxel box, read through the interpolation.
+  EXPECT_NEAR(s.grains[1].edge_sigma / kVoxel, 0.8, 0.15);
+  const io::H5File f = io::H5File::open(dir / "s.h5");
+  EXPECT_EQ(f.attr_string(schema::shapes::reentry_depth, "units"), "m");
+  // Looser thresholds keep the fit: the cavity is still reported, not flagged unreliable.
+  const auto loose = run_tool("labels2shapes", {(dir / "labels.h5").string(), (dir / "loose.h5").string(), "--max-hidden-void",
+                                                "0.1", "--max-reentry-depth", "20"});
+  ASSERT_EQ(loose.exit_code, 0) << loose.err;
+  const shape::ShapesFile l = shape::read_shapes_file(dir / "loose.h5");
+  EXPECT_TRUE(l.grains[0].flags & shape::shape_flag::not_star_shaped);
+  EXPECT_FALSE(l.grains[0].flags & shape::shape_flag::unreliable_fit);
+  EXPECT_EQ(nlohmann::json::parse(l.parameters_json)["max_hidden_void"], 0.1);
+  fail(dir, {(dir / "labels.h5").string(), (dir / "x.h5").string(), "--max-hidden-void", "2"}, 2, "[0, 1]");
+  fail(dir, {(dir / "labels.h5").string(), (dir / "x.h5").string(), "--point-spread", "-1"}, 2, "[0, 10] voxels");
 }

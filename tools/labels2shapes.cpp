@@ -1,5 +1,5 @@
 // labels2shapes: measure every grain of a labels file and fit its spherical-harmonic surface
-// (SPEC.md sections 2 and 5).
+// (docs/methods.md: grain properties, spherical harmonics).
 //   labels2shapes labels.h5 shapes.h5
 //   labels2shapes labels.h5 scan.h5 shapes.h5 --surfaces grains.vtp
 #include <fmt/format.h>
@@ -13,6 +13,7 @@
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/resources.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/stl.hpp"
@@ -36,7 +37,11 @@ struct Options {
   std::string surface = "auto";
   std::optional<double> smooth_vox;
   std::optional<double> grey_void, grey_grain;
-  double max_multi_exit = 0.02;
+  double min_reentry_depth = 0.5;
+  double max_hidden_void = 0.01;
+  double max_reentry_depth = 1.0;
+  bool no_blur_correction = false;
+  std::optional<double> point_spread;
   fs::path surfaces;
   int surface_subdivisions = 3;
 };
@@ -92,13 +97,33 @@ void check_grey_levels(const MeasureOptions& mo, const Volume<T>& grey, const fs
                                  mo.grey_grain, mo.grey_void, volume_path.string()));
 }
 
-template <class T>
-std::vector<GrainShape> measure_all(const segment::LabelsFile& labels, const Volume<T>* grey, const ShFitter& fitter,
-                                    const MeasureOptions& options, cli::RunContext& ctx) {
+/// The star-shape test in numbers: how many grains re-enter beyond the noise floor, and why the
+/// unreliable ones are unreliable; the median edge width behind the blur correction.
+void log_star_shape_summary(const std::vector<GrainShape>& g, double max_hidden_void, double max_depth_m) {
+  std::size_t by_volume = 0, by_depth = 0;
+  std::vector<double> sigma;
+  for (const GrainShape& s : g) {
+    by_volume += s.hidden_void_fraction > max_hidden_void;
+    by_depth += s.reentry_depth > max_depth_m;
+    if (s.edge_sigma > 0.0) sigma.push_back(s.edge_sigma);
+  }
+  spdlog::info("star shape: {} grains with re-entrant rays above the noise floor; {} enclose more than {:.3g} % of "
+               "their volume as void, {} miss a surface deeper than {:.3g} um",
+               count_flag(g, shape_flag::not_star_shaped), by_volume, 100.0 * max_hidden_void, by_depth, max_depth_m * 1e6);
+  if (!sigma.empty()) spdlog::info("edge width (Gaussian sigma, median over grains) {:.3g} um", median(std::move(sigma)) * 1e6);
+}
+
+std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> grain_boxes(const segment::LabelsFile& labels) {
   std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> grains;
   grains.reserve(labels.grains.size());
   for (const auto& r : labels.grains) grains.push_back({r.label, r.bbox});
-  return measure_grains(labels.labels, grey, grains, fitter, options, ctx.progress_callback("grains"));
+  return grains;
+}
+
+template <class T>
+std::vector<GrainShape> measure_all(const segment::LabelsFile& labels, const Volume<T>* grey, const ShFitter& fitter,
+                                    const MeasureOptions& options, cli::RunContext& ctx) {
+  return measure_grains(labels.labels, grey, grain_boxes(labels), fitter, options, ctx.progress_callback("grains"));
 }
 
 }  // namespace
@@ -137,9 +162,23 @@ int main(int argc, char** argv) {
       ->check(cli::finite_number());
   app.add_option("--grey-grain", o.grey_grain, "grey surface: grey level of grain (default: median of grain interiors)")
       ->check(cli::finite_number());
-  app.add_option("--max-multi-exit", o.max_multi_exit,
-                 "Share of centroid rays leaving a grain twice above which its fit is flagged unreliable")
+  app.add_option("--min-reentry-depth", o.min_reentry_depth,
+                 "Star-shape noise floor (voxels): a centroid ray's re-entry counts only where the surface it misses "
+                 "lies at least this far inside the radial surface")
+      ->check(number_in(closed(0, 100, "voxels")))->capture_default_str();
+  app.add_option("--max-hidden-void", o.max_hidden_void,
+                 "Flag the fit unreliable when the radial surface encloses more than this share of the grain's volume "
+                 "as void")
       ->check(number_in(closed(0, 1)))->capture_default_str();
+  app.add_option("--max-reentry-depth", o.max_reentry_depth,
+                 "Flag the fit unreliable when it misses a surface deeper than this (voxels) inside the radial surface")
+      ->check(number_in(closed(0, 100, "voxels")))->capture_default_str();
+  app.add_option("--point-spread", o.point_spread,
+                 "grey surface: the scanner's point spread (Gaussian sigma, voxels) whose share from neighbouring grains is "
+                 "taken off each grain's grey levels (default: estimated from the grains' edges; 0 = keep the neighbours' light)")
+      ->check(number_in(closed(0, 10, "voxels")));
+  app.add_flag("--no-blur-correction", o.no_blur_correction,
+               "Keep the iso-surface as found: do not undo the inward shift that the edge blur gives curved surfaces");
   app.add_option("--surfaces", o.surfaces, "Also write the reconstructed SH surfaces: .vtp (ParaView) or .stl");
   app.add_option("--surface-subdivisions", o.surface_subdivisions,
                  "Icosphere subdivisions of each reconstructed surface (3: 1280 triangles per grain)")
@@ -195,7 +234,10 @@ int main(int argc, char** argv) {
     mo.source = use_grey ? SurfaceSource::grey : SurfaceSource::labels;
     mo.smooth_vox = o.smooth_vox.value_or(use_grey ? 0.0 : 0.7);
     mo.tol = o.tol;
-    mo.max_multi_exit_fraction = o.max_multi_exit;
+    mo.min_reentry_depth_vox = o.min_reentry_depth;
+    mo.max_hidden_void_fraction = o.max_hidden_void;
+    mo.max_reentry_depth_vox = o.max_reentry_depth;
+    mo.correct_blur = !o.no_blur_correction;
     std::vector<GrainShape> grains;
     try {
       grains = std::visit(
@@ -214,6 +256,9 @@ int main(int argc, char** argv) {
               spdlog::info("grey levels: void {:.6g}, grain {:.6g}{}", mo.grey_void, mo.grey_grain,
                            o.grey_void || o.grey_grain ? " (given)" : " (medians of interior voxels)");
               check_grey_levels(mo, g, volume_path);
+              mo.point_spread_vox = o.point_spread ? *o.point_spread : estimate_point_spread(labels.labels, g, grain_boxes(labels), fitter, mo);
+              spdlog::info("point spread {:.3g} voxel{}", mo.point_spread_vox,
+                           o.point_spread ? " (given)" : " (edge width of up to 64 grains, less the voxel's own)");
               return measure_all<T>(labels, &g, fitter, mo, ctx);
             }
           },
@@ -234,8 +279,12 @@ int main(int argc, char** argv) {
                         {"condition_number", fitter.condition_number()},
                         {"tol", o.tol},
                         {"surface", use_grey ? "grey" : "labels"},
-                        {"max_multi_exit", o.max_multi_exit}};
+                        {"min_reentry_depth_vox", o.min_reentry_depth},
+                        {"max_hidden_void", o.max_hidden_void},
+                        {"max_reentry_depth_vox", o.max_reentry_depth},
+                        {"blur_correction", !o.no_blur_correction}};
     if (use_grey) p["grey_levels"] = {mo.grey_void, mo.grey_grain};
+    if (use_grey) p["point_spread_vox"] = mo.point_spread_vox;
     p["smooth_vox"] = mo.smooth_vox;
     content.parameters_json = p.dump();
     content.grains = std::move(grains);
@@ -250,6 +299,9 @@ int main(int argc, char** argv) {
                  count_flag(g, shape_flag::not_star_shaped), count_flag(g, shape_flag::unreliable_fit),
                  count_flag(g, shape_flag::touches_edge), count_flag(g, shape_flag::small),
                  count_flag(g, shape_flag::tolerance_not_met));
+    log_star_shape_summary(g, o.max_hidden_void, o.max_reentry_depth * std::min({labels.labels.voxel_size()[0],
+                                                                                  labels.labels.voxel_size()[1],
+                                                                                  labels.labels.voxel_size()[2]}));
     write_shapes_file(out.temp_path(), content, ctx.history());
     if (surfaces) write_surfaces(surfaces->temp_path(), o.surfaces.extension() == ".stl", g, content.degree, o.surface_subdivisions);
     io::commit_outputs({&out, surfaces ? &*surfaces : nullptr});

@@ -71,7 +71,13 @@ void write_shapes_file(const std::filesystem::path& path, const ShapesFile& c, c
   sh_scalar("rms_error", [](const GrainShape& s) { return s.rms_error; });
   sh_scalar("max_error", [](const GrainShape& s) { return s.max_error; });
   sh_scalar("volume_error", [](const GrainShape& s) { return s.volume_error; });
-  sh_scalar("multi_exit_fraction", [](const GrainShape& s) { return s.multi_exit_fraction; });
+  f.write(schema::shapes::multi_exit_fraction, column<double>(g, 1, [](const GrainShape& s, std::size_t) { return s.multi_exit_fraction; }),
+          units("1"));
+  f.write(schema::shapes::hidden_void_fraction,
+          column<double>(g, 1, [](const GrainShape& s, std::size_t) { return s.hidden_void_fraction; }), units("1"));
+  f.write(schema::shapes::reentry_depth, column<double>(g, 1, [](const GrainShape& s, std::size_t) { return s.reentry_depth; }),
+          units("m"));
+  f.write(schema::shapes::edge_sigma, column<double>(g, 1, [](const GrainShape& s, std::size_t) { return s.edge_sigma; }), units("m"));
   f.write("/sh/flags", column<std::uint8_t>(g, 1, [](const GrainShape& s, std::size_t) { return s.flags; }));
   f.set_attr("/sh/flags", "bits",
              std::string("1 not star-shaped, 2 centroid outside, 4 unreliable fit, 8 touches edge, 16 small, "
@@ -106,7 +112,11 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
              semi = need("/grains/semi_axes", 3), axes = need("/grains/axes", 9), ar = need("/grains/aspect_ratio", 1),
              el = need("/grains/elongation", 1), fl = need("/grains/flatness", 1), coeffs = need("/sh/coeffs", ncoef),
              inv = need("/sh/invariants", ninv), rms = need("/sh/rms_error", 1), mx = need("/sh/max_error", 1),
-             ve = need("/sh/volume_error", 1), mef = need("/sh/multi_exit_fraction", 1);
+             ve = need("/sh/volume_error", 1), mef = need(schema::shapes::multi_exit_fraction, 1);
+  // The star-shape depth and edge measures came later: files written before them read as zeros.
+  const auto optional = [&](const char* name) { return f.exists(name) ? need(name, 1) : std::vector<double>(n, 0.0); };
+  const auto hidden = optional(schema::shapes::hidden_void_fraction), depth = optional(schema::shapes::reentry_depth),
+             sigma = optional(schema::shapes::edge_sigma);
   const auto degree = f.read<std::int32_t>("/sh/degree");
   const auto flags = f.read<std::uint8_t>("/sh/flags");
   if (voxels.size() != n || degree.size() != n || flags.size() != n)
@@ -140,6 +150,9 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
     s.max_error = mx[i];
     s.volume_error = ve[i];
     s.multi_exit_fraction = mef[i];
+    s.hidden_void_fraction = hidden[i];
+    s.reentry_depth = depth[i];
+    s.edge_sigma = sigma[i];
     s.flags = flags[i];
   }
   c.psd.diameter = f.read<double>("/psd/diameter");

@@ -240,3 +240,11 @@ inline constexpr const char* series_inertial_number = "/series/inertial_number";
 /// Membrane ball centres of a frame (B x 3, m), in frames taken while the membrane is on.
 inline constexpr const char* frame_membrane_position = "membrane/position";
 }  // namespace graintwin::schema::fdem_results
+
+// kind=shapes (labels2shapes), layout in docs/formats.md: the star-shape and edge measures.
+namespace graintwin::schema::shapes {
+inline constexpr const char* multi_exit_fraction = "/sh/multi_exit_fraction";    ///< (N) share of re-entrant rays
+inline constexpr const char* hidden_void_fraction = "/sh/hidden_void_fraction";  ///< (N) void inside the radial surface / V
+inline constexpr const char* reentry_depth = "/sh/reentry_depth";                ///< (N) m, deepest missed surface
+inline constexpr const char* edge_sigma = "/sh/edge_sigma";                      ///< (N) m, edge width (Gaussian sigma)
+}  // namespace graintwin::schema::shapes

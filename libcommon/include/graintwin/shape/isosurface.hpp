@@ -3,7 +3,7 @@
 // centres is split into 6 tetrahedra around its main diagonal (Kuhn split, the same in every cube,
 // so the surface has no cracks and needs no case tables or ambiguity rules), and each tetrahedron
 // contributes 0, 1 or 2 triangles with vertices interpolated linearly on its edges. Used for the
-// surface area of grains (SPEC section 2: from an isosurface, not from voxel faces).
+// surface area of grains (docs/methods.md: from an isosurface, not from voxel faces).
 #include <array>
 #include <functional>
 

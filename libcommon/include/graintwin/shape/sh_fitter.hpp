@@ -2,7 +2,7 @@
 // Fitting many grains' radial functions r(direction) with spherical harmonics at once: every grain
 // is sampled along the same directions, so the least-squares problem has the same design matrix
 // for all of them; its pseudo-inverse is computed once and each fit is one matrix-vector product
-// (issue 6: the paper solved a least-squares system per grain).
+// (the paper solved a least-squares system per grain).
 #include <string>
 #include <vector>
 
