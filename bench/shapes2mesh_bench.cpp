@@ -2,7 +2,8 @@
 // element size (elements per diameter) and order, for the two 10-node curvings; the automatic size
 // on a sand-like and a rough grain against the 2 % volume target of 4-node meshes; chart of volume
 // error against elements per grain (docs/img/shapes2mesh_accuracy.png); and whole models of
-// sand_small's reference scan with 1 and 2 gmsh worker processes when runs/ has its shapes.
+// sand_small's reference scan with 1 and 2 gmsh worker processes and of the real soil crop, with
+// the time per grain and the share of grains on each meshing path, when runs/ has their shapes.
 //   shapes2mesh_bench [--quick]
 #include <sys/resource.h>
 
@@ -15,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/fdem/model_file.hpp"
+#include "graintwin/io/h5file.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -91,8 +93,9 @@ int main(int argc, char** argv) {
                        "exact surface (/ radius), min gamma and min Jacobian ratio; boundary nodes snapped onto the exact SH "
                        "surface except for 'tet10 gmsh'. Then the automatic size (250 surface nodes; 4-node: the 2 % volume "
                        "target from the measured total mean curvature) on it and on a rougher grain (degree 12). Then whole "
-                       "models of sand_small scan 0 with -j 1 and -j 2 (threads = gmsh worker processes), wall time of the "
-                       "tool. " + bench::machine_summary());
+                       "models (shapes and labels of the pipeline's runs/) of sand_small scan 0 with -j 1 and -j 2 (threads = "
+                       "gmsh worker processes) and of the real soil crop with -j 2: wall time of the tool (one run), CPU "
+                       "time, and per meshing path the share of grains and their mean time in mesh_grain. " + bench::machine_summary());
   std::ofstream csv(kSource + "/docs/img/shapes2mesh_accuracy.csv");
   csv << "series,label,x,y\n";
   struct Variant {
@@ -149,21 +152,47 @@ int main(int argc, char** argv) {
                  "shapes2mesh: volume error against cost", "elements per grain",
                  "|volume error| (labels: elements per diameter or grain)");
 
-  // Whole models: sand_small's reference scan, if the pipeline has produced its shapes.
-  const std::filesystem::path shapes = kSource + "/runs/sand_small/scan_000/shapes.h5";
-  if (!quick && std::filesystem::exists(shapes)) {
-    const std::string tool = (bench::bin_dir() / "shapes2mesh").string();
-    const std::size_t grains = shape::read_shapes_file(shapes).grains.size();
+  // Whole models of the pipeline's reference scans, where runs/ has their shapes and labels:
+  // sand_small (ctsynth grains) with 1 and 2 gmsh worker processes (the same model either way),
+  // and the real soil crop with 2. Per grain: wall time in mesh_grain (/mesh/seconds) and the
+  // share of grains on each meshing path.
+  const std::string tool = (bench::bin_dir() / "shapes2mesh").string();
+  struct Series {
+    const char* name;
+    std::vector<int> processes;
+  };
+  for (const Series& series : {Series{"sand_small", {1, 2}}, Series{"soil_crop", {2}}}) {
+    const std::filesystem::path scan = kSource + "/runs/" + series.name + "/scan_000";
+    if (quick || !std::filesystem::exists(scan / "shapes.h5") || !std::filesystem::exists(scan / "labels.h5")) continue;
+    const std::size_t grains = shape::read_shapes_file(scan / "shapes.h5").grains.size();
     std::vector<fdem::Model> models;
-    for (int processes : {1, 2}) {
+    for (int processes : series.processes) {
       const std::string model = fmt::format("/tmp/shapes2mesh_bench_model_{}.h5", processes);
       const double load = load_average(), cpu_before = children_cpu_seconds();
-      bench::Row row = bench::run_child(fmt::format("sand_small scan 0 ({} grains), 10-node, snap", grains),
+      bench::Row row = bench::run_child(fmt::format("{} scan 0 ({} grains), 10-node, snap", series.name, grains),
                                         fmt::format("shapes2mesh -j {} ({} gmsh process{})", processes, processes, processes > 1 ? "es" : ""),
-                                        {tool, shapes.string(), model, "--force", "-q", "-j", std::to_string(processes)}, 2);
+                                        {tool, (scan / "shapes.h5").string(), (scan / "labels.h5").string(), model, "--force", "-q", "-j",
+                                         std::to_string(processes)});
+      const double cpu = children_cpu_seconds() - cpu_before;
       models.push_back(fdem::read_model_file(model));
-      row.note = fmt::format("best of 2; CPU {:.1f} s per run (tool and workers); load average {:.2f} before the runs{}",
-                             (children_cpu_seconds() - cpu_before) / 2, load, load > 1.0 ? " (shared machine)" : "");
+      const io::H5File f = io::H5File::open(model);
+      const auto path = f.read<std::uint8_t>("/mesh/path");
+      const auto seconds = f.read<double>("/mesh/seconds");
+      const auto overran = f.read<std::uint8_t>("/mesh/overran_budget");
+      std::size_t on[3] = {0, 0, 0}, overruns = 0;
+      double path_seconds[3] = {0, 0, 0}, slowest = 0;
+      for (std::size_t g = 0; g < path.size(); ++g) {
+        ++on[path[g]], path_seconds[path[g]] += seconds[g], overruns += overran[g];
+        slowest = std::max(slowest, seconds[g]);
+      }
+      const auto share = [&](int k) {
+        return on[k] ? fmt::format("{:.1f} % ({:.3f} s per grain)", 100.0 * double(on[k]) / double(path.size()), path_seconds[k] / double(on[k]))
+                     : std::string("0 %");
+      };
+      row.note = fmt::format("CPU {:.1f} s (tool and workers), {:.3f} CPU s per grain; paths: gmsh surface {}, kept surface {}, "
+                             "ellipsoid {}; slowest grain {:.2f} s; {} over the time budget; load average {:.2f} before the run{}",
+                             cpu, cpu / double(grains), share(0), share(1), share(2), slowest, overruns, load,
+                             load > 1.0 ? " (shared machine)" : "");
       if (models.size() == 2)
         row.note += models[1].nodes == models[0].nodes && models[1].element_nodes == models[0].element_nodes
                         ? "; model identical to -j 1"

@@ -1,12 +1,17 @@
 #include "graintwin/mesh/grain_mesher.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <functional>
+
+#include <fmt/format.h>
 
 #include <Eigen/Geometry>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
+#include "graintwin/mesh/surface_remesh.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::mesh {
@@ -21,6 +26,16 @@ constexpr double kFacetVolumeLoss = 0.11;
 /// about 250 nodes (gmsh's triangles come out smaller than equilateral ones of edge h, for which
 /// k would be 2 / sqrt(3) = 1.15 at 4 nodes).
 constexpr double kSurfaceNodesPerArea[2] = {1.64, 7.7};
+
+/// Edge of the remeshed boundary for element size h: gmsh's surface meshes at h carry 1.64 A / h^2
+/// corner nodes, equilateral triangles of edge a carry 1.155 A / a^2, so a = sqrt(1.155 / 1.64) h
+/// gives the kept boundary the surface nodes of a gmsh_surface mesh of the same h.
+constexpr double kRemeshEdgePerSize = 0.84;
+
+/// The kept-surface path's time cap is the budget, but never less than this (s).
+constexpr double kKeptPathMinSeconds = 1.0;
+/// Spacing of the voxel surface's samples for element size h (voxel_surface's stride).
+constexpr double kSourceSpacingPerSize = 0.4;
 
 bool worse(const MeshQuality& a, const MeshQuality& b) {
   return a.inverted + a.below_floor > b.inverted + b.below_floor;
@@ -48,6 +63,15 @@ const char* surface_origin_name(SurfaceOrigin origin) {
   return "?";
 }
 
+const char* mesh_path_name(MeshPath path) {
+  switch (path) {
+    case MeshPath::gmsh_surface: return "gmsh surface";
+    case MeshPath::kept_surface: return "kept surface";
+    case MeshPath::ellipsoid: return "ellipsoid";
+  }
+  return "?";
+}
+
 ElementSize choose_element_size(double area, double diameter, double curvature_per_volume, int order, const SizeTargets& t) {
   if (!(diameter > 0.0)) throw DataError("choose_element_size: a grain without a positive diameter");
   if (t.elements_per_diameter > 0.0) return {diameter / t.elements_per_diameter, SizeRule::given};
@@ -66,59 +90,33 @@ ShSurfaceBasis::ShSurfaceBasis(int subdivisions, int degree)
 
 GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis& sh, const Volume<std::uint32_t>* labels,
                            const std::array<std::size_t, 6>& bbox, const GrainMeshOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point started = Clock::now();
+  const auto deadline_from = [&](Clock::time_point t) {
+    return options.budget_seconds > 0.0 ? t + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.budget_seconds))
+                                        : Clock::time_point::max();
+  };
   GrainMeshResult r;
+  const auto add_note = [&](const std::string& what) { r.note += std::string(r.note.empty() ? "" : "; ") + what; };
   const bool tiny = grain.equivalent_diameter < options.rigid_diameter;
   const int order = tiny ? 1 : options.order;
   r.kind = tiny ? fdem::GrainKind::rigid : order == 2 ? fdem::GrainKind::tet10 : fdem::GrainKind::tet4;
-
-  // The surface: SH fit, else smoothed voxels, else (no usable surface) the inertia ellipsoid.
-  TriangleSurface surface;
-  bool have_surface = false;
-  const auto accept = [&](TriangleSurface candidate, SurfaceOrigin origin, const char* what) {
-    const SurfaceCheck c = check_surface(candidate);
-    if (c.ok()) {
-      surface = std::move(candidate), r.origin = origin, have_surface = true;
-      return;
-    }
-    r.note += std::string(r.note.empty() ? "" : "; ") + what + " surface has " + c.problems();
-  };
-  if (grain.flags & shape::shape_flag::unreliable_fit) r.note = "SH fit flagged unreliable";
-  else accept(sh_surface(sh.sphere, sh.basis, grain.coeffs, grain.centroid), SurfaceOrigin::sh, "SH");
-  if (!have_surface && labels) accept(voxel_surface(*labels, grain.label, bbox, options.smooth_vox), SurfaceOrigin::voxels, "voxel");
-  if (!have_surface) r.origin = SurfaceOrigin::ellipsoid;
-
   SizeTargets targets = options.size;
   if (tiny) targets.elements_per_diameter = targets.min_per_diameter;
-  r.surface_volume = have_surface ? enclosed_volume(surface) : 4.0 / 3.0 * M_PI * grain.semi_axes.prod();
-  // Without a surface, the curvature of the sphere of the grain's diameter (3 / R^2).
-  const double curvature_per_volume = have_surface ? total_mean_curvature(surface) / r.surface_volume
-                                                   : 12.0 / (grain.equivalent_diameter * grain.equivalent_diameter);
-  r.size = choose_element_size(have_surface ? surface_area(surface) : grain.surface_area, grain.equivalent_diameter,
-                               curvature_per_volume, order, targets);
-  const Eigen::Quaterniond axes(grain.axes);
+  const auto size_for = [&](const TriangleSurface& s, double volume) {
+    return choose_element_size(surface_area(s), grain.equivalent_diameter, total_mean_curvature(s) / volume, order, targets);
+  };
   const int degree = static_cast<int>(std::lround(std::sqrt(static_cast<double>(grain.coeffs.size())))) - 1;
   const auto on_sh_surface = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
     const Eigen::Vector3d d = (p - grain.centroid).normalized();
     return grain.centroid + shape::sh_radius(grain.coeffs, degree, d) * d;
   };
-  const auto run = [&](double h) {
-    TetOptions o;
-    o.size = h, o.order = order;
-    if (options.snap_to_sh && r.origin == SurfaceOrigin::sh) o.project = on_sh_surface;
-    return r.origin == SurfaceOrigin::ellipsoid ? mesh_ellipsoid(grain.centroid, grain.semi_axes, axes, o, &r.gmsh, options.workers)
-                                                : tetrahedralize(surface, o, &r.gmsh, options.workers);
-  };
-  try {
+  // Meshes with `run` at r.size.h, then once more at 0.7 h when elements miss the quality floor
+  // (keeping the better mesh; a failed or overrun remesh keeps the first).
+  const auto mesh_and_check = [&](const std::function<TetMesh(double)>& run) {
     r.mesh = run(r.size.h);
-  } catch (DataError& e) {
-    if (r.origin == SurfaceOrigin::ellipsoid) throw;
-    r.note += std::string(r.note.empty() ? "" : "; ") + e.message();
-    r.origin = SurfaceOrigin::ellipsoid;
-    r.surface_volume = 4.0 / 3.0 * M_PI * grain.semi_axes.prod();
-    r.mesh = run(r.size.h);
-  }
-  r.quality = mesh_quality(r.mesh, options.gamma_floor);
-  if (r.quality.inverted > 0 || r.quality.below_floor > 0) {
+    r.quality = mesh_quality(r.mesh, options.gamma_floor);
+    if (r.quality.inverted == 0 && r.quality.below_floor == 0) return;
     const TetReport first = r.gmsh;
     r.remeshed = true;
     try {
@@ -129,14 +127,123 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
       } else {
         r.gmsh = first;
       }
-    } catch (const DataError& e) {  // the first mesh stays
+    } catch (const DataError& e) {  // the first mesh stays (GmshOverrun included)
       r.gmsh = first;
-      r.note += std::string(r.note.empty() ? "" : "; ") + "remeshing at 0.7 h failed: " + e.message();
+      add_note("remeshing at 0.7 h failed: " + e.message());
     }
     if (r.quality.inverted > 0 || r.quality.below_floor > 0)
-      r.note += std::string(r.note.empty() ? "" : "; ") + std::to_string(r.quality.below_floor) + " elements below the gamma floor, " +
-                std::to_string(r.quality.inverted) + " inverted";
+      add_note(std::to_string(r.quality.below_floor) + " elements below the gamma floor, " + std::to_string(r.quality.inverted) + " inverted");
+  };
+
+  // 1. The SH surface, remeshed by gmsh, within the budget.
+  TriangleSurface sh_candidate;
+  bool sh_ok = false;
+  if (grain.flags & shape::shape_flag::unreliable_fit) {
+    add_note("SH fit flagged unreliable");
+  } else {
+    sh_candidate = sh_surface(sh.sphere, sh.basis, grain.coeffs, grain.centroid);
+    const SurfaceCheck c = check_surface(sh_candidate);
+    sh_ok = c.ok();
+    if (!sh_ok) {
+      add_note("SH surface has " + c.problems());
+    } else if (options.sh_path == MeshPath::gmsh_surface) {
+      r.origin = SurfaceOrigin::sh, r.path = MeshPath::gmsh_surface;
+      r.surface_volume = enclosed_volume(sh_candidate);
+      r.size = size_for(sh_candidate, r.surface_volume);
+      const Clock::time_point deadline = deadline_from(started);
+      try {
+        mesh_and_check([&](double h) {
+          TetOptions o;
+          o.size = h, o.order = order, o.deadline = deadline;
+          if (options.snap_to_sh) o.project = on_sh_surface;
+          return tetrahedralize(sh_candidate, o, &r.gmsh, options.workers);
+        });
+        r.seconds = std::chrono::duration<double>(Clock::now() - started).count();
+        return r;
+      } catch (const GmshOverrun&) {
+        r.overran = true;
+        add_note(fmt::format("gmsh overran the {:g} s budget on the SH surface", options.budget_seconds));
+      } catch (const DataError& e) {
+        add_note(e.message());
+      }
+    }
   }
+
+  // 2. A surface remeshed to about h and kept as the boundary: the SH surface when it passed the
+  // checks (the default for SH grains; or gmsh overran or failed on it), else the grain's smoothed
+  // voxels (their main piece).
+  TriangleSurface source;
+  const bool sh_kept = sh_ok;
+  if (sh_kept) {
+    source = std::move(sh_candidate);
+    r.origin = SurfaceOrigin::sh;
+  } else if (labels) {
+    // Sampled every 0.4 h or so (h estimated from the grain's measured area): about 25 times the
+    // triangles of the remeshed boundary, which is then quick to make and still follows it.
+    const double h_estimate = choose_element_size(grain.surface_area, grain.equivalent_diameter,
+                                                  12.0 / (grain.equivalent_diameter * grain.equivalent_diameter), order, targets).h;
+    const double voxel = labels->voxel_size()[0];
+    const int stride = std::max(1, static_cast<int>(std::lround(kSourceSpacingPerSize * h_estimate / voxel)));
+    source = largest_piece(voxel_surface(*labels, grain.label, bbox, options.smooth_vox, stride));
+    r.origin = SurfaceOrigin::voxels;
+  }
+  const SurfaceCheck source_check = sh_kept || source.triangles.empty() ? SurfaceCheck{} : check_surface(source);
+  if (!sh_kept && !source.triangles.empty() && !source_check.embedded()) {
+    add_note(std::string(surface_origin_name(r.origin)) + " surface has " + source_check.problems());
+  } else if (!source.triangles.empty()) {
+    r.path = MeshPath::kept_surface;
+    r.surface_volume = enclosed_volume(source);
+    r.size = size_for(source, r.surface_volume);
+    const std::function<Eigen::Vector3d(const Eigen::Vector3d&)> onto =
+        r.origin == SurfaceOrigin::sh ? std::function<Eigen::Vector3d(const Eigen::Vector3d&)>(on_sh_surface) : closest_point_on(source);
+    // The budget again, at least kKeptPathMinSeconds: this path is cheap (a few hundredths of a
+    // second), so its cap only guards against a gmsh hang, and must not fail a grain whose first
+    // path just spent a short budget.
+    const Clock::time_point deadline =
+        options.budget_seconds > 0.0
+            ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(std::max(options.budget_seconds, kKeptPathMinSeconds)))
+            : Clock::time_point::max();
+    try {
+      mesh_and_check([&](double h) {
+        // Finer until embedded: collapses in thin parts of a coarse remesh can cross the surface.
+        TriangleSurface boundary;
+        for (double edge = kRemeshEdgePerSize * h;; edge *= 0.7) {
+          boundary = remesh_isotropic(source, edge, 3);
+          const SurfaceCheck c = check_surface(boundary);
+          if (c.embedded()) break;
+          if (edge < 0.3 * kRemeshEdgePerSize * h)
+            throw DataError("the surface remeshed at 0.34 h still has " + c.problems());
+        }
+        TetOptions o;
+        o.size = h, o.order = order, o.keep_surface = true, o.project = onto, o.deadline = deadline;
+        return tetrahedralize(boundary, o, &r.gmsh, options.workers);
+      });
+      r.seconds = std::chrono::duration<double>(Clock::now() - started).count();
+      return r;
+    } catch (const GmshOverrun&) {
+      r.overran = true;
+      add_note(fmt::format("gmsh overran its {:g} s on the {} surface kept as the boundary", std::max(options.budget_seconds, kKeptPathMinSeconds),
+                           surface_origin_name(r.origin)));
+    } catch (const DataError& e) {
+      add_note(std::string(surface_origin_name(r.origin)) + " surface kept as the boundary: " + e.message());
+    }
+  }
+
+  // 3. The inertia ellipsoid (gmsh's exact sphere, scaled): no surface of the grain was usable.
+  r.origin = SurfaceOrigin::ellipsoid, r.path = MeshPath::ellipsoid;
+  r.surface_volume = 4.0 / 3.0 * M_PI * grain.semi_axes.prod();
+  // Without a surface, the curvature of the sphere of the grain's diameter (3 / R^2).
+  r.size = choose_element_size(grain.surface_area, grain.equivalent_diameter, 12.0 / (grain.equivalent_diameter * grain.equivalent_diameter),
+                               order, targets);
+  r.remeshed = false;
+  const Eigen::Quaterniond axes(grain.axes);
+  mesh_and_check([&](double h) {
+    TetOptions o;
+    o.size = h, o.order = order;
+    return mesh_ellipsoid(grain.centroid, grain.semi_axes, axes, o, &r.gmsh, options.workers);
+  });
+  r.seconds = std::chrono::duration<double>(Clock::now() - started).count();
   return r;
 }
 

@@ -1,8 +1,11 @@
 #include "graintwin/mesh/grain_surface.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <map>
 
+#include "graintwin/core/error.hpp"
 #include "graintwin/core/filters.hpp"
 #include "graintwin/shape/isosurface.hpp"
 
@@ -18,8 +21,10 @@ TriangleSurface sh_surface(const shape::SphereMesh& sphere, const Eigen::MatrixX
 }
 
 TriangleSurface voxel_surface(const Volume<std::uint32_t>& labels, std::uint32_t label, const std::array<std::size_t, 6>& bbox,
-                              double smooth_vox) {
-  const auto pad = static_cast<std::size_t>(2 + std::ceil(3.0 * smooth_vox));
+                              double smooth_vox, int stride) {
+  if (stride < 1) throw UsageError("voxel_surface: the stride must be at least 1 voxel (got " + std::to_string(stride) + ")");
+  // Zero all around, on the coarse grid too.
+  const auto pad = static_cast<std::size_t>(std::max(2.0 + std::ceil(3.0 * smooth_vox), static_cast<double>(stride) + 1.0));
   Shape3 shape;
   std::array<long, 3> start;
   for (int a = 0; a < 3; ++a) {
@@ -39,6 +44,16 @@ TriangleSurface voxel_surface(const Volume<std::uint32_t>& labels, std::uint32_t
                    static_cast<std::size_t>(start[2]) + x) == label)
           field(z, y, x) = 1.0f;
   if (smooth_vox > 0.0) gaussian_blur(field, smooth_vox);
+  if (stride > 1) {  // every stride-th sample: the same field on a coarser grid, from the same origin
+    const auto s = static_cast<std::size_t>(stride);
+    Shape3 coarse_shape;
+    for (std::size_t a = 0; a < 3; ++a) coarse_shape[a] = (shape[a] - 1) / s + 1;
+    Volume<float> coarse(coarse_shape, {h[0] * double(s), h[1] * double(s), h[2] * double(s)}, origin, 0.0f);
+    for (std::size_t z = 0; z < coarse_shape[0]; ++z)
+      for (std::size_t y = 0; y < coarse_shape[1]; ++y)
+        for (std::size_t x = 0; x < coarse_shape[2]; ++x) coarse(z, y, x) = field(z * s, y * s, x * s);
+    field = std::move(coarse);
+  }
 
   TriangleSurface s;
   std::map<std::array<double, 3>, int> index;  // exact positions: each crossing is computed identically

@@ -22,8 +22,10 @@ TriangleSurface sh_surface(const shape::SphereMesh& sphere, const Eigen::MatrixX
 /// The isosurface 0.5 of the grain's indicator (voxels == label within the half-open box `bbox`
 /// (z0, y0, x0, z1, y1, x1), padded by 2 + 3 sigma voxels) smoothed with a Gaussian of `smooth_vox`
 /// voxels; shared vertices welded (marching tetrahedra computes each edge crossing identically from
-/// both sides), degenerate triangles dropped. Metres, outward.
+/// both sides), degenerate triangles dropped. Metres, outward. `stride` > 1 contours the smoothed
+/// field sampled every `stride` voxels: marching tetrahedra make about 12 triangles per voxel of
+/// surface, far more than a mesher needs once the element size is several voxels.
 TriangleSurface voxel_surface(const Volume<std::uint32_t>& labels, std::uint32_t label, const std::array<std::size_t, 6>& bbox,
-                              double smooth_vox);
+                              double smooth_vox, int stride = 1);
 
 }  // namespace graintwin::mesh
