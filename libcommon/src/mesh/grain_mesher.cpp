@@ -184,7 +184,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
                                                   12.0 / (grain.equivalent_diameter * grain.equivalent_diameter), order, targets).h;
     const double voxel = labels->voxel_size()[0];
     const int stride = std::max(1, static_cast<int>(std::lround(kSourceSpacingPerSize * h_estimate / voxel)));
-    source = largest_piece(voxel_surface(*labels, grain.label, bbox, options.smooth_vox, stride));
+    source = largest_piece(voxel_surface(*labels, grain.label, bbox, options.smooth_vox, stride, true));
     r.origin = SurfaceOrigin::voxels;
   }
   const SurfaceCheck source_check = sh_kept || source.triangles.empty() ? SurfaceCheck{} : check_surface(source);
@@ -193,6 +193,12 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
   } else if (!source.triangles.empty()) {
     r.path = MeshPath::kept_surface;
     r.surface_volume = enclosed_volume(source);
+    if (r.origin == SurfaceOrigin::voxels) {
+      // The smoothed voxels carry no detail finer than about two voxels; their edges' curvature
+      // would otherwise drive the 4-node volume rule to elements under a voxel.
+      targets.max_per_diameter = std::min(targets.max_per_diameter, grain.equivalent_diameter / (2.0 * labels->voxel_size()[0]));
+      targets.max_per_diameter = std::max(targets.max_per_diameter, targets.min_per_diameter);
+    }
     r.size = size_for(source, r.surface_volume);
     const std::function<Eigen::Vector3d(const Eigen::Vector3d&)> onto =
         r.origin == SurfaceOrigin::sh ? std::function<Eigen::Vector3d(const Eigen::Vector3d&)>(on_sh_surface) : closest_point_on(source);
