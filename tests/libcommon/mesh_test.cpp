@@ -348,6 +348,11 @@ TEST(GmshWorkers, MeshAsThisProcessDoesAndSurviveACrash) {
     EXPECT_EQ(ellipsoid_there.nodes, ellipsoid_here.nodes);
     // A gmsh failure comes back as the worker's one-sentence DataError.
     EXPECT_THROW(mesh::tetrahedralize(mesh::TriangleSurface{}, tet_options(0.35, 1), nullptr, &workers), DataError);
+    // That worker's gmsh is not trusted again: it was stopped, and the next request forks a new one.
+    EXPECT_EQ(workers.pids()[0], 0);
+    EXPECT_EQ(mesh::tetrahedralize(s, snapped, nullptr, &workers).nodes, here.nodes);
+    ASSERT_NE(workers.pids()[0], 0);
+    first.push_back(workers.pids()[0]);
     // A worker killed under a request: that request fails naming the signal, the next one is served.
     ASSERT_EQ(::kill(workers.pids()[0], SIGKILL), 0);
     try {

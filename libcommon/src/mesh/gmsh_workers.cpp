@@ -365,7 +365,15 @@ TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report, 
                                 "takes the next request",
                                 pid, describe(status), request.body == detail::GmshRequest::Body::ellipsoid ? "an ellipsoid" : "a surface"));
   }
-  return decode_reply(reply, report);
+  try {
+    return decode_reply(reply, report);
+  } catch (const DataError&) {
+    // A gmsh that failed is not to be trusted with the next request: after a PLC error in boundary
+    // recovery, the same worker's next meshes (an ellipsoid, another grain) came out empty.
+    std::lock_guard lock(mutex_);
+    stop({slot}, true);
+    throw;
+  }
 }
 
 }  // namespace graintwin::mesh
