@@ -90,8 +90,9 @@ int main(int argc, char** argv) {
                        "One sand-like SH grain (radius 0.3 mm, degree 8, exact volume from the SH moments) meshed through "
                        "mesh::mesh_grain at fixed elements per diameter: seconds in gmsh (best of 3), elements, surface nodes, "
                        "volume error against the exact SH volume, largest distance of boundary triangle centroids from the "
-                       "exact surface (/ radius), min gamma and min Jacobian ratio; boundary nodes snapped onto the exact SH "
-                       "surface except for 'tet10 gmsh'. Then the automatic size (250 surface nodes; 4-node: the 2 % volume "
+                       "exact surface (/ radius), min gamma and min Jacobian ratio; gmsh remeshes the SH surface, boundary nodes "
+                       "snapped onto the exact SH surface except for 'tet10 gmsh'; 'kept': the surface remeshed by CGAL and "
+                       "kept as the boundary (the default), gmsh seconds are then only its volume filling. Then the automatic size (250 surface nodes; 4-node: the 2 % volume "
                        "target from the measured total mean curvature) on it and on a rougher grain (degree 12). Then whole "
                        "models (shapes and labels of the pipeline's runs/) of sand_small scan 0 with -j 1 and -j 2 (threads = "
                        "gmsh worker processes) and of the real soil crop with -j 2: wall time of the tool (one run), CPU "
@@ -102,8 +103,14 @@ int main(int argc, char** argv) {
     const char* name;
     int order;
     bool snap;
+    mesh::MeshPath path;
   };
-  const std::vector<Variant> variants = {{"tet4", 1, true}, {"tet10 snap", 2, true}, {"tet10 gmsh", 2, false}};
+  // gmsh's remeshing of the SH surface (snapped, or curved by gmsh), and the kept-surface path.
+  const std::vector<Variant> variants = {{"tet4", 1, true, mesh::MeshPath::gmsh_surface},
+                                         {"tet10 snap", 2, true, mesh::MeshPath::gmsh_surface},
+                                         {"tet10 gmsh", 2, false, mesh::MeshPath::gmsh_surface},
+                                         {"tet4 kept", 1, true, mesh::MeshPath::kept_surface},
+                                         {"tet10 kept", 2, true, mesh::MeshPath::kept_surface}};
   const std::vector<double> per_diameter = quick ? std::vector<double>{3, 6} : std::vector<double>{3, 4, 6, 8, 12};
   double fewest = 1e300, most = 0;  // elements, for the target line
   for (const Variant& v : variants)
@@ -111,6 +118,7 @@ int main(int argc, char** argv) {
       mesh::GrainMeshOptions o;
       o.order = v.order;
       o.snap_to_sh = v.snap;
+      o.sh_path = v.path;
       o.size.elements_per_diameter = n;
       mesh::GrainMeshResult r;
       double best = 1e300;
@@ -129,10 +137,11 @@ int main(int argc, char** argv) {
       fewest = std::min(fewest, double(r.quality.elements)), most = std::max(most, double(r.quality.elements));
     }
   // The automatic size (contact: 250 surface nodes; 4-node: also the volume target).
-  for (const Variant& v : {variants[0], variants[1]})
+  for (const Variant& v : {variants[0], variants[1], variants[3], variants[4]})
     for (const auto& [name, g, b] : {std::tuple{"sand-like", &grain, &basis}, std::tuple{"rough", &rough, &rough_basis}}) {
       mesh::GrainMeshOptions o;
       o.order = v.order;
+      o.sh_path = v.path;
       const auto r = mesh::mesh_grain(*g, *b, nullptr, {}, o);
       const double volume_error = r.quality.volume / g->volume - 1;
       // Total mean curvature over volume against the sphere of the same volume's 3 / R^2.

@@ -179,7 +179,8 @@ int main(int argc, char** argv) {
                  "inertia ellipsoid), counted in the summary and noted in /mesh/note")
       ->check(number_in(closed(0, 3600, "s")))->capture_default_str();
   app.add_option("--curving", curving,
-                 "10-node grains with an SH surface: snap (boundary nodes moved onto the exact SH surface, inverted "
+                 "10-node grains on the gmsh path (--sh-meshing gmsh; kept surfaces are always snapped): snap (boundary "
+                 "nodes moved onto the exact SH surface, inverted "
                  "elements pulled back) or gmsh (gmsh curves onto the triangulated surface, optimize(HighOrder) when "
                  "an element is inverted; slower)")
       ->check(CLI::IsMember({"snap", "gmsh"}))->capture_default_str();
