@@ -96,9 +96,9 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
                            const std::array<std::size_t, 6>& bbox, const GrainMeshOptions& options) {
   using Clock = std::chrono::steady_clock;
   const Clock::time_point started = Clock::now();
-  const auto deadline_from = [&](Clock::time_point t) {
-    return options.budget_seconds > 0.0 ? t + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.budget_seconds))
-                                        : Clock::time_point::max();
+  const auto deadline_in = [](double seconds) {  // 0: none
+    return seconds > 0.0 ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds))
+                         : Clock::time_point::max();
   };
   GrainMeshResult r;
   const auto add_note = [&](const std::string& what) { r.note += std::string(r.note.empty() ? "" : "; ") + what; };
@@ -162,7 +162,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
       r.origin = SurfaceOrigin::sh, r.path = MeshPath::gmsh_surface;
       r.surface_volume = enclosed_volume(sh_candidate);
       r.size = size_for(sh_candidate, r.surface_volume);
-      const Clock::time_point deadline = deadline_from(started);
+      const Clock::time_point deadline = deadline_in(options.budget_seconds);
       try {
         mesh_and_check([&](double h) {
           TetOptions o;
@@ -217,11 +217,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     // The budget again, at least kKeptPathMinSeconds: this path is cheap (a few hundredths of a
     // second), so its cap only guards against a gmsh hang, and must not fail a grain whose first
     // path just spent a short budget.
-    const Clock::time_point deadline =
-        options.budget_seconds > 0.0
-            ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                 std::chrono::duration<double>(std::max(options.budget_seconds, kKeptPathMinSeconds)))
-            : Clock::time_point::max();
+    const Clock::time_point deadline = deadline_in(options.budget_seconds > 0.0 ? std::max(options.budget_seconds, kKeptPathMinSeconds) : 0.0);
     try {
       mesh_and_check([&](double h) {
         // Finer until embedded: collapses in thin parts of a coarse remesh can cross the surface.
