@@ -495,7 +495,7 @@ TEST(GrainMesher, NonStarGrainFromLabelsKeepsItsCavityOnTheKeptSurfacePath) {
 
 TEST(GrainMesher, OverrunOnTheShSurfaceFallsBackToTheKeptSurfaceAndIsReported) {
   // A budget far shorter than any gmsh run: gmsh's remeshing of the SH surface always overruns (in a worker, which is
-  // stopped and replaced), and the kept-surface path, which gets at least a second, meshes it.
+  // stopped and replaced), and the kept-surface path, which gets at least 10 s, meshes it.
   const mesh::ShSurfaceBasis basis(4, 4);
   const double r0 = 0.3e-3, exact = 4.0 / 3.0 * M_PI * r0 * r0 * r0;
   mesh::GmshWorkers workers(1);

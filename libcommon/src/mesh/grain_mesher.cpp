@@ -33,7 +33,7 @@ constexpr double kSurfaceNodesPerArea[2] = {1.64, 7.7};
 constexpr double kRemeshEdgePerSize = 0.84;
 
 /// The kept-surface path's time cap is the budget, but never less than this (s).
-constexpr double kKeptPathMinSeconds = 1.0;
+constexpr double kKeptPathMinSeconds = 10.0;
 /// A 10-node kept-surface mesh whose volume misses its surface's by more than this is meshed again at
 /// 0.7 h (coarse 10-node meshes of irregular voxel grains lost up to 20 %, where snapping bent
 /// thin elements and their mid-edge nodes were pulled back straight).
@@ -220,18 +220,26 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     const Clock::time_point deadline = deadline_in(options.budget_seconds > 0.0 ? std::max(options.budget_seconds, kKeptPathMinSeconds) : 0.0);
     try {
       mesh_and_check([&](double h) {
-        // Finer until embedded: collapses in thin parts of a coarse remesh can cross the surface.
-        TriangleSurface boundary;
-        for (double edge = kRemeshEdgePerSize * h;; edge *= 0.7) {
-          boundary = remesh_isotropic(source, edge, 3);
+        // Finer until embedded: collapses in thin parts of a coarse remesh can cross the surface,
+        // and gmsh can still refuse facets that nearly touch (a PLC error): finer once more then.
+        for (double edge = kRemeshEdgePerSize * h, refused = 0;; edge *= 0.7) {
+          const TriangleSurface boundary = remesh_isotropic(source, edge, 3);
           const SurfaceCheck c = check_surface(boundary);
-          if (c.embedded()) break;
-          if (edge < 0.3 * kRemeshEdgePerSize * h)
-            throw DataError("the surface remeshed at 0.34 h still has " + c.problems());
+          const bool last = edge < 0.3 * kRemeshEdgePerSize * h;
+          if (!c.embedded()) {
+            if (last) throw DataError("the surface remeshed at 0.34 h still has " + c.problems());
+            continue;
+          }
+          TetOptions o;
+          o.size = std::min(h, edge / kRemeshEdgePerSize), o.order = order, o.keep_surface = true, o.project = onto, o.deadline = deadline;
+          try {
+            return tetrahedralize(boundary, o, &r.gmsh, options.workers);
+          } catch (const GmshOverrun&) {
+            throw;
+          } catch (const DataError&) {
+            if (last || ++refused > 1) throw;
+          }
         }
-        TetOptions o;
-        o.size = h, o.order = order, o.keep_surface = true, o.project = onto, o.deadline = deadline;
-        return tetrahedralize(boundary, o, &r.gmsh, options.workers);
       });
       r.seconds = std::chrono::duration<double>(Clock::now() - started).count();
       return r;

@@ -73,7 +73,7 @@ struct GrainMeshOptions {
   MeshPath sh_path = MeshPath::kept_surface;
   /// > 0: seconds gmsh may take on the grain's gmsh_surface path (its first mesh and any remesh
   /// together); on overrun the worker is killed and the grain takes the kept_surface path, which
-  /// gets the same time again, at least a second (a cap against a gmsh hang; that path takes
+  /// gets the same time again, at least 10 s (a cap against a gmsh hang; that path takes
   /// hundredths of a second). Enforced in worker
   /// processes; in-process runs (no workers) only refuse to start once it is spent.
   double budget_seconds = 0.0;
