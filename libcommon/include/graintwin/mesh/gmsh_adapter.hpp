@@ -74,8 +74,9 @@ struct GmshRequest;
 /// from any thread takes a free worker (waiting for one), sends it the body and options through a
 /// socket and gets the mesh back. Results do not depend on which worker meshed (each request is a
 /// fresh gmsh model). A worker that dies is reported as a DataError for that call and forked again
-/// for the next, and so is one whose gmsh failed (its global state may be broken); a request that overruns its deadline kills its worker the same way; an interrupt (graintwin::interrupted) kills the worker being waited for and throws
-/// InterruptedError. Workers end and are reaped when the pool is destroyed, and die with the
+/// for the next; so is one whose gmsh failed (its global state may be broken) or that overran the
+/// request's deadline (killed, GmshOverrun); an interrupt (graintwin::interrupted) kills the worker
+/// being waited for and throws InterruptedError. Workers end and are reaped when the pool is destroyed, and die with the
 /// parent. Create it before starting threads and before reading large inputs: fork copies the
 /// process as it is.
 class GmshWorkers {

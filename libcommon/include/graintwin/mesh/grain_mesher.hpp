@@ -49,12 +49,12 @@ ElementSize choose_element_size(double area, double diameter, double curvature_p
 enum class SurfaceOrigin : std::uint8_t { sh = 0, voxels = 1, ellipsoid = 2 };
 const char* surface_origin_name(SurfaceOrigin origin);
 
-/// How the grain was meshed. gmsh_surface: gmsh classifies and reparametrises the surface, remeshes
-/// it at h and fills it (the SH path: smooth, star-shaped grains). kept_surface: the surface is
-/// remeshed to triangles of about h first (remesh_isotropic) and gmsh only fills it, keeping them
-/// (voxel surfaces, and grains whose gmsh_surface run overran the budget or failed): cheap and
-/// robust on rough, angular and non-star surfaces of any genus. ellipsoid: the inertia ellipsoid
-/// from gmsh's exact sphere, where no usable surface remains.
+/// How the grain was meshed. gmsh_surface: gmsh classifies and reparametrises the SH surface,
+/// remeshes it at h and fills it (GrainMeshOptions::sh_path = gmsh_surface). kept_surface: the
+/// surface is remeshed to triangles of about h first (remesh_isotropic) and gmsh only fills it,
+/// keeping them (the default for SH and voxel surfaces, and the fallback of a gmsh_surface run that
+/// overran the budget or failed): cheap and robust on rough, angular and non-star surfaces of any
+/// genus. ellipsoid: the inertia ellipsoid from gmsh's exact sphere, where no usable surface remains.
 enum class MeshPath : std::uint8_t { gmsh_surface = 0, kept_surface = 1, ellipsoid = 2 };
 const char* mesh_path_name(MeshPath path);
 
@@ -73,9 +73,9 @@ struct GrainMeshOptions {
   MeshPath sh_path = MeshPath::kept_surface;
   /// > 0: seconds gmsh may take on the grain's gmsh_surface path (its first mesh and any remesh
   /// together); on overrun the worker is killed and the grain takes the kept_surface path, which
-  /// gets the same time again, at least 10 s (a cap against a gmsh hang; that path takes
-  /// hundredths of a second). Enforced in worker
-  /// processes; in-process runs (no workers) only refuse to start once it is spent.
+  /// gets the same time again, at least 10 s (a cap against a gmsh hang: that path takes
+  /// hundredths of a second), then the ellipsoid. Enforced in worker processes; in-process runs
+  /// (no workers) only refuse to start once it is spent.
   double budget_seconds = 0.0;
   /// gmsh runs in these worker processes (grains in parallel), else in this process under its lock.
   GmshWorkers* workers = nullptr;
@@ -93,7 +93,7 @@ struct GrainMeshResult {
   fdem::GrainKind kind = fdem::GrainKind::tet4;
   SurfaceOrigin origin = SurfaceOrigin::sh;
   MeshPath path = MeshPath::gmsh_surface;
-  bool overran = false;           ///< the gmsh_surface path overran budget_seconds (then kept_surface)
+  bool overran = false;           ///< gmsh overran budget_seconds on a path, and the grain took the next
   double seconds = 0.0;           ///< wall time of mesh_grain for this grain, s
   ElementSize size;
   MeshQuality quality;
@@ -104,9 +104,9 @@ struct GrainMeshResult {
 };
 
 /// Meshes one grain. `labels` (may be null) enables the voxel surface for grains whose SH fit is
-/// flagged unreliable or whose SH surface fails check_surface or gmsh; `bbox` is the grain's box in
-/// it. SH surfaces take MeshPath::gmsh_surface (under budget_seconds); voxel surfaces, and SH
-/// grains whose gmsh run overran or failed, kept_surface; the inertia ellipsoid is the last resort.
+/// flagged unreliable or whose SH surface fails check_surface; `bbox` is the grain's box in it. SH
+/// surfaces take options.sh_path (gmsh_surface under budget_seconds, falling back to kept_surface),
+/// voxel surfaces kept_surface; the inertia ellipsoid is the last resort.
 /// Thread-safe (the gmsh part runs one grain at a time per worker process, or in this process).
 GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis& sh, const Volume<std::uint32_t>* labels,
                            const std::array<std::size_t, 6>& bbox, const GrainMeshOptions& options);
