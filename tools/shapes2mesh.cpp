@@ -175,7 +175,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"kept", "gmsh"}))->capture_default_str();
   app.add_option("--grain-budget", mo.budget_seconds,
                  "Seconds gmsh may spend on one grain (0: no limit); on overrun its gmsh worker is stopped and the grain "
-                 "falls back (gmsh remeshing to the kept surface, the kept surface, which gets at least 10 s, to the "
+                 "falls back (gmsh remeshing to the kept surface, which then gets at least 10 s; the kept surface to the "
                  "inertia ellipsoid), counted in the summary and noted in /mesh/note")
       ->check(number_in(closed(0, 3600, "s")))->capture_default_str();
   app.add_option("--curving", curving,

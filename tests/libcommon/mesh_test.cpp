@@ -513,7 +513,17 @@ TEST(GrainMesher, OverrunOnTheShSurfaceFallsBackToTheKeptSurfaceAndIsReported) {
   EXPECT_NEAR(r.quality.volume, exact, 0.01 * exact);  // snapped onto the exact sphere
   EXPECT_GT(r.seconds, 0.0);
   EXPECT_NE(workers.pids()[0], first) << "the overrunning worker was replaced";
+  // The kept surface first (the default) under that budget: it overruns too, and the grain
+  // becomes its ellipsoid.
+  o.sh_path = mesh::MeshPath::kept_surface;
+  const auto kept_first = mesh::mesh_grain(sh_grain(r0, 0.0, Vector3d::Zero()), basis, nullptr, {}, o);
+  EXPECT_TRUE(kept_first.overran);
+  EXPECT_EQ(kept_first.path, mesh::MeshPath::ellipsoid);
+  EXPECT_NE(kept_first.note.find("gmsh overran its 1e-09 s on the sh surface kept as the boundary"), std::string::npos)
+      << kept_first.note;
+  expect_valid(kept_first.mesh);
   // No budget: the same grain takes the gmsh path.
+  o.sh_path = mesh::MeshPath::gmsh_surface;
   o.budget_seconds = 0.0;
   const auto unhurried = mesh::mesh_grain(sh_grain(r0, 0.0, Vector3d::Zero()), basis, nullptr, {}, o);
   EXPECT_FALSE(unhurried.overran);

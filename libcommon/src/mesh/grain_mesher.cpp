@@ -32,7 +32,8 @@ constexpr double kSurfaceNodesPerArea[2] = {1.64, 7.7};
 /// gives the kept boundary the surface nodes of a gmsh_surface mesh of the same h.
 constexpr double kRemeshEdgePerSize = 0.84;
 
-/// The kept-surface path's time cap is the budget, but never less than this (s).
+/// The kept-surface path's time cap as the fallback of an overrun: the budget, but never less than
+/// this (s).
 constexpr double kKeptPathMinSeconds = 10.0;
 /// A 10-node kept-surface mesh whose volume misses its surface's by more than this is meshed again at
 /// 0.7 h (coarse 10-node meshes of irregular voxel grains lost up to 20 %, where snapping bent
@@ -214,10 +215,11 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     r.size = size_for(source, r.surface_volume);
     const std::function<Eigen::Vector3d(const Eigen::Vector3d&)> onto =
         r.origin == SurfaceOrigin::sh ? std::function<Eigen::Vector3d(const Eigen::Vector3d&)>(on_sh_surface) : closest_point_on(source);
-    // The budget again, at least kKeptPathMinSeconds: this path is cheap (a few hundredths of a
-    // second), so its cap only guards against a gmsh hang, and must not fail a grain whose first
-    // path just spent a short budget.
-    const Clock::time_point deadline = deadline_in(options.budget_seconds > 0.0 ? std::max(options.budget_seconds, kKeptPathMinSeconds) : 0.0);
+    // The budget; as the fallback of an overrun, at least kKeptPathMinSeconds: this path is cheap
+    // (hundredths of a second), and must not fail a grain whose first path just spent a short
+    // budget (a freshly forked worker on a loaded machine).
+    const double cap = r.overran ? std::max(options.budget_seconds, kKeptPathMinSeconds) : options.budget_seconds;
+    const Clock::time_point deadline = deadline_in(options.budget_seconds > 0.0 ? cap : 0.0);
     try {
       mesh_and_check([&](double h) {
         // Finer until embedded: collapses in thin parts of a coarse remesh can cross the surface,
@@ -245,8 +247,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
       return r;
     } catch (const GmshOverrun&) {
       r.overran = true;
-      add_note(fmt::format("gmsh overran its {:g} s on the {} surface kept as the boundary", std::max(options.budget_seconds, kKeptPathMinSeconds),
-                           surface_origin_name(r.origin)));
+      add_note(fmt::format("gmsh overran its {:g} s on the {} surface kept as the boundary", cap, surface_origin_name(r.origin)));
     } catch (const DataError& e) {
       add_note(std::string(surface_origin_name(r.origin)) + " surface kept as the boundary: " + e.message());
     }

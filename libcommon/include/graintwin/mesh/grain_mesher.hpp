@@ -71,11 +71,12 @@ struct GrainMeshOptions {
   /// default: about 3 times less CPU than gmsh's reparametrisation on sand-like grains and 5 times
   /// less on real rough ones, same volume error and quality) or gmsh_surface.
   MeshPath sh_path = MeshPath::kept_surface;
-  /// > 0: seconds gmsh may take on the grain's gmsh_surface path (its first mesh and any remesh
-  /// together); on overrun the worker is killed and the grain takes the kept_surface path, which
-  /// gets the same time again, at least 10 s (a cap against a gmsh hang: that path takes
-  /// hundredths of a second), then the ellipsoid. Enforced in worker processes; in-process runs
-  /// (no workers) only refuse to start once it is spent.
+  /// > 0: seconds gmsh may take on the grain's first path (its first mesh and any remesh
+  /// together); on overrun the worker is killed and the grain falls back: from gmsh_surface to
+  /// kept_surface, which then gets the same time again but at least 10 s (it takes hundredths of a
+  /// second; a fresh worker on a loaded machine must not fail it), from kept_surface to the
+  /// ellipsoid. Enforced in worker processes; in-process runs (no workers) only refuse to start
+  /// once it is spent.
   double budget_seconds = 0.0;
   /// gmsh runs in these worker processes (grains in parallel), else in this process under its lock.
   GmshWorkers* workers = nullptr;
