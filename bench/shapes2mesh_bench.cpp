@@ -2,7 +2,8 @@
 // element size (elements per diameter) and order, for the two 10-node curvings; the automatic size
 // on a sand-like and a rough grain against the 2 % volume target of 4-node meshes; chart of volume
 // error against elements per grain (docs/img/shapes2mesh_accuracy.png); and whole models of
-// sand_small's reference scan with 1 and 2 gmsh worker processes when runs/ has its shapes.
+// sand_small's reference scan with 1 and 2 gmsh worker processes and of the real soil crop, with
+// the time per grain and the share of grains on each meshing path, when runs/ has their shapes.
 //   shapes2mesh_bench [--quick]
 #include <sys/resource.h>
 
@@ -15,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/fdem/model_file.hpp"
+#include "graintwin/io/h5file.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -88,19 +90,27 @@ int main(int argc, char** argv) {
                        "One sand-like SH grain (radius 0.3 mm, degree 8, exact volume from the SH moments) meshed through "
                        "mesh::mesh_grain at fixed elements per diameter: seconds in gmsh (best of 3), elements, surface nodes, "
                        "volume error against the exact SH volume, largest distance of boundary triangle centroids from the "
-                       "exact surface (/ radius), min gamma and min Jacobian ratio; boundary nodes snapped onto the exact SH "
-                       "surface except for 'tet10 gmsh'. Then the automatic size (250 surface nodes; 4-node: the 2 % volume "
+                       "exact surface (/ radius), min gamma and min Jacobian ratio; gmsh remeshes the SH surface, boundary nodes "
+                       "snapped onto the exact SH surface except for 'tet10 gmsh'; 'kept': the surface remeshed by CGAL and "
+                       "kept as the boundary (the default), gmsh seconds are then only its volume filling. Then the automatic size (250 surface nodes; 4-node: the 2 % volume "
                        "target from the measured total mean curvature) on it and on a rougher grain (degree 12). Then whole "
-                       "models of sand_small scan 0 with -j 1 and -j 2 (threads = gmsh worker processes), wall time of the "
-                       "tool. " + bench::machine_summary());
+                       "models (shapes and labels of the pipeline's runs/) of sand_small scan 0 with -j 1 and -j 2 (threads = "
+                       "gmsh worker processes) and of the real soil crop with -j 2: wall time of the tool (one run), CPU "
+                       "time, and per meshing path the share of grains and their mean time in mesh_grain. " + bench::machine_summary());
   std::ofstream csv(kSource + "/docs/img/shapes2mesh_accuracy.csv");
   csv << "series,label,x,y\n";
   struct Variant {
     const char* name;
     int order;
     bool snap;
+    mesh::MeshPath path;
   };
-  const std::vector<Variant> variants = {{"tet4", 1, true}, {"tet10 snap", 2, true}, {"tet10 gmsh", 2, false}};
+  // gmsh's remeshing of the SH surface (snapped, or curved by gmsh), and the kept-surface path.
+  const std::vector<Variant> variants = {{"tet4", 1, true, mesh::MeshPath::gmsh_surface},
+                                         {"tet10 snap", 2, true, mesh::MeshPath::gmsh_surface},
+                                         {"tet10 gmsh", 2, false, mesh::MeshPath::gmsh_surface},
+                                         {"tet4 kept", 1, true, mesh::MeshPath::kept_surface},
+                                         {"tet10 kept", 2, true, mesh::MeshPath::kept_surface}};
   const std::vector<double> per_diameter = quick ? std::vector<double>{3, 6} : std::vector<double>{3, 4, 6, 8, 12};
   double fewest = 1e300, most = 0;  // elements, for the target line
   for (const Variant& v : variants)
@@ -108,6 +118,7 @@ int main(int argc, char** argv) {
       mesh::GrainMeshOptions o;
       o.order = v.order;
       o.snap_to_sh = v.snap;
+      o.sh_path = v.path;
       o.size.elements_per_diameter = n;
       mesh::GrainMeshResult r;
       double best = 1e300;
@@ -126,10 +137,11 @@ int main(int argc, char** argv) {
       fewest = std::min(fewest, double(r.quality.elements)), most = std::max(most, double(r.quality.elements));
     }
   // The automatic size (contact: 250 surface nodes; 4-node: also the volume target).
-  for (const Variant& v : {variants[0], variants[1]})
+  for (const Variant& v : {variants[0], variants[1], variants[3], variants[4]})
     for (const auto& [name, g, b] : {std::tuple{"sand-like", &grain, &basis}, std::tuple{"rough", &rough, &rough_basis}}) {
       mesh::GrainMeshOptions o;
       o.order = v.order;
+      o.sh_path = v.path;
       const auto r = mesh::mesh_grain(*g, *b, nullptr, {}, o);
       const double volume_error = r.quality.volume / g->volume - 1;
       // Total mean curvature over volume against the sphere of the same volume's 3 / R^2.
@@ -149,21 +161,47 @@ int main(int argc, char** argv) {
                  "shapes2mesh: volume error against cost", "elements per grain",
                  "|volume error| (labels: elements per diameter or grain)");
 
-  // Whole models: sand_small's reference scan, if the pipeline has produced its shapes.
-  const std::filesystem::path shapes = kSource + "/runs/sand_small/scan_000/shapes.h5";
-  if (!quick && std::filesystem::exists(shapes)) {
-    const std::string tool = (bench::bin_dir() / "shapes2mesh").string();
-    const std::size_t grains = shape::read_shapes_file(shapes).grains.size();
+  // Whole models of the pipeline's reference scans, where runs/ has their shapes and labels:
+  // sand_small (ctsynth grains) with 1 and 2 gmsh worker processes (the same model either way),
+  // and the real soil crop with 2. Per grain: wall time in mesh_grain (/mesh/seconds) and the
+  // share of grains on each meshing path.
+  const std::string tool = (bench::bin_dir() / "shapes2mesh").string();
+  struct Series {
+    const char* name;
+    std::vector<int> processes;
+  };
+  for (const Series& series : {Series{"sand_small", {1, 2}}, Series{"soil_crop", {2}}}) {
+    const std::filesystem::path scan = kSource + "/runs/" + series.name + "/scan_000";
+    if (quick || !std::filesystem::exists(scan / "shapes.h5") || !std::filesystem::exists(scan / "labels.h5")) continue;
+    const std::size_t grains = shape::read_shapes_file(scan / "shapes.h5").grains.size();
     std::vector<fdem::Model> models;
-    for (int processes : {1, 2}) {
+    for (int processes : series.processes) {
       const std::string model = fmt::format("/tmp/shapes2mesh_bench_model_{}.h5", processes);
       const double load = load_average(), cpu_before = children_cpu_seconds();
-      bench::Row row = bench::run_child(fmt::format("sand_small scan 0 ({} grains), 10-node, snap", grains),
+      bench::Row row = bench::run_child(fmt::format("{} scan 0 ({} grains), 10-node, snap", series.name, grains),
                                         fmt::format("shapes2mesh -j {} ({} gmsh process{})", processes, processes, processes > 1 ? "es" : ""),
-                                        {tool, shapes.string(), model, "--force", "-q", "-j", std::to_string(processes)}, 2);
+                                        {tool, (scan / "shapes.h5").string(), (scan / "labels.h5").string(), model, "--force", "-q", "-j",
+                                         std::to_string(processes)});
+      const double cpu = children_cpu_seconds() - cpu_before;
       models.push_back(fdem::read_model_file(model));
-      row.note = fmt::format("best of 2; CPU {:.1f} s per run (tool and workers); load average {:.2f} before the runs{}",
-                             (children_cpu_seconds() - cpu_before) / 2, load, load > 1.0 ? " (shared machine)" : "");
+      const io::H5File f = io::H5File::open(model);
+      const auto path = f.read<std::uint8_t>("/mesh/path");
+      const auto seconds = f.read<double>("/mesh/seconds");
+      const auto overran = f.read<std::uint8_t>("/mesh/overran_budget");
+      std::size_t on[3] = {0, 0, 0}, overruns = 0;
+      double path_seconds[3] = {0, 0, 0}, slowest = 0;
+      for (std::size_t g = 0; g < path.size(); ++g) {
+        ++on[path[g]], path_seconds[path[g]] += seconds[g], overruns += overran[g];
+        slowest = std::max(slowest, seconds[g]);
+      }
+      const auto share = [&](int k) {
+        return on[k] ? fmt::format("{:.1f} % ({:.3f} s per grain)", 100.0 * double(on[k]) / double(path.size()), path_seconds[k] / double(on[k]))
+                     : std::string("0 %");
+      };
+      row.note = fmt::format("CPU {:.1f} s (tool and workers), {:.3f} CPU s per grain; paths: gmsh surface {}, kept surface {}, "
+                             "ellipsoid {}; slowest grain {:.2f} s; {} over the time budget; load average {:.2f} before the run{}",
+                             cpu, cpu / double(grains), share(0), share(1), share(2), slowest, overruns, load,
+                             load > 1.0 ? " (shared machine)" : "");
       if (models.size() == 2)
         row.note += models[1].nodes == models[0].nodes && models[1].element_nodes == models[0].element_nodes
                         ? "; model identical to -j 1"

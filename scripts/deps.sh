@@ -14,6 +14,8 @@ PACKAGES=(
   libtomlplusplus-dev
   # tetrahedral meshing of grains (shapes2mesh, fdemrun): only the mesh/ library links it
   libgmsh-dev
+  # surface remeshing of grains before gmsh fills them (mesh/surface_remesh.cpp only)
+  libcgal-dev
   # Python from Debian for the h5py interoperability checks, reference baselines and plots;
   # VTK's own reader checks that ParaView opens what we write
   python3 python3-numpy python3-h5py python3-matplotlib python3-vtk9

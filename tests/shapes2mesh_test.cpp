@@ -2,7 +2,8 @@
 // checked against the balls' exact volumes, element validity and watertight grain surfaces; a
 // broken SH surface caught and replaced; the .vtu and .msh views; the same model whatever the
 // number of gmsh worker processes; Ctrl-C ending the workers, SIGKILL taking them along, -j 1024
-// starting no more of them than grains or processors; bad inputs failing cleanly.
+// starting no more of them than grains or processors; grains over the time budget falling back and
+// counted; bad inputs failing cleanly.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -206,6 +207,37 @@ TEST(Shapes2mesh, BrokenShSurfaceFallsBackToVoxelsOrEllipsoidWithANote) {
   EXPECT_NE(alone.err.find("1 as ellipsoids"), std::string::npos) << alone.err;
 }
 
+TEST(Shapes2mesh, GrainsOverTheBudgetFallBackToTheKeptSurfaceAndAreCounted) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  // gmsh's remeshing of the SH surfaces under a budget no gmsh run meets: every grain overruns,
+  // its worker is stopped, and it is meshed from its SH surface kept as the boundary.
+  const auto r = run_tool("shapes2mesh", {in.shapes.string(), in.labels.string(), (dir / "m.h5").string(), "--sh-meshing", "gmsh",
+                                          "--grain-budget", "1e-9", "-j", "2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gmsh overran --grain-budget 1e-09 s; meshed by the kept surface path from its sh instead"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("8 overran --grain-budget"), std::string::npos) << r.err;
+  const io::H5File f = io::H5File::open(dir / "m.h5");
+  const auto path = f.read<std::uint8_t>("/mesh/path");
+  const auto overran = f.read<std::uint8_t>("/mesh/overran_budget");
+  const auto volume = f.read<double>("/mesh/volume");
+  const auto notes = f.read_strings("/mesh/note");
+  ASSERT_EQ(path.size(), kBalls.size());
+  for (std::size_t g = 0; g < path.size(); ++g) {
+    EXPECT_EQ(path[g], 1) << g;
+    EXPECT_EQ(overran[g], 1) << g;
+    EXPECT_NE(notes[g].find("overran"), std::string::npos) << notes[g];
+    EXPECT_NEAR(volume[g], ball_volume(g), 0.05 * ball_volume(g)) << g;
+  }
+  // The default: kept surfaces straight away, nothing over the budget.
+  const auto d = run_tool("shapes2mesh", {in.shapes.string(), in.labels.string(), (dir / "d.h5").string()});
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_NE(d.err.find("0 gmsh remeshed the surface, 8 surface remeshed and kept as the boundary, 0 ellipsoid; 0 overran"),
+            std::string::npos)
+      << d.err;
+}
+
 TEST(Shapes2mesh, OverridesAndRigidSmallGrains) {
   test::TempDir dir;
   const Inputs in = write_inputs(dir);
@@ -299,9 +331,25 @@ TEST(Shapes2mesh, OptionsOutsideTheirRangeAreRefused) {
   refused({"--gamma-floor", "nan"}, "--gamma-floor: must be a finite number in [0, 0.9], not nan");
   refused({"--volume-tol", "inf"}, "[0.0001, 0.5]");
   refused({"--smooth", "nan"}, "[0, 5] voxels");
+  refused({"--grain-budget=-1"}, "--grain-budget: must be a finite number in [0, 3600] s");
+  refused({"--sh-meshing", "fast"}, "--sh-meshing");
   refused({"--grains", "1e19"}, "--grains: must be a whole number in [0, 50000]");
   // -1 wrapped round to 2^64 - 1 grains and ended in a bare "cannot create std::vector larger than max_size()".
   refused({"--grains=-1"}, "--grains: must be a whole number in [0, 50000], not -1");
   refused({"--membrane-thickness", "nan"}, "--membrane-thickness: the length 'nan' must be a finite length");
   refused({"--membrane-thickness", "2m"}, "[1 um, 10 mm]");
+}
+
+TEST(Shapes2mesh, MeshesBeyondTheMemoryAreRefusedWithTheNumbersBeforeMeshing) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  // 100 elements per diameter: about 3e6 elements per grain (3 (d / h)^3), far beyond 2 GB.
+  const auto before = test::list_dir(dir.path());
+  const auto r = test::run_tool_with_memory_limit("shapes2mesh", 2000000000,
+                                                  {in.shapes.string(), (dir / "m.h5").string(), "--elements-per-diameter", "100"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("shapes2mesh needs about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("grains of about 3e+06 elements, 100 per diameter"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("give a smaller --elements-per-diameter"), std::string::npos) << r.err;
+  EXPECT_EQ(test::list_dir(dir.path()), before);
 }

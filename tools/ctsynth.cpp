@@ -126,9 +126,10 @@ int main(int argc, char** argv) {
   app.add_option("--height", o.height, "Cylinder height (platen to platen)")->check(sample_size)->capture_default_str();
   app.add_option("--box", o.box, "Box edge lengths X,Y,Z, e.g. 4mm,4mm,4mm (with --container box; each 10 um to 1 m)");
   app.add_option("--solid-fraction", o.solid_fraction,
-                 "Grain volume / container volume to pack (0.74 is the densest arrangement of equal spheres; random "
-                 "packings of sand stop near 0.64)")
-      ->check(number_in(above(0, 0.74)))->capture_default_str();
+                 fmt::format("Grain volume / container volume to pack ({:g} is the densest arrangement of equal spheres; random "
+                             "packings of sand stop near 0.64)",
+                             synth::kDensestPacking))
+      ->check(number_in(above(0, synth::kDensestPacking)))->capture_default_str();
   app.add_option("--contact-tolerance", o.contact_tolerance,
                  "Largest interpenetration, as a fraction of the smallest grain radius; pairs within it touch")
       ->check(number_in(cli::NumberRange{0, 0.5, true, true}))->capture_default_str();

@@ -1,10 +1,11 @@
-// shapes2mesh: the FDEM twin of the reference scan (SPEC.md sections 5, 7, 8; issue 8).
+// shapes2mesh: the FDEM twin of the reference scan (docs/shapes2mesh.md; docs/methods.md).
 //   shapes2mesh scan_000/shapes.h5 scan_000/labels.h5 model.h5 --vtu model.vtu --msh model.msh
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <unordered_map>
@@ -41,15 +42,17 @@ std::set<std::uint32_t> tracked_labels(const fs::path& tracks) {
 /// Per-grain figures of the run, written under /mesh.
 struct Report {
   std::vector<std::uint32_t> label, source_label;
-  std::vector<std::uint8_t> origin, kind, optimized, remeshed;
+  std::vector<std::uint8_t> origin, path, overran, kind, optimized, remeshed;
   std::vector<std::uint64_t> elements, nodes, surface_nodes, inverted_after_curving, inverted;
-  std::vector<double> size, min_gamma, mean_gamma, min_jacobian, volume, surface_volume, volume_error, seconds;
+  std::vector<double> size, min_gamma, mean_gamma, min_jacobian, volume, surface_volume, volume_error, seconds, grain_seconds;
   std::vector<std::string> note;
 
   void add(std::uint32_t l, std::uint32_t source, const mesh::GrainMeshResult& r) {
     label.push_back(l);
     source_label.push_back(source);
     origin.push_back(static_cast<std::uint8_t>(r.origin));
+    path.push_back(static_cast<std::uint8_t>(r.path));
+    overran.push_back(r.overran);
     kind.push_back(static_cast<std::uint8_t>(r.kind));
     optimized.push_back(r.gmsh.optimized);
     remeshed.push_back(r.remeshed);
@@ -66,6 +69,7 @@ struct Report {
     surface_volume.push_back(r.surface_volume);
     volume_error.push_back(r.quality.volume / r.surface_volume - 1.0);
     seconds.push_back(r.gmsh.seconds);
+    grain_seconds.push_back(r.seconds);
     note.push_back(r.note);
   }
   void write(io::H5File& f, const std::string& parameters) const {
@@ -74,6 +78,10 @@ struct Report {
     f.write("/mesh/source_label", source_label);
     f.write("/mesh/surface_origin", origin);
     f.set_attr("/mesh/surface_origin", "codes", std::string("0 SH fit, 1 smoothed voxels, 2 inertia ellipsoid"));
+    f.write("/mesh/path", path);
+    f.set_attr("/mesh/path", "codes",
+               std::string("0 gmsh remeshes the surface, 1 surface remeshed to the element size and kept as the boundary, 2 ellipsoid"));
+    f.write("/mesh/overran_budget", overran);
     f.write("/mesh/kind", kind);
     f.write("/mesh/element_size", size, units("m"));
     f.write("/mesh/elements", elements);
@@ -90,6 +98,7 @@ struct Report {
     f.write("/mesh/surface_volume", surface_volume, units("m^3"));
     f.write("/mesh/volume_error", volume_error, units("1"));
     f.write("/mesh/gmsh_seconds", seconds, units("s"));
+    f.write("/mesh/seconds", grain_seconds, units("s"));
     f.write_strings("/mesh/note", note);
     f.write_strings("/mesh/parameters", {parameters});
   }
@@ -102,21 +111,26 @@ int main(int argc, char** argv) {
       "shapes2mesh",
       "Build the FDEM twin of a reference scan: every grain of SHAPES (kind=shapes, from labels2shapes) as a "
       "tetrahedral mesh at its CT position (kind=fdem_model), with the sample cylinder, rigid platens top and bottom, "
-      "the membrane geometry and the default materials of SPEC.md section 0. Each grain's surface is its SH fit (an "
-      "icosphere displaced to r(direction)); where labels2shapes flagged the fit unreliable, or the SH surface fails "
-      "the checks (closed, manifold, one piece, outward, no self-intersection), the grain's smoothed voxels from "
-      "LABELS are used, and without LABELS (or if those fail too) its inertia ellipsoid, with a note. gmsh meshes the "
-      "surface (4-node, or 10-node: by default with straight mid-edge nodes whose boundary nodes are then moved "
-      "onto the exact SH surface, --curving gmsh for gmsh's own curving with optimize(HighOrder); either way every "
-      "element's Jacobian is checked and inverted ones have their mid-edge nodes pulled back; 4-node meshes get their "
-      "boundary nodes snapped onto the SH surface too). The element size follows what contact needs (about "
+      "the membrane geometry and the default materials of docs/methods.md. Each grain's surface is its SH fit (an "
+      "icosphere displaced to r(direction)); where labels2shapes flagged the fit unreliable (e.g. a grain that is not "
+      "star-shaped), or the SH surface fails the checks (closed, manifold, one piece, outward, no self-intersection), "
+      "the grain's smoothed voxels from LABELS are used (their largest piece, of any genus), and without LABELS (or if "
+      "those fail too) its inertia ellipsoid, with a note. By default (--sh-meshing kept) every surface is remeshed "
+      "to triangles of the element size (CGAL's isotropic remeshing) that gmsh keeps as the boundary while it fills "
+      "the volume: cheap and robust on rough, angular and non-star grains; --sh-meshing gmsh has gmsh reparametrise "
+      "and remesh SH surfaces instead. 10-node elements get straight mid-edge nodes, then every boundary node is "
+      "moved onto the exact SH surface or the smoothed voxel surface (--curving gmsh: gmsh's own curving with "
+      "optimize(HighOrder) on the gmsh path); every element's Jacobian is checked and distorted ones have their "
+      "mid-edge nodes pulled back; 4-node meshes get their boundary nodes snapped too. gmsh's work on a grain is "
+      "bounded by --grain-budget: an overrun stops that gmsh worker and the grain falls back, with a warning. The element size follows what contact needs (about "
       "--surface-nodes nodes on each grain's surface) and, for 4-node meshes, the volume target --volume-tol from the "
       "grain's measured total mean curvature; "
       "--elements-per-diameter overrides both. Quality (gamma = 3 inradius / circumradius) is measured per element; "
       "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Grains smaller than --rigid-below d50 get "
       "a coarse linear mesh and are marked rigid. LABELS also gives the sample cylinder (ct2labels' region) when it "
       "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel: -j threads, each "
-      "handing its gmsh work to its own gmsh worker process (gmsh is not thread-safe); with --curving snap the model does not depend on -j "
+      "handing its gmsh work to its own gmsh worker process (gmsh is not thread-safe), largest grains first; with "
+      "--curving snap the model does not depend on -j "
       "(gmsh's optimize(HighOrder) is not reproducible run to run), "
       "and a worker that crashes is reported for its grain, which falls back as above. --packing equivalent builds a "
       "statistically equivalent sample instead of the twin: the grains of SHAPES (the shape library; each once, or "
@@ -125,9 +139,10 @@ int main(int argc, char** argv) {
       "the solid fraction holds by construction of the cylinder.");
   fs::path shapes_path, labels_path, model_path, vtu_path, msh_path, tracks_path;
   mesh::GrainMeshOptions mo;
+  mo.budget_seconds = 5.0;
   int subdivisions = 4;
   double rigid_below_d50 = 0.3, platen_friction = 0.0;
-  std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan";
+  std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan", sh_meshing = "kept";
   mesh::EquivalentPackingOptions po;
   po.aspect = 0.0;  // the scan's unless given
   tool.add_input("SHAPES", shapes_path, "Shapes of the reference scan (.h5, kind=shapes)");
@@ -153,8 +168,19 @@ int main(int argc, char** argv) {
       ->check(whole_number_in(2, 6))->capture_default_str();
   app.add_option("--smooth", mo.smooth_vox, "Gaussian sigma (voxels) of the voxel surfaces")
       ->check(number_in(closed(0, 5, "voxels")))->capture_default_str();
+  app.add_option("--sh-meshing", sh_meshing,
+                 "Grains with a usable SH surface: kept (the surface remeshed to the element size and kept as the mesh "
+                 "boundary, gmsh fills it; fast on rough grains) or gmsh (gmsh reparametrises and remeshes the surface, "
+                 "within --grain-budget)")
+      ->check(CLI::IsMember({"kept", "gmsh"}))->capture_default_str();
+  app.add_option("--grain-budget", mo.budget_seconds,
+                 "Seconds gmsh may spend on one grain (0: no limit); on overrun its gmsh worker is stopped and the grain "
+                 "falls back (gmsh remeshing to the kept surface, which then gets at least 10 s; the kept surface to the "
+                 "inertia ellipsoid), counted in the summary and noted in /mesh/note")
+      ->check(number_in(closed(0, 3600, "s")))->capture_default_str();
   app.add_option("--curving", curving,
-                 "10-node grains with an SH surface: snap (boundary nodes moved onto the exact SH surface, inverted "
+                 "10-node grains on the gmsh path (--sh-meshing gmsh; kept surfaces are always snapped): snap (boundary "
+                 "nodes moved onto the exact SH surface, inverted "
                  "elements pulled back) or gmsh (gmsh curves onto the triangulated surface, optimize(HighOrder) when "
                  "an element is inverted; slower)")
       ->check(CLI::IsMember({"snap", "gmsh"}))->capture_default_str();
@@ -173,7 +199,7 @@ int main(int argc, char** argv) {
       ->check(whole_number_in(0, 50000))->capture_default_str();
   app.add_option("--solid-fraction", po.solid_fraction,
                  "--packing equivalent: grain volume / cylinder volume (0: the scan's, from LABELS' sample cylinder)")
-      ->check(number_in(closed(0, 0.74)))->capture_default_str();
+      ->check(number_in(closed(0, synth::kDensestPacking)))->capture_default_str();
   app.add_option("--aspect", po.aspect, "--packing equivalent: cylinder height / diameter (0: the scan's, from LABELS, else 1)")
       ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--seed", po.seed, "--packing equivalent: seed of the draw and the packing")->capture_default_str();
@@ -190,6 +216,7 @@ int main(int argc, char** argv) {
     if (!msh_path.empty() && msh_path.extension() != ".msh") throw UsageError("--msh " + msh_path.string() + " must end in .msh");
     const double thickness = parse_length_m(membrane_thickness, "--membrane-thickness");
     mo.snap_to_sh = curving == "snap";
+    mo.sh_path = sh_meshing == "gmsh" ? mesh::MeshPath::gmsh_surface : mesh::MeshPath::kept_surface;
     const bool equivalent = packing == "equivalent";
     if (equivalent && po.solid_fraction == 0.0 && labels_path.empty())
       throw UsageError("--packing equivalent needs --solid-fraction, or LABELS whose sample cylinder gives the scan's");
@@ -256,7 +283,7 @@ int main(int argc, char** argv) {
         double solid = 0.0;
         for (const auto& g : shapes.grains) solid += g.volume;
         po.solid_fraction = solid / (M_PI * region.radius * region.radius * height);
-        if (po.solid_fraction > 0.74)
+        if (po.solid_fraction > synth::kDensestPacking)
           throw DataError(fmt::format("the scan's solid fraction comes out at {:.3f} from {}, above what packs; give --solid-fraction",
                                       po.solid_fraction, labels_path.string()));
       }
@@ -264,9 +291,10 @@ int main(int argc, char** argv) {
       try {
         sample = mesh::pack_equivalent_sample(grains, shapes.degree, po, ctx.progress_callback("packing"));
       } catch (const DataError& e) {
-        throw DataError(fmt::format("the equivalent sample did not pack at solid fraction {:.3f} ({}); lower --solid-fraction, or "
+        throw DataError(fmt::format("the equivalent sample did not pack at solid fraction {:.3f} ({}); lower --solid-fraction, "
                                     "draw more grains with --grains for a wider cylinder (rough grains jam near 0.58 in "
-                                    "cylinders a few d50 across)",
+                                    "cylinders a few d50 across), or try another --seed or --aspect: near jamming, "
+                                    "whether a draw packs depends on the draw",
                                     po.solid_fraction, e.message()));
       }
       throw_if_interrupted();
@@ -285,14 +313,23 @@ int main(int argc, char** argv) {
     const auto grain = [&](std::size_t i) -> const shape::GrainShape& { return sample ? members[i] : *grains[i]; };
     const auto source_label = [&](std::size_t i) { return sample ? grains[sample->source[i]]->label : grains[i]->label; };
 
+    mesh::check_meshing_memory(count, std::min<int>(ctx.threads(), static_cast<int>(count)), mo.order, mo.size);
     const mesh::ShSurfaceBasis basis(subdivisions, shapes.degree);
     std::vector<mesh::GrainMeshResult> results(count);
     std::vector<std::string> failures(count);
     auto progress = ctx.progress("meshing", count);
     // Voxel surfaces exist only where the grains are, in the scan.
     const Volume<std::uint32_t>* label_volume = labels && !sample ? &labels->labels : nullptr;
+    // Largest grains first, one at a time to whichever thread is free: the costly ones (big voxel
+    // surfaces, rough SH surfaces) start early and the small ones fill in, so no worker idles at
+    // the end while another still has a long grain (a grain is bounded by --grain-budget).
+    std::vector<std::size_t> order(count);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return grain(a).equivalent_diameter > grain(b).equivalent_diameter; });
 #pragma omp parallel for schedule(dynamic, 1)
-    for (std::size_t i = 0; i < count; ++i) {
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t i = order[k];
       if (interrupted()) continue;
       const auto box = label_volume ? bbox.at(grain(i).label) : std::array<std::size_t, 6>{};
       try {
@@ -311,21 +348,30 @@ int main(int argc, char** argv) {
 
     fdem::Model model;
     Report report;
-    std::size_t origin_count[3] = {0, 0, 0}, rigid = 0, remeshed = 0, optimized = 0, below = 0, curving_inverted = 0;
-    double seconds = 0.0;
+    std::size_t origin_count[3] = {0, 0, 0}, path_count[3] = {0, 0, 0}, overran = 0, rigid = 0, remeshed = 0, optimized = 0, below = 0, curving_inverted = 0;
+    double seconds = 0.0, grain_seconds = 0.0;
     for (std::size_t i = 0; i < count; ++i) {
       const auto& r = results[i];
       const std::uint32_t label = sample ? static_cast<std::uint32_t>(i + 1) : grains[i]->label;
       mesh::append_grain(model, r.mesh, label, r.kind);
       report.add(label, source_label(i), r);
       ++origin_count[static_cast<int>(r.origin)];
+      ++path_count[static_cast<int>(r.path)];
+      overran += r.overran;
+      grain_seconds += r.seconds;
+      if (r.overran) spdlog::warn("grain {}: gmsh overran --grain-budget {:g} s; meshed by the {} path from its {} instead", label,
+                                  mo.budget_seconds, mesh::mesh_path_name(r.path), mesh::surface_origin_name(r.origin));
       rigid += r.kind == fdem::GrainKind::rigid;
       remeshed += r.remeshed;
       optimized += r.gmsh.optimized;
       curving_inverted += r.gmsh.inverted_after_curving > 0;
       below += r.quality.below_floor > 0 || r.quality.inverted > 0;
       seconds += r.gmsh.seconds;
-      if (!r.note.empty()) spdlog::debug("grain {}: {}", label, r.note);
+      spdlog::debug("grain {}: {} from {}, {:.3f} s ({:.3f} s in gmsh), {} elements, {} surface nodes, volume {:+.2f} %, min gamma "
+                    "{:.2f}{}{}",
+                    label, mesh::mesh_path_name(r.path), mesh::surface_origin_name(r.origin), r.seconds, r.gmsh.seconds, r.quality.elements,
+                    r.quality.surface_nodes, 100.0 * (r.quality.volume / r.surface_volume - 1.0), r.quality.min_gamma,
+                    r.note.empty() ? "" : "; ", r.note);
     }
     // The sample: the equivalent packing's cylinder, ct2labels' region when it is bounded, else
     // the cylinder around the grains.
@@ -350,9 +396,13 @@ int main(int argc, char** argv) {
     const std::size_t n = count;
     spdlog::info("{} grains: {} from SH, {} from voxels, {} as ellipsoids; {} rigid (below {:.3g} mm)", n, origin_count[0],
                  origin_count[1], origin_count[2], rigid, mo.rigid_diameter * 1e3);
-    spdlog::info("{} nodes, {} elements ({:.0f} per grain), {} surface triangles; {:.2f} s in gmsh ({:.3f} s per grain)",
+    spdlog::info("meshing paths: {} gmsh remeshed the surface, {} surface remeshed and kept as the boundary, {} ellipsoid; {} "
+                 "overran --grain-budget {:g} s",
+                 path_count[0], path_count[1], path_count[2], overran, mo.budget_seconds);
+    spdlog::info("{} nodes, {} elements ({:.0f} per grain), {} surface triangles; {:.2f} s in gmsh ({:.3f} s per grain), {:.3f} s "
+                 "per grain in all (summed over threads)",
                  model.nodes.size(), model.element_count(), static_cast<double>(model.element_count()) / n, model.triangles.size(),
-                 seconds, seconds / n);
+                 seconds, seconds / n, grain_seconds / n);
     spdlog::info("quality: {} grains had elements inverted by curving ({} through optimize(HighOrder), the others' mid-edge "
                  "nodes pulled back); {} grains remeshed, {} still below the gamma floor {} or inverted",
                  curving_inverted, optimized, remeshed, below, mo.gamma_floor);
@@ -365,7 +415,8 @@ int main(int argc, char** argv) {
         {"volume_tolerance", mo.size.volume_tolerance}, {"gamma_floor", mo.gamma_floor}, {"rigid_below_d50", rigid_below_d50},
         {"rigid_diameter_m", mo.rigid_diameter}, {"surface_subdivisions", subdivisions}, {"smooth_vox", mo.smooth_vox}, {"curving", curving},
         {"membrane_thickness_m", thickness}, {"platen_friction", platen_friction}, {"sample_source", sample_source},
-        {"tracked_only", tracks_path.string()}, {"gmsh_processes", workers.size()}, {"packing", packing}};
+        {"tracked_only", tracks_path.string()}, {"gmsh_processes", workers.size()}, {"packing", packing},
+        {"grain_budget_s", mo.budget_seconds}, {"sh_meshing", sh_meshing}};
     if (sample)
       parameters["equivalent_packing"] = {{"grains", po.grains}, {"solid_fraction", po.solid_fraction}, {"aspect", po.aspect},
                                           {"seed", po.seed}, {"packed_solid_fraction", sample->report.solid_fraction},

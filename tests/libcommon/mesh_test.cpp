@@ -1,8 +1,10 @@
 // mesh/: surface checks, tetrahedral meshes through gmsh (4 and 10 node), in this process and in
-// worker processes, our quality measures, sizing from curvature, grains joining an fdem::Model, the
+// worker processes (and their time budget), our quality measures, sizing from curvature, surface
+// remeshing and the kept-surface path of non-star grains, grains joining an fdem::Model, the
 // equivalent packing; accuracy against analytic volumes.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <optional>
 
@@ -17,6 +19,7 @@
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/mesh/surface.hpp"
+#include "graintwin/mesh/surface_remesh.hpp"
 #include "graintwin/mesh/tet_mesh.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/sh_surface.hpp"
@@ -345,6 +348,11 @@ TEST(GmshWorkers, MeshAsThisProcessDoesAndSurviveACrash) {
     EXPECT_EQ(ellipsoid_there.nodes, ellipsoid_here.nodes);
     // A gmsh failure comes back as the worker's one-sentence DataError.
     EXPECT_THROW(mesh::tetrahedralize(mesh::TriangleSurface{}, tet_options(0.35, 1), nullptr, &workers), DataError);
+    // That worker's gmsh is not trusted again: it was stopped, and the next request forks a new one.
+    EXPECT_EQ(workers.pids()[0], 0);
+    EXPECT_EQ(mesh::tetrahedralize(s, snapped, nullptr, &workers).nodes, here.nodes);
+    ASSERT_NE(workers.pids()[0], 0);
+    first.push_back(workers.pids()[0]);
     // A worker killed under a request: that request fails naming the signal, the next one is served.
     ASSERT_EQ(::kill(workers.pids()[0], SIGKILL), 0);
     try {
@@ -363,6 +371,179 @@ TEST(GmshWorkers, MeshAsThisProcessDoesAndSurviveACrash) {
     EXPECT_EQ(::waitpid(pid, nullptr, WNOHANG), -1) << pid;
     EXPECT_EQ(errno, ECHILD);
   }
+}
+
+TEST(Surface, LargestPieceKeepsTheBodyAndDropsCrumbsAndCavities) {
+  const auto body = sphere_surface(1.0, 2);
+  mesh::TriangleSurface s = body;
+  const auto add = [&](const mesh::TriangleSurface& piece, const Vector3d& shift, bool inward) {
+    const int offset = static_cast<int>(s.vertices.size());
+    for (const Vector3d& p : piece.vertices) s.vertices.push_back(p + shift);
+    for (auto t : piece.triangles) {
+      if (inward) std::swap(t[1], t[2]);
+      s.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+  };
+  add(sphere_surface(0.3, 2), Vector3d(3, 0, 0), false);  // a crumb outside
+  add(sphere_surface(0.5, 2), Vector3d::Zero(), true);    // a cavity shell inside (negative volume)
+  const mesh::TriangleSurface kept = mesh::largest_piece(s);
+  EXPECT_EQ(kept.vertices, body.vertices);
+  EXPECT_EQ(kept.triangles, body.triangles);
+  EXPECT_EQ(mesh::largest_piece(body).triangles, body.triangles);
+}
+
+TEST(SurfaceRemesh, DenseSphereBecomesEmbeddedTrianglesOfTheEdgeOnTheSurface) {
+  const auto dense = sphere_surface(1.0, 5);  // 20 480 triangles, edges near 0.04
+  const mesh::TriangleSurface coarse = mesh::remesh_isotropic(dense, 0.3);
+  const mesh::SurfaceCheck c = mesh::check_surface(coarse);
+  EXPECT_TRUE(c.ok()) << c.problems();
+  // A sphere of area 4 pi in triangles of edge 0.3 (area 0.039): about 320, and edges within
+  // the remesher's 4/5 .. 4/3 band on average.
+  EXPECT_GT(coarse.triangles.size(), 200u);
+  EXPECT_LT(coarse.triangles.size(), 500u);
+  double edges = 0.0;
+  for (const auto& t : coarse.triangles)
+    for (int k = 0; k < 3; ++k) edges += (coarse.vertices[t[k]] - coarse.vertices[t[(k + 1) % 3]]).norm();
+  const double mean_edge = edges / (3.0 * coarse.triangles.size());
+  EXPECT_GT(mean_edge, 0.8 * 0.3);
+  EXPECT_LT(mean_edge, 4.0 / 3.0 * 0.3);
+  // Every vertex on the input (within its own chord error, edge^2 / 8 R = 2e-4).
+  for (const Vector3d& p : coarse.vertices) EXPECT_NEAR(p.norm(), 1.0, 3e-4);
+  const auto onto = mesh::closest_point_on(dense);
+  EXPECT_NEAR((onto(Vector3d(3, 0, 0)) - Vector3d(1, 0, 0)).norm(), 0.0, 1e-3);
+  EXPECT_NEAR(onto(Vector3d(0, 0.2, 0)).norm(), 1.0, 3e-4);
+  EXPECT_THROW(mesh::remesh_isotropic(dense, 0.0), UsageError);
+}
+
+TEST(Gmsh, KeptSurfaceIsTheBoundaryOfTheMesh) {
+  const auto s = mesh::remesh_isotropic(sphere_surface(1.0, 4), 0.4);
+  mesh::TetOptions o = tet_options(0.4, 1);
+  o.keep_surface = true;
+  const mesh::TetMesh m = mesh::tetrahedralize(s, o);
+  expect_valid(m);
+  // gmsh filled the volume without touching the surface: its boundary is the input, volume and all.
+  const mesh::TriangleSurface b = mesh::boundary_surface(m);
+  EXPECT_EQ(b.triangles.size(), s.triangles.size());
+  EXPECT_NEAR(mesh::enclosed_volume(b), mesh::enclosed_volume(s), 1e-12);
+}
+
+/// A U-shaped grain (label 5) of voxels 1e-5 m: a block 8 x 16 x 16 (x, y, z) with a slot 6 voxels
+/// wide and 10 deep cut from its top: no centroid ray sees its whole surface (not star-shaped).
+struct UGrain {
+  static constexpr double h = 1e-5;
+  Volume<std::uint32_t> labels{{26, 26, 18}, {h, h, h}};
+  std::array<std::size_t, 6> bbox{4, 4, 4, 20, 20, 12};  // z0, y0, x0, z1, y1, x1
+  std::size_t voxels = 0;
+  shape::GrainShape grain;
+  UGrain() {
+    Vector3d sum = Vector3d::Zero();
+    for (std::size_t z = 4; z < 20; ++z)
+      for (std::size_t y = 4; y < 20; ++y)
+        for (std::size_t x = 4; x < 12; ++x)
+          if (!(z >= 10 && y >= 9 && y < 15)) labels(z, y, x) = 5, ++voxels, sum += Vector3d(double(x), double(y), double(z)) * h;
+    const double volume = double(voxels) * h * h * h;
+    grain.label = 5;
+    grain.centroid = sum / double(voxels);
+    grain.flags = shape::shape_flag::not_star_shaped | shape::shape_flag::unreliable_fit;
+    grain.coeffs = Eigen::VectorXd::Zero(25);
+    grain.coeffs[0] = std::cbrt(3.0 * volume / (4.0 * M_PI)) * std::sqrt(4.0 * M_PI);
+    grain.equivalent_diameter = std::cbrt(6.0 * volume / M_PI);
+    grain.surface_area = 2.0 * (8 * 16 + 8 * 16 + 16 * 16) * h * h + 2.0 * 10 * 6 * h * h;
+    grain.semi_axes = Vector3d(4, 8, 8) * h;
+  }
+  double volume() const { return double(voxels) * h * h * h; }
+};
+
+/// Whether p lies in one of the mesh's elements (their corner tetrahedra).
+bool inside(const mesh::TetMesh& m, const Vector3d& p) {
+  for (std::size_t e = 0; e < m.element_count(); ++e) {
+    const std::uint32_t* n = m.element(e);
+    const Vector3d &a = m.nodes[n[0]], &b = m.nodes[n[1]], &c = m.nodes[n[2]], &d = m.nodes[n[3]];
+    const auto six = [](const Vector3d& p0, const Vector3d& p1, const Vector3d& p2, const Vector3d& p3) {
+      return (p1 - p0).cross(p2 - p0).dot(p3 - p0);
+    };
+    if (six(p, b, c, d) >= 0 && six(a, p, c, d) >= 0 && six(a, b, p, d) >= 0 && six(a, b, c, p) >= 0) return true;
+  }
+  return false;
+}
+
+TEST(GrainMesher, NonStarGrainFromLabelsKeepsItsCavityOnTheKeptSurfacePath) {
+  const UGrain u;
+  const mesh::ShSurfaceBasis basis(3, 4);
+  for (int order : {1, 2}) {
+    mesh::GrainMeshOptions o;
+    o.order = order;
+    // Two elements across its 5-voxel arms (the contact rule's 3 per diameter would put one
+    // across, and the straightened mid-edge nodes of such elements cut 10 % off).
+    o.size.elements_per_diameter = 6;
+    const auto r = mesh::mesh_grain(u.grain, basis, &u.labels, u.bbox, o);
+    EXPECT_EQ(r.path, mesh::MeshPath::kept_surface) << r.note;
+    EXPECT_EQ(r.origin, mesh::SurfaceOrigin::voxels);
+    EXPECT_FALSE(r.overran);
+    expect_valid(r.mesh);
+    EXPECT_EQ(r.quality.inverted, 0u);
+    // The surface encloses the voxels' volume (its level is chosen so); the mesh follows it
+    // within 2 % curved, 5 % with straight facets (-4.1 % and -0.6 % measured).
+    EXPECT_NEAR(r.surface_volume, u.volume(), 2e-3 * u.volume());
+    EXPECT_NEAR(r.quality.volume, u.volume(), (order == 1 ? 0.05 : 0.02) * u.volume()) << "order " << order;
+    // The slot stays open (a radial surface about the centroid would have filled it), the arms are solid.
+    EXPECT_FALSE(inside(r.mesh, Vector3d(8, 11.5, 16) * UGrain::h)) << "order " << order;
+    EXPECT_TRUE(inside(r.mesh, Vector3d(8, 6, 16) * UGrain::h)) << "order " << order;
+    EXPECT_TRUE(inside(r.mesh, Vector3d(8, 17, 16) * UGrain::h)) << "order " << order;
+  }
+}
+
+TEST(GrainMesher, OverrunOnTheShSurfaceFallsBackToTheKeptSurfaceAndIsReported) {
+  // A budget far shorter than any gmsh run: gmsh's remeshing of the SH surface always overruns (in a worker, which is
+  // stopped and replaced), and the kept-surface path, which gets at least 10 s, meshes it.
+  const mesh::ShSurfaceBasis basis(4, 4);
+  const double r0 = 0.3e-3, exact = 4.0 / 3.0 * M_PI * r0 * r0 * r0;
+  mesh::GmshWorkers workers(1);
+  const pid_t first = workers.pids()[0];
+  mesh::GrainMeshOptions o;
+  o.workers = &workers;
+  o.sh_path = mesh::MeshPath::gmsh_surface;
+  o.budget_seconds = 1e-9;
+  const auto r = mesh::mesh_grain(sh_grain(r0, 0.0, Vector3d::Zero()), basis, nullptr, {}, o);
+  EXPECT_TRUE(r.overran);
+  EXPECT_EQ(r.path, mesh::MeshPath::kept_surface);
+  EXPECT_EQ(r.origin, mesh::SurfaceOrigin::sh);
+  EXPECT_NE(r.note.find("overran"), std::string::npos) << r.note;
+  expect_valid(r.mesh);
+  EXPECT_NEAR(r.quality.volume, exact, 0.01 * exact);  // snapped onto the exact sphere
+  EXPECT_GT(r.seconds, 0.0);
+  EXPECT_NE(workers.pids()[0], first) << "the overrunning worker was replaced";
+  // The kept surface first (the default) under that budget: it overruns too, and the grain
+  // becomes its ellipsoid.
+  o.sh_path = mesh::MeshPath::kept_surface;
+  const auto kept_first = mesh::mesh_grain(sh_grain(r0, 0.0, Vector3d::Zero()), basis, nullptr, {}, o);
+  EXPECT_TRUE(kept_first.overran);
+  EXPECT_EQ(kept_first.path, mesh::MeshPath::ellipsoid);
+  EXPECT_NE(kept_first.note.find("gmsh overran its 1e-09 s on the sh surface kept as the boundary"), std::string::npos)
+      << kept_first.note;
+  expect_valid(kept_first.mesh);
+  // No budget: the same grain takes the gmsh path.
+  o.sh_path = mesh::MeshPath::gmsh_surface;
+  o.budget_seconds = 0.0;
+  const auto unhurried = mesh::mesh_grain(sh_grain(r0, 0.0, Vector3d::Zero()), basis, nullptr, {}, o);
+  EXPECT_FALSE(unhurried.overran);
+  EXPECT_EQ(unhurried.path, mesh::MeshPath::gmsh_surface);
+}
+
+TEST(GmshWorkers, OverrunStopsTheWorkerAndTheNextRequestIsServed) {
+  const auto s = sphere_surface(1.0, 3);
+  const mesh::TetMesh here = mesh::tetrahedralize(s, tet_options(0.35, 1));
+  mesh::GmshWorkers workers(1);
+  const pid_t first = workers.pids()[0];
+  mesh::TetOptions late = tet_options(0.35, 1);
+  late.deadline = std::chrono::steady_clock::now();  // already passed when the request is sent
+  EXPECT_THROW(mesh::tetrahedralize(s, late, nullptr, &workers), mesh::GmshOverrun);
+  EXPECT_EQ(workers.pids()[0], 0) << "stopped";
+  EXPECT_EQ(::waitpid(first, nullptr, WNOHANG), -1) << "and reaped";
+  EXPECT_EQ(mesh::tetrahedralize(s, tet_options(0.35, 1), nullptr, &workers).nodes, here.nodes);
+  EXPECT_NE(workers.pids()[0], 0);
+  // In this process a spent budget refuses to start (gmsh cannot be stopped there).
+  EXPECT_THROW(mesh::tetrahedralize(s, late), mesh::GmshOverrun);
 }
 
 TEST(GmshWorkers, NoMoreThanUsefulAndStoppedTogether) {
@@ -426,4 +607,13 @@ TEST(EquivalentPacking, KeepsTheLibraryPsdAndTheSolidFraction) {
   pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitZ()));
   mesh::place_mesh(m, pose);
   EXPECT_LT((m.nodes[0] - Vector3d(0, 1, 5)).norm(), 1e-12);
+}
+
+TEST(GrainMesher, ExpectedElementsFollowTheSizeRule) {
+  mesh::SizeTargets given;
+  given.elements_per_diameter = 10.0;
+  EXPECT_NEAR(mesh::expected_elements_per_grain(1, given), 3000.0, 1e-6);
+  // Automatic 10-node size: 250 surface nodes over a sphere's area put d / h = sqrt(250 / (7.7 pi)).
+  const double per_diameter = std::sqrt(250.0 / (7.7 * M_PI));
+  EXPECT_NEAR(mesh::expected_elements_per_grain(2, mesh::SizeTargets{}), 3.0 * std::pow(per_diameter, 3), 1e-6);
 }

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::mesh {
@@ -13,10 +14,10 @@ namespace graintwin::mesh {
 EquivalentSample pack_equivalent_sample(const std::vector<const shape::GrainShape*>& library, int degree,
                                         const EquivalentPackingOptions& o,
                                         const std::function<void(double fraction_done)>& progress) {
-  if (!(o.solid_fraction > 0.0 && o.solid_fraction <= 0.74))
-    throw UsageError(fmt::format("the solid fraction {:.3g} of an equivalent sample must be in (0, 0.74]: 0.74 is the densest "
+  if (!(o.solid_fraction > 0.0 && o.solid_fraction <= synth::kDensestPacking))
+    throw UsageError(fmt::format("the solid fraction {:.3g} of an equivalent sample must be in (0, {:g}]: {:g} is the densest "
                                  "arrangement of equal spheres",
-                                 o.solid_fraction));
+                                 o.solid_fraction, synth::kDensestPacking, synth::kDensestPacking));
   if (!(o.aspect > 0.0)) throw UsageError(fmt::format("the sample's height / diameter must be positive (got {})", o.aspect));
   EquivalentSample s;
   // The packer's radius tables, one per usable library grain (true surface, then each smooth stage).
@@ -27,6 +28,7 @@ EquivalentSample pack_equivalent_sample(const std::vector<const shape::GrainShap
   std::vector<std::size_t> usable;
   std::vector<std::vector<shape::RadialTable>> tables(stages_degree.size());
   for (std::size_t i = 0; i < library.size(); ++i) {
+    throw_if_interrupted();  // a library of thousands of grains takes seconds to tabulate
     const shape::GrainShape& g = *library[i];
     if (g.flags & shape::shape_flag::unreliable_fit) {
       ++s.unusable;

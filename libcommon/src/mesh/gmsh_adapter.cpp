@@ -214,9 +214,11 @@ void build(const detail::GmshRequest& q) {
   for (const auto& t : surface.triangles)
     for (int k : t) connectivity.push_back(static_cast<std::size_t>(k) + 1);
   gmsh::model::mesh::addElementsByType(s, 2, {}, connectivity);
-  // forReparametrization splits the closed surface into patches that each have one map.
-  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
-  gmsh::model::mesh::createGeometry();
+  if (!q.keep_surface) {
+    // forReparametrization splits the closed surface into patches that each have one map.
+    gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
+    gmsh::model::mesh::createGeometry();
+  }
   gmsh::vectorpair surfaces;
   gmsh::model::getEntities(surfaces, 2);
   std::vector<int> loop;
@@ -238,8 +240,11 @@ TetMesh run(detail::GmshRequest& q, const TetOptions& o, TetReport* report, Gmsh
   TetReport& r = report ? *report : local;
   r = TetReport{};
   q.size = o.size, q.order = o.order, q.fix_inverted = o.fix_inverted, q.straight = o.order == 2 && o.project;
+  q.keep_surface = o.keep_surface && q.body == detail::GmshRequest::Body::surface;
   if (q.size_at && workers) throw UsageError("tetrahedralize: graded sizes (size_at) run in this process only, not in gmsh workers");
-  TetMesh m = workers ? workers->run(q, r) : detail::run_gmsh(q, r);
+  if (!workers && std::chrono::steady_clock::now() >= o.deadline)
+    throw GmshOverrun("the grain's time budget was spent before gmsh could start");
+  TetMesh m = workers ? workers->run(q, r, o.deadline) : detail::run_gmsh(q, r);
   if (place) place(m);
   if (o.project) snap_to_surface(m, o.project, r);
   return m;

@@ -19,6 +19,7 @@ struct GmshRequest {
   int order = 1;
   bool fix_inverted = true;                         ///< order 2, gmsh's curving: optimize(HighOrder) when inverted
   bool straight = false;                            ///< order 2: straight mid-edge nodes (the caller snaps them)
+  bool keep_surface = false;                        ///< body == surface: its triangles are the boundary mesh (no reparametrisation)
   /// Graded size at a point of the body's frame (TetOptions::size_at moved there); in-process
   /// only: a function cannot cross to a worker.
   std::function<double(const Eigen::Vector3d&)> size_at;

@@ -98,7 +98,7 @@ std::vector<Eigen::Vector3d> unflatten(const std::vector<double>& xyz) {
 
 std::vector<char> encode_request(const detail::GmshRequest& q) {
   Writer w;
-  w.put(q.body), w.put(q.size), w.put(q.order), w.put(q.fix_inverted), w.put(q.straight);
+  w.put(q.body), w.put(q.size), w.put(q.order), w.put(q.fix_inverted), w.put(q.straight), w.put(q.keep_surface);
   w.put(q.semi_axes.x()), w.put(q.semi_axes.y()), w.put(q.semi_axes.z());
   w.put_all(flatten(q.surface.vertices));
   w.put_all(q.surface.triangles);
@@ -110,6 +110,7 @@ detail::GmshRequest decode_request(const std::vector<char>& bytes) {
   detail::GmshRequest q;
   q.body = r.get<detail::GmshRequest::Body>();
   q.size = r.get<double>(), q.order = r.get<int>(), q.fix_inverted = r.get<bool>(), q.straight = r.get<bool>();
+  q.keep_surface = r.get<bool>();
   for (int k = 0; k < 3; ++k) q.semi_axes[k] = r.get<double>();
   q.surface.vertices = unflatten(r.get_all<double>());
   q.surface.triangles = r.get_all<std::array<int, 3>>();
@@ -301,7 +302,7 @@ void GmshWorkers::stop(const std::vector<std::size_t>& slots, bool kill) {
   }
 }
 
-TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report) {
+TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report, std::chrono::steady_clock::time_point deadline) {
   std::size_t slot = 0;
   {
     std::unique_lock lock(mutex_);
@@ -326,14 +327,26 @@ TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report) 
   } release{*this, slot};
   const int fd = workers_[slot].socket;
   const pid_t pid = workers_[slot].pid;
-  const auto wait = [&] {  // until the reply can be read, or an interrupt
+  const auto started = std::chrono::steady_clock::now();
+  const auto wait = [&] {  // until the reply can be read, or an interrupt, or the deadline
     for (pollfd p{fd, POLLIN, 0};;) {
-      const int ready = ::poll(&p, 1, 100);
+      int timeout_ms = 100;
+      if (deadline != std::chrono::steady_clock::time_point::max()) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
+        timeout_ms = static_cast<int>(std::clamp<long long>(left, 0, 100));
+      }
+      const int ready = ::poll(&p, 1, timeout_ms);
       if (ready > 0 || (ready < 0 && errno != EINTR)) return;  // recv reports errors
       if (interrupted()) {
         std::lock_guard lock(mutex_);
         stop({slot}, true);
         throw InterruptedError();
+      }
+      if (std::chrono::steady_clock::now() >= deadline) {
+        std::lock_guard lock(mutex_);
+        stop({slot}, true);  // killed and reaped; the next call forks a new one
+        throw GmshOverrun(fmt::format("gmsh overran the time budget ({:.2f} s) and its worker was stopped",
+                                      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()));
       }
     }
   };
@@ -352,7 +365,15 @@ TetMesh GmshWorkers::run(const detail::GmshRequest& request, TetReport& report) 
                                 "takes the next request",
                                 pid, describe(status), request.body == detail::GmshRequest::Body::ellipsoid ? "an ellipsoid" : "a surface"));
   }
-  return decode_reply(reply, report);
+  try {
+    return decode_reply(reply, report);
+  } catch (const DataError&) {
+    // A gmsh that failed is not to be trusted with the next request: after a PLC error in boundary
+    // recovery, the same worker's next meshes (an ellipsoid, another grain) came out empty.
+    std::lock_guard lock(mutex_);
+    stop({slot}, true);
+    throw;
+  }
 }
 
 }  // namespace graintwin::mesh

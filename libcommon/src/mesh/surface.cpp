@@ -147,6 +147,37 @@ double total_mean_curvature(const TriangleSurface& m) {
   return 0.5 * sum;
 }
 
+TriangleSurface largest_piece(const TriangleSurface& m) {
+  // Union-find over vertices joined by the triangles.
+  std::vector<int> parent(m.vertices.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  const auto root = [&](int v) {
+    while (parent[static_cast<std::size_t>(v)] != v) v = parent[static_cast<std::size_t>(v)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(v)])];
+    return v;
+  };
+  for (const auto& t : m.triangles)
+    for (int k = 1; k < 3; ++k) parent[static_cast<std::size_t>(root(t[static_cast<std::size_t>(k)]))] = root(t[0]);
+  std::unordered_map<int, double> volume;  // per piece root, x6
+  for (const auto& t : m.triangles)
+    volume[root(t[0])] += m.vertices[static_cast<std::size_t>(t[0])].dot(
+        m.vertices[static_cast<std::size_t>(t[1])].cross(m.vertices[static_cast<std::size_t>(t[2])]));
+  if (volume.size() <= 1) return m;
+  int best = -1;
+  for (const auto& [r, v] : volume)
+    if (best < 0 || v > volume[best] || (v == volume[best] && r < best)) best = r;
+  TriangleSurface out;
+  std::vector<int> renumber(m.vertices.size(), -1);  // the piece's vertices in their order
+  for (const auto& t : m.triangles)
+    if (root(t[0]) == best)
+      for (int v : t) renumber[static_cast<std::size_t>(v)] = 0;
+  for (std::size_t v = 0; v < m.vertices.size(); ++v)
+    if (renumber[v] == 0) renumber[v] = static_cast<int>(out.vertices.size()), out.vertices.push_back(m.vertices[v]);
+  for (const auto& t : m.triangles)
+    if (root(t[0]) == best)
+      out.triangles.push_back({renumber[static_cast<std::size_t>(t[0])], renumber[static_cast<std::size_t>(t[1])], renumber[static_cast<std::size_t>(t[2])]});
+  return out;
+}
+
 std::string SurfaceCheck::problems() const {
   std::vector<std::string> p;
   if (open_edges) p.push_back(std::to_string(open_edges) + " open edges");

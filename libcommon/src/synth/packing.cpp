@@ -60,7 +60,7 @@ using detail::WallHit;
 // Constants of the method (dimensionless), chosen on packings of spheres and of 1.3:1 ellipsoids
 // with an Ottawa-sand size spread (tests/libcommon/packing_test.cpp).
 struct Tune {
-  double max_fill = 0.74;           // densest packing of equal spheres: refuse anything denser
+  double max_fill = kDensestPacking;  // refuse anything denser
   double default_s0 = 0.55;         // initial scale for compact grains ...
   double s0_bounding_fill = 0.25;   // ... lowered so that bounding spheres fill at most this
   double rotation_gain = 0.5;       // weight of torques against forces (0: grains never turn)
@@ -292,7 +292,7 @@ class Packer {
   void check_fit() const {
     if (fill_ > kTune.max_fill) {
       throw DataError("scene: grains fill " + fmt_num(fill_) + " of the " + kind_name(c_) +
-                      ", above the 0.74 that any packing allows; enlarge the container or lower "
+                      ", above the " + fmt_num(kDensestPacking) + " that any packing allows; enlarge the container or lower "
                       "the grain count");
     }
     const double room = c_.kind == Container::Kind::cylinder

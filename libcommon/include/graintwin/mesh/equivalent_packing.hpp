@@ -1,5 +1,5 @@
 #pragma once
-// The statistically equivalent sample (issue 8): instead of the scan's own arrangement, grains
+// The statistically equivalent sample: instead of the scan's own arrangement, grains
 // drawn from the shape library (the grains of a shapes file, SH surfaces about their centroids)
 // packed at random positions and orientations into a cylinder at a chosen solid fraction, by the
 // synthetic-scan packer (synth::pack_in_stages: grown smooth, then with their true roughness).
@@ -19,7 +19,7 @@ namespace graintwin::mesh {
 
 struct EquivalentPackingOptions {
   std::size_t grains = 0;       ///< grains in the sample; 0: every usable library grain once
-  double solid_fraction = 0.0;  ///< drawn grain volume / cylinder volume, in (0, 0.74]
+  double solid_fraction = 0.0;  ///< drawn grain volume / cylinder volume, in (0, synth::kDensestPacking]
   double aspect = 1.0;          ///< cylinder height / diameter (> 0)
   /// SH degrees of the smoothed stages packed first, increasing; those not below the library's
   /// degree are left out.

@@ -3,6 +3,7 @@
 // thread-safe: in-process calls hold one process-wide lock (callers may call from many threads, the
 // gmsh part runs one at a time); parallel meshing goes through GmshWorkers, worker processes with
 // a gmsh each.
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <mutex>
@@ -12,6 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "graintwin/core/error.hpp"
 #include "graintwin/mesh/surface.hpp"
 #include "graintwin/mesh/tet_mesh.hpp"
 
@@ -33,6 +35,20 @@ struct TetOptions {
   /// the returned mesh (gmsh's size callback), never above `size`; e.g. fine near the point where
   /// a grain will touch another (fdem::graded_element_size).
   std::function<double(const Eigen::Vector3d&)> size_at;
+  /// The surface's own triangles become the boundary of the mesh (gmsh only fills the volume, no
+  /// classification or reparametrisation): for a surface already remeshed to about `size`
+  /// (remesh_isotropic), of any genus. Without it gmsh remeshes the surface and needs it one
+  /// sphere-like piece.
+  bool keep_surface = false;
+  /// gmsh must answer by then, or GmshOverrun is thrown (a worker is killed and replaced; in this
+  /// process the run is refused when the time has already passed, since it cannot be stopped).
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+};
+
+/// gmsh did not finish before TetOptions::deadline (the grain's time budget).
+class GmshOverrun : public DataError {
+ public:
+  using DataError::DataError;
 };
 
 struct TetReport {
@@ -58,8 +74,9 @@ struct GmshRequest;
 /// from any thread takes a free worker (waiting for one), sends it the body and options through a
 /// socket and gets the mesh back. Results do not depend on which worker meshed (each request is a
 /// fresh gmsh model). A worker that dies is reported as a DataError for that call and forked again
-/// for the next; an interrupt (graintwin::interrupted) kills the worker being waited for and throws
-/// InterruptedError. Workers end and are reaped when the pool is destroyed, and die with the
+/// for the next; so is one whose gmsh failed (its global state may be broken) or that overran the
+/// request's deadline (killed, GmshOverrun); an interrupt (graintwin::interrupted) kills the worker
+/// being waited for and throws InterruptedError. Workers end and are reaped when the pool is destroyed, and die with the
 /// parent. Create it before starting threads and before reading large inputs: fork copies the
 /// process as it is.
 class GmshWorkers {
@@ -75,8 +92,10 @@ class GmshWorkers {
   int size() const { return static_cast<int>(workers_.size()); }
   /// Process ids of the live workers (0 where one is gone and not yet forked again).
   std::vector<pid_t> pids() const;
-  /// Runs one request in a worker (the adapter's functions call this).
-  TetMesh run(const detail::GmshRequest& request, TetReport& report);
+  /// Runs one request in a worker (the adapter's functions call this). When no reply has come by
+  /// `deadline`, the worker is killed (and forked again for the next call) and GmshOverrun thrown.
+  TetMesh run(const detail::GmshRequest& request, TetReport& report,
+              std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
 
  private:
   struct Worker {

@@ -1,7 +1,7 @@
 #pragma once
-// One CT grain to a checked tetrahedral mesh (issue 8): choose its surface (SH fit, else smoothed
-// voxels, else the inertia ellipsoid), check it, choose the element size, mesh it with gmsh,
-// measure the quality and remesh finer once when it misses the floor. Tiny grains get a coarse
+// One CT grain to a checked tetrahedral mesh: choose its surface (SH fit, else smoothed voxels,
+// else the inertia ellipsoid), check it, choose the element size, mesh it with gmsh (within a time
+// budget), measure the quality and remesh finer once when it misses the floor. Tiny grains get a coarse
 // linear mesh and are marked rigid.
 #include <cstdint>
 #include <string>
@@ -45,9 +45,27 @@ struct ElementSize {
 /// a sphere; the volume rule is skipped when it is not positive).
 ElementSize choose_element_size(double area, double diameter, double curvature_per_volume, int order, const SizeTargets& targets);
 
+/// Elements a typical grain gets at `targets`: a sphere's size rule gives d / h, and gmsh fills a
+/// grain with about 3 (d / h)^3 elements (2.8 to 3.3 on sand_small at 8 and 16 per diameter).
+double expected_elements_per_grain(int order, const SizeTargets& targets);
+
+/// Refuses (UsageError, with the numbers) a run whose meshes would not fit in memory: the model's
+/// `grains` x expected_elements_per_grain elements, and in each of `workers` gmsh processes the
+/// largest grain's mesh (elongated grains get up to 2.5 times the typical count).
+void check_meshing_memory(std::size_t grains, int workers, int order, const SizeTargets& targets);
+
 /// Where the meshed surface came from.
 enum class SurfaceOrigin : std::uint8_t { sh = 0, voxels = 1, ellipsoid = 2 };
 const char* surface_origin_name(SurfaceOrigin origin);
+
+/// How the grain was meshed. gmsh_surface: gmsh classifies and reparametrises the SH surface,
+/// remeshes it at h and fills it (GrainMeshOptions::sh_path = gmsh_surface). kept_surface: the
+/// surface is remeshed to triangles of about h first (remesh_isotropic) and gmsh only fills it,
+/// keeping them (the default for SH and voxel surfaces, and the fallback of a gmsh_surface run that
+/// overran the budget or failed): cheap and robust on rough, angular and non-star surfaces of any
+/// genus. ellipsoid: the inertia ellipsoid from gmsh's exact sphere, where no usable surface remains.
+enum class MeshPath : std::uint8_t { gmsh_surface = 0, kept_surface = 1, ellipsoid = 2 };
+const char* mesh_path_name(MeshPath path);
 
 struct GrainMeshOptions {
   int order = 2;
@@ -58,6 +76,17 @@ struct GrainMeshOptions {
   /// Grains with an SH surface: boundary nodes moved onto the exact SH surface (TetOptions::project);
   /// for 10-node grains rather than gmsh's curving on the triangulated surface + optimize(HighOrder).
   bool snap_to_sh = true;
+  /// How grains with a usable SH surface are meshed: kept_surface (remeshed by CGAL and kept, the
+  /// default: about 3 times less CPU than gmsh's reparametrisation on sand-like grains and 5 times
+  /// less on real rough ones, same volume error and quality) or gmsh_surface.
+  MeshPath sh_path = MeshPath::kept_surface;
+  /// > 0: seconds gmsh may take on the grain's first path (its first mesh and any remesh
+  /// together); on overrun the worker is killed and the grain falls back: from gmsh_surface to
+  /// kept_surface, which then gets the same time again but at least 10 s (it takes hundredths of a
+  /// second; a fresh worker on a loaded machine must not fail it), from kept_surface to the
+  /// ellipsoid. Enforced in worker processes; in-process runs (no workers) only refuse to start
+  /// once it is spent.
+  double budget_seconds = 0.0;
   /// gmsh runs in these worker processes (grains in parallel), else in this process under its lock.
   GmshWorkers* workers = nullptr;
 };
@@ -73,6 +102,9 @@ struct GrainMeshResult {
   TetMesh mesh;
   fdem::GrainKind kind = fdem::GrainKind::tet4;
   SurfaceOrigin origin = SurfaceOrigin::sh;
+  MeshPath path = MeshPath::gmsh_surface;
+  bool overran = false;           ///< gmsh overran budget_seconds on a path, and the grain took the next
+  double seconds = 0.0;           ///< wall time of mesh_grain for this grain, s
   ElementSize size;
   MeshQuality quality;
   TetReport gmsh;
@@ -82,7 +114,9 @@ struct GrainMeshResult {
 };
 
 /// Meshes one grain. `labels` (may be null) enables the voxel surface for grains whose SH fit is
-/// flagged unreliable or whose SH surface fails check_surface; `bbox` is the grain's box in it.
+/// flagged unreliable or whose SH surface fails check_surface; `bbox` is the grain's box in it. SH
+/// surfaces take options.sh_path (gmsh_surface under budget_seconds, falling back to kept_surface),
+/// voxel surfaces kept_surface; the inertia ellipsoid is the last resort.
 /// Thread-safe (the gmsh part runs one grain at a time per worker process, or in this process).
 GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis& sh, const Volume<std::uint32_t>* labels,
                            const std::array<std::size_t, 6>& bbox, const GrainMeshOptions& options);

@@ -34,13 +34,21 @@ struct SurfaceCheck {
   long euler_characteristic = 0;        ///< V - E + F of the used vertices; 2 for a sphere-like surface
   std::size_t intersecting_pairs = 0;   ///< pairs of triangles that cross each other (or fold onto each other)
   double volume = 0.0;                  ///< enclosed volume, m^3
-  bool ok() const {
-    return open_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0 && nonmanifold_vertices == 0 &&
-           euler_characteristic == 2 && intersecting_pairs == 0 && volume > 0.0;
+  bool ok() const { return embedded() && euler_characteristic == 2; }
+  /// Closed, manifold, outward and without self-intersection, of any genus: enough to bound a
+  /// volume that is meshed from these very triangles (no reparametrisation, which needs ok()).
+  bool embedded() const {
+    return open_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0 && nonmanifold_vertices == 0 && intersecting_pairs == 0 &&
+           volume > 0.0;
   }
   /// One sentence naming every failed condition ("" when ok()).
   std::string problems() const;
 };
+
+/// The piece of the surface (triangles connected through shared vertices) that encloses the largest
+/// volume, its vertices renumbered; the whole surface when it is one piece. A grain's voxels can
+/// give a main body plus crumbs or inner cavity shells (negative volume): the mesher keeps the body.
+TriangleSurface largest_piece(const TriangleSurface& surface);
 
 /// Runs every check. Self-intersection: triangles are binned on a uniform grid of their bounding
 /// boxes (O(N) for a surface of even triangles); pairs without a shared vertex cross when an edge

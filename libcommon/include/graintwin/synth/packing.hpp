@@ -55,6 +55,11 @@ struct Container {
   double volume() const;
 };
 
+/// The densest packing of equal spheres, pi / sqrt(18) = 0.7405, rounded down: no container is
+/// filled beyond it (random packings of sand stop near 0.64, rough grains in narrow cylinders
+/// near 0.58).
+inline constexpr double kDensestPacking = 0.74;
+
 /// Pose of one grain: position of the body origin (the grain centroid) in the world frame, and the
 /// body -> world rotation.
 struct PackedGrain {
@@ -102,7 +107,7 @@ struct PackingReport {
 /// density: choose it for the density wanted, below the jamming limit of the shapes, size spread
 /// and grain count (see the note on walls above).
 /// Throws UsageError for empty/invalid shapes or container, DataError when the grains cannot fit
-/// (over 0.74 of the container, a grain larger than the container, or no convergence: jammed
+/// (over kDensestPacking of the container, a grain larger than the container, or no convergence: jammed
 /// before full size or overlaps not relaxed within max_sweeps). `progress` (optional) is called
 /// from the calling thread with the fraction done in [0, 1].
 std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*>& shapes,
