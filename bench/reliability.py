@@ -122,12 +122,15 @@ band-width = "0.7mm"
 
 # The FDEM twin of the first scan as rigid grains settling under gravity between the model's platens
 # (frame 0 is the initial state, before any contact is computed: fdem2forces starts at frame 1).
+# Its grains are 7 to 13 voxels across, and the platens cut the end grains by up to a voxel: 13 %
+# of the smallest diameter, so the overlap tolerance is 0.2 instead of 0.1.
 FDEM_SCENE = """[run]
 duration = {duration}
 gravity = [0, 0, -9.81]
 damping = 2000
 frame_interval = {frame}
 series_interval = {series}
+overlap_tolerance = 0.2
 
 [model]
 kind = "rigid"
