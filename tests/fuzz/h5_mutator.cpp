@@ -489,7 +489,14 @@ void apply(hid_t file, ByteReader& in) {
 
 void mutate_h5(const fs::path& base, const fs::path& out, const std::uint8_t* data, std::size_t size) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  fs::copy_file(base, out, fs::copy_options::overwrite_existing);
+  // libFuzzer's timers interrupt system calls, and copy_file does not retry on EINTR: a copy cut
+  // short at the end of a budget is the harness's, not the reader's, and is simply made again.
+  for (;;) {
+    std::error_code ec;
+    fs::copy_file(base, out, fs::copy_options::overwrite_existing, ec);
+    if (!ec) break;
+    if (ec != std::errc::interrupted) throw fs::filesystem_error("cannot copy the base file", base, out, ec);
+  }
   if (size == 0) return;
   Id file(H5Fopen(out.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose);
   if (!file.ok()) defect("fuzz support", "cannot open the copy " + out.string() + " of the base file");

@@ -12,6 +12,7 @@
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/message.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -112,7 +113,7 @@ std::string Tool::config_file_problem(int argc, char** argv) const {
   try {
     root = toml::parse_file(file.string());
   } catch (const toml::parse_error& e) {
-    return file.string() + " line " + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
+    return file.string() + " line " + std::to_string(e.source().begin.line) + ": " + shorten_quotes(std::string(e.description())) +
            "; fix the TOML syntax";
   }
   std::vector<std::string> names;

@@ -11,6 +11,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/statistics.hpp"
+#include "graintwin/core/message.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/primitives.hpp"
@@ -28,7 +29,7 @@ class Table {
         std::string list;
         for (const char* key : keys) list += (list.empty() ? "" : ", ") + std::string(key);
         const std::string hint = closest_name(std::string(k.str()), {keys.begin(), keys.end()});
-        fail("key '" + std::string(k.str()) + "' is unknown" + (hint.empty() ? "" : "; did you mean '" + hint + "'?") +
+        fail("key '" + excerpt(std::string(k.str())) + "' is unknown" + (hint.empty() ? "" : "; did you mean '" + hint + "'?") +
              " (known: " + list + ")");
       }
   }
@@ -125,7 +126,7 @@ GrainKind parse_kind(const Table& t) {
   if (k == "rigid") return GrainKind::rigid;
   if (k == "tet4") return GrainKind::tet4;
   if (k == "tet10") return GrainKind::tet10;
-  t.fail("kind '" + k + "' is unknown; use rigid, tet4 or tet10");
+  t.fail("kind '" + excerpt(k) + "' is unknown; use rigid, tet4 or tet10");
 }
 
 /// The [triaxial] table (docs/fdem_triaxial.md).
@@ -133,7 +134,7 @@ TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>&
   TriaxialSpec spec;
   TriaxialOptions& o = spec.options;
   const std::string boundary = t.text("boundary", "membrane");
-  if (boundary != "membrane" && boundary != "wall") t.fail("boundary '" + boundary + "' is unknown; use membrane or wall");
+  if (boundary != "membrane" && boundary != "wall") t.fail("boundary '" + excerpt(boundary) + "' is unknown; use membrane or wall");
   spec.membrane = boundary == "membrane";
   o.confining_pressure = t.positive("confining_pressure", o.confining_pressure);
   o.membrane.young = t.positive("membrane_young", o.membrane.young);
@@ -195,7 +196,7 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   try {
     root = toml::parse_file(file);
   } catch (const toml::parse_error& e) {
-    throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
+    throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + shorten_quotes(std::string(e.description())) +
                      "; fix the TOML syntax");
   }
   const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages", "triaxial"});
@@ -336,7 +337,7 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
       const Eigen::Vector3d r = t.vector("rotation", Eigen::Vector3d::Zero());
       if (r.norm() > 0) spec.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()));
     } else {
-      t.fail("shape '" + spec.shape + "' is unknown; use box, sphere or ellipsoid");
+      t.fail("shape '" + excerpt(spec.shape) + "' is unknown; use box, sphere or ellipsoid");
     }
     if (!(spec.size.minCoeff() > 0)) t.fail("the " + spec.shape + "'s size must be positive in every direction");
     spec.position = t.vector("position", Eigen::Vector3d::Zero());

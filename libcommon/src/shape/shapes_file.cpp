@@ -11,6 +11,11 @@
 #include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::shape {
+
+namespace {
+/// Far above labels2shapes' --degree limit (40), far below where (degree + 1)^2 overflows an int.
+constexpr long long kMaxStoredShDegree = 1000;
+}  // namespace
 using io::units;
 namespace {
 
@@ -93,8 +98,13 @@ void write_shapes_file(const std::filesystem::path& path, const ShapesFile& c, c
 ShapesFile read_shapes_file(const std::filesystem::path& path) {
   const io::H5File f = io::open_kind(path, schema::kind::shapes, "pass the output of labels2shapes");
   ShapesFile c;
-  c.degree = static_cast<int>(f.attr_int("/sh/coeffs", "degree").value_or(-1));
-  if (c.degree < 0) throw DataError(path.string() + " has no SH degree on /sh/coeffs; rewrite it with labels2shapes");
+  const long long degree_attr = f.attr_int("/sh/coeffs", "degree").value_or(-1);
+  if (degree_attr < 0) throw DataError(path.string() + " has no SH degree on /sh/coeffs; rewrite it with labels2shapes");
+  // (degree + 1)^2 coefficients per grain: a damaged attribute must not overflow the count.
+  if (degree_attr > kMaxStoredShDegree)
+    throw DataError(path.string() + ": /sh/coeffs declares SH degree " + std::to_string(degree_attr) + ", above the " +
+                    std::to_string(kMaxStoredShDegree) + " any tool writes; rewrite it with labels2shapes");
+  c.degree = static_cast<int>(degree_attr);
   const auto label = f.read<std::uint32_t>("/grains/label");
   const std::size_t n = label.size(), ncoef = static_cast<std::size_t>(sh_count(c.degree)), ninv = static_cast<std::size_t>(c.degree + 1);
   const auto need = [&](const char* name, std::size_t k) {
