@@ -76,6 +76,7 @@ class Reader {
  private:
   void take(void* to, std::size_t n) {
     if (n > static_cast<std::size_t>(end_ - p_)) throw DataError("a gmsh worker message is shorter than it says");
+    if (n == 0) return;  // an empty list's data() may be null, which memcpy must not be given even for 0 bytes
     std::memcpy(to, p_, n);
     p_ += n;
   }
