@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
   mesh::GrainMeshOptions mo;
   mo.budget_seconds = 5.0;
   int subdivisions = 4;
-  double rigid_below_d50 = 0.3, platen_friction = 0.0;
+  double rigid_below_d50 = 0.3, platen_friction = 0.0, size_cap_d50 = 2.0;
   std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan", sh_meshing = "kept";
   mesh::EquivalentPackingOptions po;
   po.aspect = 0.0;  // the scan's unless given
@@ -158,6 +158,10 @@ int main(int argc, char** argv) {
       ->check(number_in(closed(0, 100)))->capture_default_str();
   app.add_option("--surface-nodes", mo.size.surface_nodes, "Automatic size: surface nodes per grain that contact needs")
       ->check(number_in(closed(20, 1e5)))->capture_default_str();
+  app.add_option("--size-cap", size_cap_d50,
+                 "Automatic size: no element coarser than this many times a d50 grain's size, so that grains larger than "
+                 "this many d50 resolve their contacts with d50 grains as those do (0: each grain by its own size only)")
+      ->check(number_in(closed(0, 100)))->capture_default_str();
   app.add_option("--volume-tol", mo.size.volume_tolerance, "Automatic size, 4-node: largest relative volume error of the facets")
       ->check(number_in(closed(1e-4, 0.5)))->capture_default_str();
   app.add_option("--gamma-floor", mo.gamma_floor, "Elements below this quality make a grain remeshed (and reported)")
@@ -261,6 +265,7 @@ int main(int argc, char** argv) {
       for (const auto& g : shapes.grains) grains.push_back(&g);
     }
     mo.rigid_diameter = rigid_below_d50 * shapes.psd.d50;
+    mo.size.coarsest_size = mesh::neighbour_size_cap(shapes.psd.d50, size_cap_d50, mo.order, mo.size);
 
     // What is meshed: the scan's grains where they are, or an equivalent sample drawn from them
     // (copies centred on their body origin, meshed there and then placed).
@@ -412,6 +417,7 @@ int main(int argc, char** argv) {
 
     nlohmann::json parameters = {
         {"order", mo.order}, {"elements_per_diameter", mo.size.elements_per_diameter}, {"surface_nodes", mo.size.surface_nodes},
+        {"size_cap_d50", size_cap_d50},
         {"volume_tolerance", mo.size.volume_tolerance}, {"gamma_floor", mo.gamma_floor}, {"rigid_below_d50", rigid_below_d50},
         {"rigid_diameter_m", mo.rigid_diameter}, {"surface_subdivisions", subdivisions}, {"smooth_vox", mo.smooth_vox}, {"curving", curving},
         {"membrane_thickness_m", thickness}, {"platen_friction", platen_friction}, {"sample_source", sample_source},

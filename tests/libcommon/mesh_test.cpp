@@ -243,6 +243,29 @@ TEST(Sizing, VolumeRuleFollowsTheMeasuredCurvature) {
   EXPECT_EQ(mesh::choose_element_size(area, d, 0.0, 1, t).rule, mesh::SizeRule::contact);
 }
 
+TEST(Sizing, LargeGrainsAreCappedAtTheSizeOfGrainsOfTheD50) {
+  // Spheres: the contact rule gives h proportional to d, so the cap of 2 d50 sizes binds from 2 d50 up.
+  const double d50 = 1e-3;
+  const auto sphere_size = [](double d, const mesh::SizeTargets& t) {
+    return mesh::choose_element_size(M_PI * d * d, d, 12.0 / (d * d), 2, t);
+  };
+  mesh::SizeTargets t;
+  const double own = sphere_size(d50, t).h;
+  t.coarsest_size = mesh::neighbour_size_cap(d50, 2.0, 2, t);
+  EXPECT_NEAR(t.coarsest_size, 2 * own, 1e-15);
+  EXPECT_EQ(sphere_size(d50, t).rule, mesh::SizeRule::contact);
+  EXPECT_NEAR(sphere_size(1.9 * d50, t).h, 1.9 * own, 1e-15);
+  const auto large = sphere_size(5 * d50, t);
+  EXPECT_EQ(large.rule, mesh::SizeRule::neighbours);
+  EXPECT_DOUBLE_EQ(large.h, 2 * own);
+  // The cap yields to the finest size a grain may get, and a factor of 0 sets none.
+  t.max_per_diameter = 2.0;
+  EXPECT_EQ(sphere_size(5 * d50, t).rule, mesh::SizeRule::finest);
+  EXPECT_EQ(mesh::neighbour_size_cap(d50, 0.0, 2, t), 0.0);
+  // The typical grain's element count does not depend on the cap.
+  EXPECT_DOUBLE_EQ(mesh::expected_elements_per_grain(2, t), mesh::expected_elements_per_grain(2, mesh::SizeTargets{.max_per_diameter = 2.0}));
+}
+
 TEST(GrainMesher, SphereGrainMeetsTheContactTargetAndItsVolume) {
   const mesh::ShSurfaceBasis basis(4, 4);
   const double r0 = 0.3e-3, exact = 4.0 / 3.0 * M_PI * r0 * r0 * r0;

@@ -40,8 +40,12 @@ constexpr double kKeptPathMinSeconds = 10.0;
 /// 0.7 h (coarse 10-node meshes of irregular voxel grains lost up to 20 %, where snapping bent
 /// thin elements and their mid-edge nodes were pulled back straight).
 constexpr double kRemeshVolumeError = 0.05;
-/// Spacing of the voxel surface's samples for element size h (voxel_surface's stride).
+/// Spacing of the voxel surface's samples for element size h (voxel_surface's stride), in voxels
+/// at most kMaxSourceStride: sampled coarser, the smoothed voxels of a large non-star grain cut
+/// across the concavities where its small neighbours sit, and its mesh reached three voxels into
+/// them on the soil crop (at most 2, one voxel or so like the SH grains, once sampled every 2).
 constexpr double kSourceSpacingPerSize = 0.4;
+constexpr int kMaxSourceStride = 2;
 
 bool worse(const MeshQuality& a, const MeshQuality& b) {
   return a.inverted + a.below_floor > b.inverted + b.below_floor;
@@ -56,6 +60,7 @@ const char* size_rule_name(SizeRule rule) {
     case SizeRule::coarsest: return "coarsest";
     case SizeRule::finest: return "finest";
     case SizeRule::given: return "given";
+    case SizeRule::neighbours: return "neighbours";
   }
   return "?";
 }
@@ -87,13 +92,25 @@ ElementSize choose_element_size(double area, double diameter, double curvature_p
     if (h_accuracy < s.h) s = {h_accuracy, SizeRule::accuracy};
   }
   if (s.h > diameter / t.min_per_diameter) s = {diameter / t.min_per_diameter, SizeRule::coarsest};
+  if (t.coarsest_size > 0.0 && s.h > t.coarsest_size) s = {t.coarsest_size, SizeRule::neighbours};
   if (s.h < diameter / t.max_per_diameter) s = {diameter / t.max_per_diameter, SizeRule::finest};
   return s;
 }
 
+double neighbour_size_cap(double d50, double factor, int order, const SizeTargets& targets) {
+  if (!(factor > 0.0)) return 0.0;
+  SizeTargets own = targets;
+  own.coarsest_size = 0.0;
+  return factor * choose_element_size(M_PI * d50 * d50, d50, 12.0 / (d50 * d50), order, own).h;
+}
+
 double expected_elements_per_grain(int order, const SizeTargets& targets) {
-  const double d = 1.0;  // every rule scales with the diameter: d / h does not depend on it
-  const double per_diameter = d / choose_element_size(M_PI * d * d, d, 12.0 / (d * d), order, targets).h;
+  // Every rule but the cap scales with the diameter: d / h does not depend on it (the cap binds
+  // only on grains a few times the typical one).
+  const double d = 1.0;
+  SizeTargets typical = targets;
+  typical.coarsest_size = 0.0;
+  const double per_diameter = d / choose_element_size(M_PI * d * d, d, 12.0 / (d * d), order, typical).h;
   return 3.0 * per_diameter * per_diameter * per_diameter;
 }
 
@@ -215,7 +232,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     const double h_estimate = choose_element_size(grain.surface_area, grain.equivalent_diameter,
                                                   12.0 / (grain.equivalent_diameter * grain.equivalent_diameter), order, targets).h;
     const double voxel = labels->voxel_size()[0];
-    const int stride = std::max(1, static_cast<int>(std::lround(kSourceSpacingPerSize * h_estimate / voxel)));
+    const int stride = std::clamp(static_cast<int>(std::lround(kSourceSpacingPerSize * h_estimate / voxel)), 1, kMaxSourceStride);
     source = largest_piece(voxel_surface(*labels, grain.label, bbox, options.smooth_vox, stride, true));
     r.origin = SurfaceOrigin::voxels;
   }

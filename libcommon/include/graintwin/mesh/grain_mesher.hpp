@@ -31,9 +31,13 @@ struct SizeTargets {
   double elements_per_diameter = 0; ///< > 0: h = equivalent diameter / this, overriding the rules
   double min_per_diameter = 3.0;    ///< never coarser than this (gmsh needs a few elements across)
   double max_per_diameter = 40.0;   ///< never finer than this (no grain gets more than the scene needs)
+  /// > 0: never coarser than this (m), whatever the grain's own size: a grain many times the d50
+  /// meets grains of the d50 over patches their size, which 250 nodes spread over its whole surface
+  /// do not resolve (neighbour_size_cap).
+  double coarsest_size = 0.0;
 };
 
-enum class SizeRule : std::uint8_t { contact = 0, accuracy = 1, coarsest = 2, finest = 3, given = 4 };
+enum class SizeRule : std::uint8_t { contact = 0, accuracy = 1, coarsest = 2, finest = 3, given = 4, neighbours = 5 };
 const char* size_rule_name(SizeRule rule);
 
 struct ElementSize {
@@ -44,6 +48,11 @@ struct ElementSize {
 /// mean curvature over volume, (integral of H dA) / V, is `curvature_per_volume` (1/m^2; 3 / R^2 for
 /// a sphere; the volume rule is skipped when it is not positive).
 ElementSize choose_element_size(double area, double diameter, double curvature_per_volume, int order, const SizeTargets& targets);
+
+/// SizeTargets::coarsest_size for a sample of this `d50` (m): `factor` times the automatic element
+/// size of a sphere of diameter d50, so that grains up to `factor` d50 keep their own size and larger
+/// ones resolve their contacts with d50 grains about as those grains do. 0 for factor 0 (no cap).
+double neighbour_size_cap(double d50, double factor, int order, const SizeTargets& targets);
 
 /// Elements a typical grain gets at `targets`: a sphere's size rule gives d / h, and gmsh fills a
 /// grain with about 3 (d / h)^3 elements (2.8 to 3.3 on sand_small at 8 and 16 per diameter).
