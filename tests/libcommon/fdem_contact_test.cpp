@@ -420,6 +420,34 @@ TEST(ContactModel, OverlapsAreFoundAtAnyDepthUnlikeTheStepsSearch) {
   EXPECT_TRUE(ContactModel(apart, unit_masses(apart), {}).overlaps(apart.nodes, {}).empty());
 }
 
+TEST(ContactModel, OverlapsOfTheMovedGrainsAloneAfterAnOverlapCheck) {
+  // Three cubes in a row, each pair 0.3 mm through each other, the first 0.1 mm behind a platen.
+  Model m;
+  const TetMesh cube = box_mesh(Eigen::Vector3d::Constant(kMm), 0.5 * kMm);
+  for (int g = 0; g < 3; ++g) add_grain(m, cube, Eigen::Vector3d(0.7 * kMm * g, 0, 0), GrainKind::rigid, 0, g + 1);
+  const std::vector<PlatenState> platen{{Eigen::Vector3d(0.1 * kMm - 0.5 * kMm, 0, 0), Eigen::Vector3d::UnitX()}};
+  ContactModel contact(m, unit_masses(m), {});
+  ASSERT_EQ(contact.overlaps(m.nodes, platen).size(), 3u);
+  // The last cube moves 0.2 mm away: only its pair is measured again (0.1 mm deep now).
+  std::vector<Eigen::Vector3d> x = m.nodes;
+  for (std::uint32_t i = m.grains[2].node_begin; i < m.grains[2].node_end; ++i) x[i].x() += 0.2 * kMm;
+  const std::vector<std::uint8_t> moved{0, 0, 1};
+  const std::vector<Overlap> again = contact.overlaps(x, platen, moved);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0].a, 1u);
+  EXPECT_EQ(again[0].b, 2u);
+  EXPECT_NEAR(again[0].depth, 0.1 * kMm, 1e-15);
+  // The same as a full check of the moved configuration, for that pair.
+  const std::vector<Overlap> full = ContactModel(m, unit_masses(m), {}).overlaps(x, platen);
+  ASSERT_EQ(full.size(), 3u);
+  EXPECT_NEAR(full[2].depth, again[0].depth, 1e-15);
+  // After a step the flags are not trusted: every grain is measured.
+  auto f = zeros(m.nodes.size());
+  contact.add_forces(x, zeros(m.nodes.size()), {}, 1e-9, f);
+  EXPECT_EQ(contact.overlaps(x, platen, moved).size(), 3u);
+  EXPECT_THROW(contact.overlaps(x, platen, std::vector<std::uint8_t>{1}), DataError);
+}
+
 TEST(ContactModel, OverlapsOfSixteenThousandGrainsComeThroughTheBroadPhase) {
   // 16 000 faceted spheres on a cubic lattice 0.9 diameters apart: each overlaps its six lattice
   // neighbours by about a tenth of a diameter and no other grain (the diagonal ones are 1.27

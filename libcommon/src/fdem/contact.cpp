@@ -200,6 +200,9 @@ struct ContactModel::State {
   std::vector<RigidPose> built_pose;         ///< per grain, its pose at the last build (rigid = false: none)
   std::vector<RigidPose> pose;               ///< per grain, this step's pose (rigid = false: none)
   bool need_rebuild = true;
+  /// The trees and poses are those an overlaps() call left (no step since): overlaps() may update
+  /// only the grains that moved.
+  bool overlap_configuration = false;
   std::size_t rebuilds = 0;
 
   std::vector<HistoryEntry> history;  ///< sorted by (a, b, node)
@@ -796,6 +799,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
   // Trees and spheres; the pairs stay complete until a node has moved skin / 2 since the build.
+  s.overlap_configuration = false;
   const bool check_moved = !s.need_rebuild;
   bool moved = false;
 #pragma omp parallel for schedule(dynamic, 16) reduction(|| : moved) if (grain_count >= kParallelGrains)
@@ -1066,21 +1070,31 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
   return stats;
 }
 
-std::vector<Overlap> ContactModel::overlaps(std::span<const Eigen::Vector3d> x, std::span<const PlatenState> platens) {
+std::vector<Overlap> ContactModel::overlaps(std::span<const Eigen::Vector3d> x, std::span<const PlatenState> platens,
+                                           std::span<const std::uint8_t> moved) {
   State& s = *state_;
   if (x.size() != s.node_count)
     throw DataError(fmt::format("fdem contact: {} positions for {} nodes; pass one per model node.", x.size(), s.node_count));
   const auto grain_count = static_cast<std::uint32_t>(s.grains.size());
+  if (!moved.empty() && moved.size() != grain_count)
+    throw DataError(fmt::format("fdem contact: {} moved flags for {} grains; pass one per grain.", moved.size(), grain_count));
+  // Only a configuration left by an earlier overlaps() call (same poses, same trees) can be updated
+  // in part; after a step (or the first time) every grain is placed again.
+  const bool all = moved.empty() || !s.overlap_configuration;
+  const auto changed = [&](std::uint32_t g) { return all || moved[g] != 0; };
   s.sphere_centre.resize(grain_count);
   s.sphere_radius.resize(grain_count);
-  s.pose.assign(grain_count, RigidPose{});
+  if (all) s.pose.assign(grain_count, RigidPose{});
 #pragma omp parallel for schedule(dynamic, 16) if (grain_count >= kParallelGrains)
-  for (std::int64_t g = 0; g < grain_count; ++g) s.update_grain(static_cast<std::uint32_t>(g), x, nullptr, false);
+  for (std::int64_t g = 0; g < grain_count; ++g)
+    if (changed(static_cast<std::uint32_t>(g))) s.update_grain(static_cast<std::uint32_t>(g), x, nullptr, false);
   s.need_rebuild = true;  // the trees and poses are this configuration's, not the run's
+  s.overlap_configuration = true;
 
   std::vector<Aabb> boxes(grain_count);
   for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g);
-  const std::vector<BoxPair> pairs = overlapping_box_pairs(boxes);
+  std::vector<BoxPair> pairs = overlapping_box_pairs(boxes);
+  if (!all) std::erase_if(pairs, [&](const BoxPair& p) { return !changed(p.first) && !changed(p.second); });
   const double unbounded = std::numeric_limits<double>::infinity();
   // The deepest point of grain `from` inside grain `to`: its surface nodes and triangle centroids
   // within `to`'s box and bounding sphere, each searched without a bound.
@@ -1114,6 +1128,7 @@ std::vector<Overlap> ContactModel::overlaps(std::span<const Eigen::Vector3d> x, 
 #pragma omp parallel for schedule(dynamic, 16) if (grain_count >= kParallelGrains)
   for (std::int64_t g = 0; g < grain_count; ++g) {
     const auto grain = static_cast<std::uint32_t>(g);
+    if (!changed(grain)) continue;
     for (std::uint32_t p = 0; p < platens.size(); ++p) {
       double depth = 0;
       for (std::uint32_t node : s.surface(grain)) depth = std::max(depth, (platens[p].point - x[node]).dot(platens[p].normal));
@@ -1291,6 +1306,7 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
   s.ball_history = std::move(ball_history);
   s.records = std::move(records);
   s.need_rebuild = true;
+  s.overlap_configuration = false;
 }
 
 }  // namespace graintwin::fdem

@@ -1,6 +1,7 @@
 #include "graintwin/fdem/initial_overlap.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
@@ -93,15 +94,19 @@ OverlapSettlement settle_initial_overlaps(Solver& solver, Model& model, const Ov
                                  where, judge.describe(*first_worst), judge.tolerance_text(*first_worst),
                                  beyond > 1 ? fmt::format(" ({} overlaps in all are beyond theirs)", beyond) : ""));
 
-  // Relaxation: Jacobi passes of rigid translations, each grain moved by the mean of its pairs' pushes.
+  // Relaxation: Jacobi passes of rigid translations, each grain moved by the mean of its pairs'
+  // pushes; after a pass only the pairs of the grains that moved are measured again.
   const std::size_t grains = model.grains.size();
   std::vector<Eigen::Vector3d> centroid(grains), shift(grains, Eigen::Vector3d::Zero());
   for (std::size_t g = 0; g < grains; ++g) centroid[g] = solver.body(g).centroid;
   std::vector<Eigen::Vector3d> push(grains);
   std::vector<int> pushes(grains);
+  std::vector<std::uint8_t> moved(grains);
   for (;;) {
     const auto [left, count] = worst(overlaps, judge, kRelaxedFraction);
     if (count == 0) break;
+    spdlog::debug("relaxation pass {}: {} overlaps beyond a hundredth of their tolerance, worst {} ({:.3g} of its tolerance)",
+                  out.passes, count, judge.describe(*left), left->depth / judge.tolerance(*left));
     if (out.passes == kMaxPasses)
       throw UsageError(fmt::format("{}: relaxing the initial overlaps ([run] relax_overlaps) left {} after {} passes "
                                    "(the relaxation stops at a hundredth of the tolerance, {}); they have no room to part: move "
@@ -126,12 +131,16 @@ OverlapSettlement settle_initial_overlaps(Solver& solver, Model& model, const Ov
       ++pushes[o.a], ++pushes[o.b];
     }
     for (std::size_t g = 0; g < grains; ++g) {
-      if (pushes[g] == 0) continue;
+      moved[g] = pushes[g] > 0;
+      if (!moved[g]) continue;
       const Eigen::Vector3d move = push[g] / static_cast<double>(pushes[g]);
       shift[g] += move;
       for (std::uint32_t i = model.grains[g].node_begin; i < model.grains[g].node_end; ++i) x[i] += move;
     }
-    overlaps = contact->overlaps(x, platens);
+    // The unmoved grains' overlaps stand; the moved grains' are measured again.
+    std::erase_if(overlaps, [&](const Overlap& o) { return moved[o.a] || (!judge.platen(o) && moved[o.b]); });
+    std::vector<Overlap> fresh = contact->overlaps(x, platens, moved);
+    overlaps.insert(overlaps.end(), fresh.begin(), fresh.end());
   }
   for (std::size_t g = 0; g < grains; ++g) {
     const double moved = shift[g].norm();

@@ -179,7 +179,12 @@ class ContactModel {
   /// pseudonormal (the centroids catch boxes whose corners lie on each other's faces). A pair
   /// costs its points inside the other's box, and pairs come from the broad phase: linear in the
   /// grains for a packing. The next add_forces() rebuilds its pairs.
-  std::vector<Overlap> overlaps(std::span<const Eigen::Vector3d> x, std::span<const PlatenState> platens);
+  /// `moved` (empty: all grains) flags, one per grain, the grains whose nodes changed since the
+  /// previous overlaps() call with no add_forces() between: only pairs and platen overlaps with a
+  /// flagged grain are measured and returned (the others are unchanged), so that repeated checks
+  /// of a relaxation cost what moved.
+  std::vector<Overlap> overlaps(std::span<const Eigen::Vector3d> x, std::span<const PlatenState> platens,
+                                std::span<const std::uint8_t> moved = {});
   /// Ball contact limit on the time step, s, like stable_time_step() for the stiffest grain material.
   double ball_stable_time_step(const BallContactOptions& balls) const;
   /// Per grain, the forces on the rigid ones (those with a pose) in this step: from add_forces, which
