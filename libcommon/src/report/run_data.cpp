@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "graintwin/contacts/contacts_file.hpp"
 #include "graintwin/contacts/fabric.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/model_file.hpp"
@@ -98,16 +99,13 @@ ScanData read_scan(const RunFiles& files, std::size_t s) {
     d.grains = sh.grains.size();
   }
   if (!files.contacts[s].empty()) {
-    namespace sc = schema::contacts;
-    const io::H5File c = io::H5File::open(files.contacts[s]);
-    const auto pair_dims = c.info(sc::pair).dims;
-    if (pair_dims.size() != 2 || pair_dims[1] != 2)
-      throw DataError(files.contacts[s].string() + ": " + sc::pair + " is not a table of (low, high) label pairs; rewrite it with labels2contacts");
-    d.contacts = pair_dims[0];
-    d.coordination = c.read<std::uint64_t>(sc::coordination_count);
-    d.coordination_mean = attr_double(c, "/coordination", "mean");
-    d.rose_normal = read_rose(c, sc::rose_normal, sc::counts);
-    d.rose_branch = read_rose(c, sc::rose_branch, sc::counts);
+    const contacts::ContactsFile c = contacts::read_contacts_file(files.contacts[s]);
+    d.contacts = c.contacts.size();
+    d.coordination = c.coordination.histogram;
+    d.coordination_mean = c.coordination.mean;
+    const auto counts_only = [](const contacts::Rose& r) { return micro::ForceRose{r.theta_edges, r.phi_edges, r.counts, {}}; };
+    d.rose_normal = counts_only(c.rose_normal);
+    d.rose_branch = counts_only(c.rose_branch);
   }
   return d;
 }
@@ -137,8 +135,7 @@ void check_tables(const io::H5File& f, const std::string& kind) {
     tables({"/grains"}, "ct2labels");
     finite("/grains", {"centroid", "volume"}, "ct2labels");
   } else if (kind == schema::kind::contacts) {
-    tables({"/contacts", "/grains", "/coordination"}, "labels2contacts");
-    finite("/contacts", {"normal", "normal_pca", "branch", "point", "centroid", "area", "vector_area"}, "labels2contacts");
+    contacts::check_contacts_tables(f);
   } else if (kind == schema::kind::tracks) {
     tables({"/tracks", "/steps", "/scans"}, "shapes2tracks");
     finite("/tracks", {}, "shapes2tracks");

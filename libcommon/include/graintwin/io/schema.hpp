@@ -77,6 +77,18 @@ inline constexpr const char* theta_edges = "theta_edges";              ///< (n_t
 inline constexpr const char* phi_edges = "phi_edges";                  ///< (n_phi + 1) rad
 inline constexpr const char* counts = "counts";                        ///< uint64 (n_theta x n_phi)
 inline constexpr const char* density = "density";                      ///< (n_theta x n_phi) 1/sr
+// Tables (groups) and attributes.
+inline constexpr const char* grains = "/grains";                       ///< group: per-grain table (N)
+inline constexpr const char* coordination = "/coordination";           ///< group: Z histogram; attributes below
+inline constexpr const char* codes = "codes";                          ///< attribute of fit_status: the codes' meaning
+inline constexpr const char* min_voxels = "min_voxels";                ///< attribute of /contacts
+inline constexpr const char* refined = "refined";                      ///< attribute of /contacts, 0 or 1
+inline constexpr const char* window_vox = "window_vox";                ///< attribute of /contacts, voxels
+inline constexpr const char* gap_tolerance_vox = "gap_tolerance_vox";  ///< attribute of /contacts, voxels
+inline constexpr const char* min_confidence = "min_confidence";        ///< attribute of /contacts
+inline constexpr const char* coordination_mean = "mean";               ///< attribute of /coordination: mean Z
+inline constexpr const char* grains_counted = "grains_counted";        ///< attribute of /coordination
+inline constexpr const char* include_edge_grains = "include_edge_grains";  ///< attribute of /coordination, 0 or 1
 }  // namespace graintwin::schema::contacts
 
 // kind=tracks (shapes2tracks), layout in docs/formats.md. N tracks, T scans.
