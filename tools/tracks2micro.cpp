@@ -50,10 +50,8 @@ MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std:
   const io::H5File tracks_h5 = io::open_kind(input, schema::kind::tracks, "pass the output of shapes2tracks (tracks) or of fdemrun (simulation frames)");
   ctx.add_input_history(tracks_h5);
   const track::TracksTable tr = track::read_tracks_file(input);
-  const std::vector<double> d50 = tracks_h5.read<double>(schema::tracks::scan_d50);
   if (tr.scans < 2)
     throw UsageError(input.string() + " holds a single scan; micro-mechanics needs two states, so track two scans or more with shapes2tracks");
-  if (d50.size() != tr.scans) throw DataError(input.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
   std::vector<fs::path> shapes_paths(tr.scan_files.begin(), tr.scan_files.end());
   if (!shapes_override.empty()) {
     if (shapes_override.size() != tr.scans)
@@ -74,7 +72,7 @@ MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std:
 
   MicroFile content;
   SeriesStates& s = content.series;
-  s.grains = tr.tracks, s.states = tr.scans, s.d50 = d50;
+  s.grains = tr.tracks, s.states = tr.scans, s.d50 = tr.scan_d50;
   s.position.resize(tr.tracks * tr.scans);
   for (std::size_t c = 0; c < s.position.size(); ++c)
     s.position[c] = Eigen::Vector3d(tr.centroid[3 * c], tr.centroid[3 * c + 1], tr.centroid[3 * c + 2]);

@@ -39,11 +39,11 @@ void write_micro_file(const std::filesystem::path& path, const MicroFile& conten
 /// increment it is present in; point arrays per increment k: `d2min_k`, `eps_q_k`, `cluster_k`
 /// and `defined_k` (1 where the local deformation is defined; the values are 0 elsewhere, since
 /// ParaView's filters cannot take NaN). Grains present in no increment are left out.
+void write_micro_vtp(const std::filesystem::path& path, const MicroFile& content);
+
 /// What the states of a kind=micro file came from ("tracks" or "fdem_results"): the "source" of its
 /// /micro/parameters JSON. DataError naming the file when that is not a JSON object with a string source.
 std::string read_micro_source(const io::H5File& file);
-
-void write_micro_vtp(const std::filesystem::path& path, const MicroFile& content);
 
 /// The histogram written by write_histogram under `group` of an open file. DataError naming the
 /// file and the group when its counts, densities and edges do not agree in length.
