@@ -101,6 +101,10 @@ TEST(Shapes2tracks, TracksTheBundledSeriesWithTrueIdentitiesAndRotations) {
   EXPECT_EQ(t.matched, (std::vector<std::uint64_t>{0, 310, 310}));
   EXPECT_EQ(t.lost, (std::vector<std::uint64_t>{0, 0, 0}));
   EXPECT_EQ(t.started, (std::vector<std::uint64_t>{310, 0, 0}));
+  // Each scan's d50 as the matcher measured it from that scan's shapes file.
+  ASSERT_EQ(t.scan_d50.size(), 3u);
+  for (std::size_t s = 0; s < 3; ++s)
+    EXPECT_EQ(t.scan_d50[s], track::scan_grains(shape::read_shapes_file(t.scan_files[s])).d50) << "scan " << s;
   std::vector<double> angle_error;
   std::size_t undefined = 0;
   for (std::size_t i = 0; i < t.tracks; ++i) {

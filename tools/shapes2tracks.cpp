@@ -1,6 +1,5 @@
 // shapes2tracks: follow every grain through a series of scans (docs/methods.md, matching and tracking).
 //   shapes2tracks scan0/shapes.h5 scan1/shapes.h5 scan2/shapes.h5 tracks.h5 --vtk tracks.vtp
-#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -11,34 +10,17 @@
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
-#include "graintwin/shape/shapes_file.hpp"
-#include "graintwin/track/tracks_file.hpp"
+#include "graintwin/track/series.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
 using namespace graintwin::track;
 
-int main(int argc, char** argv) {
-  cli::Tool tool(
-      "shapes2tracks",
-      "Follow every grain through a series of scans: match the grains of each scan (kind=shapes, from "
-      "labels2shapes) to the next, chain the matches into trajectories with lost and found grains, and measure each "
-      "grain's displacement and rotation (kind=tracks, plus VTK points with displacement vectors for ParaView). "
-      "--method improved (default) predicts where each grain went from the grains matched around it (robust global "
-      "affine, then local weighted affine fits), scores the candidates near the prediction by SH invariant distance, "
-      "volume change and position residual, each normalised by its spread over the matches, solves one global "
-      "minimum-cost assignment in which a grain may be lost, and rates each match by its cost against the "
-      "alternatives and a backward match. --method paper is the CT-FDEM paper's Algorithm 1 exactly (candidates "
-      "within 3 d50 of the reference scan, volume change <= 10 %, SH invariant distance, conflicts resolved by the "
-      "smallest score); nearest and volume are baselines. A grain lost at one step is looked for again in the next "
-      "scan(s) (--max-gap). Rotations: principal axes of the inertia ellipsoid with their signs chosen by comparing "
-      "the SH surfaces, refined by aligning the surfaces (--rotation sh), and flagged undefined when the surfaces "
-      "cannot tell (near-symmetric grains).");
-  std::vector<fs::path> positional;
-  std::string method = "improved", rotation = "sh";
-  ChainOptions co;
-  RotationOptions ro;
-  fs::path vtk;
+namespace {
+
+/// The options: the shapes files then the tracks file, matching, chaining and rotation settings.
+void usage(cli::Tool& tool, std::vector<fs::path>& positional, std::string& method, std::string& rotation, ChainOptions& co,
+           RotationOptions& ro, fs::path& vtk) {
   auto& app = tool.cli();
   app.add_option("shapes", positional,
                  "Shapes files of the scans in order (.h5, kind=shapes, at least two), then the tracks file to write "
@@ -86,6 +68,57 @@ int main(int argc, char** argv) {
   tool.set_examples({"shapes2tracks scan_000/shapes.h5 scan_001/shapes.h5 tracks.h5",
                      "shapes2tracks runs/sand_small/scan_*/shapes.h5 tracks.h5 --vtk tracks.vtp",
                      "shapes2tracks a.h5 b.h5 tracks.h5 --method paper --rotation axes"});
+}
+
+void log_series(const TracksFile& content, const ChainOptions& co, const RotationOptions& ro) {
+  for (std::size_t t = 0; t < content.scans.size(); ++t)
+    spdlog::info("scan {}: {} grains, d50 {:.4g} mm ({})", t, content.scan_labels[t].size(), content.d50[t] * 1e3, content.scans[t]);
+  const Tracks& tr = content.tracks;
+  for (std::size_t t = 1; t < tr.scans; ++t) {
+    const StepCounts& s = tr.steps[t];
+    const MatchDiagnostics& d = tr.diagnostics[t - 1];
+    const std::size_t before = tr.steps[t - 1].grains;
+    spdlog::info("step {} -> {}: {} matched ({:.1f} % of {}), {} lost, {} found again, {} new; mean confidence {:.3f}, "
+                 "{} backward disagreements, {:.1f} candidates per grain",
+                 t - 1, t, s.matched, 100.0 * s.matched / before, before, s.lost, s.found, s.started, s.mean_confidence,
+                 d.backward_disagreements, d.mean_candidates);
+    if (co.match.method == Method::improved)
+      spdlog::info("  prediction from {} bootstrap pairs; residual spreads: position {:.3g} um, shape {:.3g}, volume {:.3g}",
+                   d.anchors, d.sigma_position * 1e6, d.sigma_shape, d.sigma_volume);
+  }
+  std::size_t defined = 0, steps = 0;
+  for (std::size_t i = 0; i < tr.size(); ++i)
+    for (std::size_t t = 1; t < tr.scans; ++t)
+      if (std::isfinite(content.kinematics.increment[3 * (i * tr.scans + t)]))
+        ++steps, defined += content.kinematics.rotation_defined[i * tr.scans + t];
+  if (ro.method != RotationMethod::none)
+    spdlog::info("rotations defined for {} of {} grain steps ({:.1f} %)", defined, steps, steps ? 100.0 * defined / steps : 0.0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Tool tool(
+      "shapes2tracks",
+      "Follow every grain through a series of scans: match the grains of each scan (kind=shapes, from "
+      "labels2shapes) to the next, chain the matches into trajectories with lost and found grains, and measure each "
+      "grain's displacement and rotation (kind=tracks, plus VTK points with displacement vectors for ParaView). "
+      "--method improved (default) predicts where each grain went from the grains matched around it (robust global "
+      "affine, then local weighted affine fits), scores the candidates near the prediction by SH invariant distance, "
+      "volume change and position residual, each normalised by its spread over the matches, solves one global "
+      "minimum-cost assignment in which a grain may be lost, and rates each match by its cost against the "
+      "alternatives and a backward match. --method paper is the CT-FDEM paper's Algorithm 1 exactly (candidates "
+      "within 3 d50 of the reference scan, volume change <= 10 %, SH invariant distance, conflicts resolved by the "
+      "smallest score); nearest and volume are baselines. A grain lost at one step is looked for again in the next "
+      "scan(s) (--max-gap). Rotations: principal axes of the inertia ellipsoid with their signs chosen by comparing "
+      "the SH surfaces, refined by aligning the surfaces (--rotation sh), and flagged undefined when the surfaces "
+      "cannot tell (near-symmetric grains).");
+  std::vector<fs::path> positional;
+  std::string method = "improved", rotation = "sh";
+  ChainOptions co;
+  RotationOptions ro;
+  fs::path vtk;
+  usage(tool, positional, method, rotation, co, ro, vtk);
 
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     // Options and files first, before reading any table.
@@ -106,69 +139,12 @@ int main(int argc, char** argv) {
     for (const fs::path& p : positional)
       ctx.add_input_history(io::open_kind(p, schema::kind::shapes, "pass the output of labels2shapes"));
 
-    std::vector<shape::ShapesFile> shapes;
-    std::vector<ScanGrains> scans;
-    TracksFile content;
-    for (const fs::path& p : positional) {
-      try {
-        shapes.push_back(shape::read_shapes_file(p));
-        scans.push_back(scan_grains(shapes.back()));
-      } catch (Error& e) {
-        e.add_context("while reading " + p.string());
-        throw;
-      }
-      if (scans.back().size() == 0) throw DataError(p.string() + " holds no grain; check the segmentation of that scan");
-      content.scans.push_back(p.string());
-      content.d50.push_back(scans.back().d50);
-      content.scan_labels.push_back(scans.back().label);
-      spdlog::info("scan {}: {} grains, d50 {:.4g} mm ({})", scans.size() - 1, scans.back().size(), scans.back().d50 * 1e3,
-                   p.string());
-    }
-    content.tracks = chain_tracks(scans, co, ctx.progress_callback("matching"));
-    const Tracks& tr = content.tracks;
-    for (std::size_t t = 1; t < tr.scans; ++t) {
-      const StepCounts& s = tr.steps[t];
-      const MatchDiagnostics& d = tr.diagnostics[t - 1];
-      const std::size_t before = tr.steps[t - 1].grains;
-      spdlog::info("step {} -> {}: {} matched ({:.1f} % of {}), {} lost, {} found again, {} new; mean confidence {:.3f}, "
-                   "{} backward disagreements, {:.1f} candidates per grain",
-                   t - 1, t, s.matched, 100.0 * s.matched / before, before, s.lost, s.found, s.started, s.mean_confidence,
-                   d.backward_disagreements, d.mean_candidates);
-      if (co.match.method == Method::improved)
-        spdlog::info("  prediction from {} bootstrap pairs; residual spreads: position {:.3g} um, shape {:.3g}, volume {:.3g}",
-                     d.anchors, d.sigma_position * 1e6, d.sigma_shape, d.sigma_volume);
-    }
-    std::vector<const shape::ShapesFile*> ptrs;
-    for (const auto& s : shapes) ptrs.push_back(&s);
-    content.kinematics = track_kinematics(tr, ptrs, ro, ctx.progress_callback("rotations"));
-    std::size_t defined = 0, steps = 0;
-    for (std::size_t i = 0; i < tr.size(); ++i)
-      for (std::size_t t = 1; t < tr.scans; ++t)
-        if (std::isfinite(content.kinematics.increment[3 * (i * tr.scans + t)]))
-          ++steps, defined += content.kinematics.rotation_defined[i * tr.scans + t];
-    if (ro.method != RotationMethod::none)
-      spdlog::info("rotations defined for {} of {} grain steps ({:.1f} %)", defined, steps, steps ? 100.0 * defined / steps : 0.0);
-
-    nlohmann::json p = {{"method", method_name(co.match.method)},
-                        {"window_d50", co.match.window_d50},
-                        {"volume_tol", volume_filter(co.match)},
-                        {"max_gap", co.max_gap},
-                        {"backward_check", co.match.backward_check},
-                        {"rotation", rotation},
-                        {"rotation_margin", ro.min_margin},
-                        {"rotation_degree", ro.degree},
-                        {"symmetry_tol", ro.symmetry_tol}};
-    if (co.match.method == Method::improved) {
-      p["passes"] = co.match.passes;
-      p["local_radius_d50"] = co.match.local_radius_d50;
-      p["window_sigmas"] = co.match.window_sigmas;
-      p["min_window_d50"] = co.match.min_window_d50;
-      p["lost_cost"] = co.match.lost_cost;
-    }
-    content.parameters_json = p.dump();
+    const TracksFile content =
+        track_series(positional, co, ro, ctx.progress_callback("matching"), ctx.progress_callback("rotations"));
+    log_series(content, co, ro);
     write_tracks_file(out.temp_path(), content, ctx.history());
     if (vtk_out) write_tracks_vtp(vtk_out->temp_path(), content);
     io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
-    spdlog::info("{} tracks over {} scans", tr.size(), tr.scans);
+    spdlog::info("{} tracks over {} scans", content.tracks.size(), content.tracks.scans);
   });
 }

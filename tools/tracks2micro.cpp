@@ -9,10 +9,10 @@
 
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
+#include "graintwin/contacts/contacts_file.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
-#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/micro_file.hpp"
 #include "graintwin/micro/simulation.hpp"
@@ -50,10 +50,8 @@ MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std:
   const io::H5File tracks_h5 = io::open_kind(input, schema::kind::tracks, "pass the output of shapes2tracks (tracks) or of fdemrun (simulation frames)");
   ctx.add_input_history(tracks_h5);
   const track::TracksTable tr = track::read_tracks_file(input);
-  const std::vector<double> d50 = tracks_h5.read<double>(schema::tracks::scan_d50);
   if (tr.scans < 2)
     throw UsageError(input.string() + " holds a single scan; micro-mechanics needs two states, so track two scans or more with shapes2tracks");
-  if (d50.size() != tr.scans) throw DataError(input.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
   std::vector<fs::path> shapes_paths(tr.scan_files.begin(), tr.scan_files.end());
   if (!shapes_override.empty()) {
     if (shapes_override.size() != tr.scans)
@@ -74,7 +72,7 @@ MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std:
 
   MicroFile content;
   SeriesStates& s = content.series;
-  s.grains = tr.tracks, s.states = tr.scans, s.d50 = d50;
+  s.grains = tr.tracks, s.states = tr.scans, s.d50 = tr.scan_d50;
   s.position.resize(tr.tracks * tr.scans);
   for (std::size_t c = 0; c < s.position.size(); ++c)
     s.position[c] = Eigen::Vector3d(tr.centroid[3 * c], tr.centroid[3 * c + 1], tr.centroid[3 * c + 2]);
@@ -97,14 +95,12 @@ MicroFile tracks_content(cli::RunContext& ctx, const fs::path& input, const std:
   if (!contacts.empty()) {
     s.coordination.resize(tr.scans);
     for (std::size_t t = 0; t < tr.scans; ++t) {
-      const io::H5File cf = io::open_kind(contacts[t], schema::kind::contacts, "pass the labels2contacts output of that scan");
-      ctx.add_input_history(cf);
-      // Only the grains' coordination is used, but a contacts table that disagrees with itself is a damaged file.
-      for (const char* table : {"/grains", "/contacts"}) io::table_rows(cf, table, "rewrite it with labels2contacts");
-      const auto labels = cf.read<std::uint32_t>(schema::contacts::grain_label);
-      const auto z = cf.read<std::uint32_t>(schema::contacts::grain_coordination);
+      ctx.add_input_history(io::open_kind(contacts[t], schema::kind::contacts, "pass the labels2contacts output of that scan"));
+      // Only the grains' coordination is used, but the reader refuses a file whose tables disagree (a damaged file).
+      const contacts::ContactsFile cf = contacts::read_contacts_file(contacts[t]);
+      const auto& z = cf.coordination.per_grain;
       s.coordination[t].assign(tr.tracks, 0);
-      by_label<std::uint32_t>(tr, t, labels, [&](std::size_t i, std::size_t k) { s.coordination[t][i] = z[k]; });
+      by_label<std::uint32_t>(tr, t, cf.grain_label, [&](std::size_t i, std::size_t k) { s.coordination[t][i] = z[k]; });
     }
   }
   content.label = tr.label;

@@ -9,6 +9,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/io/vtk.hpp"
 #include "graintwin/micro/micro_file.hpp"
@@ -89,14 +90,15 @@ void write_forces_file(const std::filesystem::path& path, const ForcesFile& c, c
   f.write(sf::frame_weak_theta_error, theta_error, units("1"));
   for (std::size_t k = 0; k < nf; ++k) {
     const std::string group = std::string(sf::frames) + "/" + std::to_string(k);
-    write_histogram(f, group + "/pdf", c.frames[k].distribution.pdf, "1");
+    write_histogram(f, group + "/" + sf::frame_pdf, c.frames[k].distribution.pdf, "1");
     const ForceRose& rose = c.frames[k].rose;
     const hsize_t nt = rose.theta_edges.size() - 1, np = rose.phi_edges.size() - 1;
-    f.ensure_group(group + "/rose");
-    f.write(group + "/rose/" + sf::rose_theta_edges, rose.theta_edges, units("rad"));
-    f.write(group + "/rose/" + sf::rose_phi_edges, rose.phi_edges, units("rad"));
-    f.write(group + "/rose/" + sf::rose_count, rose.counts.data(), {nt, np});
-    f.write(group + "/rose/" + sf::rose_mean_force, rose.mean_force.data(), {nt, np}, units("N"));
+    const std::string rose_group = group + "/" + sf::frame_rose;
+    f.ensure_group(rose_group);
+    f.write(rose_group + "/" + sf::rose_theta_edges, rose.theta_edges, units("rad"));
+    f.write(rose_group + "/" + sf::rose_phi_edges, rose.phi_edges, units("rad"));
+    f.write(rose_group + "/" + sf::rose_count, rose.counts.data(), {nt, np});
+    f.write(rose_group + "/" + sf::rose_mean_force, rose.mean_force.data(), {nt, np}, units("N"));
   }
   f.write(sf::window_from, from);
   f.write(sf::window_to, to);
@@ -140,6 +142,55 @@ void write_pvd(const std::filesystem::path& path, const std::vector<std::string>
     out << fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", times[k], files[k]);
   out << "  </Collection>\n</VTKFile>\n";
   if (!out) throw DataError("cannot write " + path.string() + "; check the disk and the folder's permissions");
+}
+
+void check_forces_tables(const io::H5File& f) {
+  const std::string fix = "rewrite it with fdem2forces";
+  for (const char* g : {"/frames", "/grains", "/windows"}) io::table_rows(f, g, fix);
+  for (const char* g : {"/frames", "/grains", "/windows"}) io::require_finite_table(f, g, {}, fix);
+}
+
+ForcesTables read_forces_tables(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::forces, "pass the output of fdem2forces");
+  check_forces_tables(f);
+  ForcesTables d;
+  const auto index = f.read<std::uint64_t>(sf::frame_index), contacts = f.read<std::uint64_t>(sf::frame_contacts);
+  const auto time = f.read<double>(sf::frame_time), scale = f.read<double>(sf::frame_strong_scale), theta = f.read<double>(sf::frame_weak_theta);
+  if (contacts.size() != index.size() || time.size() != index.size() || scale.size() != index.size() || theta.size() != index.size())
+    throw DataError(path.string() + ": the /frames tables differ in length; rewrite it with fdem2forces");
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    const std::string g = std::string(sf::frames) + "/" + std::to_string(k) + "/";
+    ForcesFrameTables fr;
+    fr.index = index[k], fr.time = time[k], fr.contacts = contacts[k], fr.strong_scale = scale[k], fr.weak_theta = theta[k];
+    fr.pdf = read_histogram(f, g + sf::frame_pdf);
+    const std::string rose = g + sf::frame_rose + "/";
+    fr.rose.theta_edges = f.read<double>(rose + sf::rose_theta_edges);
+    fr.rose.phi_edges = f.read<double>(rose + sf::rose_phi_edges);
+    fr.rose.counts = f.read<std::uint64_t>(rose + sf::rose_count);
+    if (fr.rose.theta_edges.size() < 2 || fr.rose.phi_edges.size() < 2 ||
+        fr.rose.counts.size() != (fr.rose.theta_edges.size() - 1) * (fr.rose.phi_edges.size() - 1))
+      throw DataError(path.string() + ": the rose " + g + sf::frame_rose + " does not have one count per bin; rewrite the file with its tool");
+    fr.rose.mean_force = f.read<double>(rose + sf::rose_mean_force);
+    if (fr.rose.mean_force.size() != fr.rose.counts.size())
+      throw DataError(path.string() + ": " + rose + sf::rose_mean_force + " does not have one value per rose bin; rewrite it with fdem2forces");
+    d.frames.push_back(std::move(fr));
+  }
+  const auto from = f.read<std::uint64_t>(sf::window_from), to = f.read<std::uint64_t>(sf::window_to);
+  const auto r = f.read<double>(sf::window_r), p = f.read<double>(sf::window_p);
+  const auto count = f.read<std::uint64_t>(sf::window_count);
+  std::vector<hsize_t> dims;
+  const auto volatility = f.read<double>(sf::grain_volatility, &dims);
+  const auto d2min = f.read<double>(sf::grain_d2min);
+  const std::size_t w = from.size(), g = dims.empty() ? 0 : dims[0];
+  if (to.size() != w || r.size() != w || p.size() != w || count.size() != w || dims.size() != 2 || dims[1] != w ||
+      d2min.size() != volatility.size())
+    throw DataError(path.string() + ": the /windows tables and the grains' volatility and D2min disagree in size; rewrite it with fdem2forces");
+  for (std::size_t k = 0; k < w; ++k) {
+    ForcesWindowTables win{from[k], to[k], r[k], p[k], count[k], {}, {}};
+    for (std::size_t i = 0; i < g; ++i) win.volatility.push_back(volatility[i * w + k]), win.d2min.push_back(d2min[i * w + k]);
+    d.windows.push_back(std::move(win));
+  }
+  return d;
 }
 
 }  // namespace graintwin::micro

@@ -9,6 +9,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/io/vtk.hpp"
 
@@ -21,42 +22,42 @@ void write_histogram(io::H5File& f, const std::string& group, const Histogram& h
   f.write(group + "/" + sm::edges, h.edges, units(unit));
   f.write(group + "/" + sm::count, h.count);
   f.write(group + "/" + sm::density, h.density, units(unit == "1" ? "1" : "1/" + unit));
-  f.set_attr(group, "used", static_cast<long long>(h.used));
-  f.set_attr(group, "outside", static_cast<long long>(h.outside));
+  f.set_attr(group, sm::histogram_used, static_cast<long long>(h.used));
+  f.set_attr(group, sm::histogram_outside, static_cast<long long>(h.outside));
 }
 
 namespace {
 
 void write_increment(io::H5File& f, const std::string& g, const IncrementResult& r) {
-  write_histogram(f, g + "/pdf_d2min", r.pdf_d2min, "1");
-  write_histogram(f, g + "/pdf_eps_q", r.pdf_eps_q, "1");
+  write_histogram(f, g + "/" + sm::pdf_d2min, r.pdf_d2min, "1");
+  write_histogram(f, g + "/" + sm::pdf_eps_q, r.pdf_eps_q, "1");
   const ClusterStatistics& c = r.clusters;
-  const std::string cg = g + "/clusters";
+  const std::string cg = g + "/" + sm::clusters;
   f.ensure_group(cg);
-  f.write(cg + "/size", c.size);
-  f.write(cg + "/radius_of_gyration", c.radius_of_gyration, units("m"));
-  f.set_attr(cg, "selected", static_cast<long long>(c.selected));
+  f.write(g + "/" + sm::cluster_size, c.size);
+  f.write(g + "/" + sm::cluster_rg, c.radius_of_gyration, units("m"));
+  f.set_attr(cg, sm::selected, static_cast<long long>(c.selected));
   f.set_attr(cg, "threshold_d2min", c.threshold);
-  f.set_attr(cg, "size_fit_valid", static_cast<long long>(c.size_fit.valid));
+  f.set_attr(cg, sm::size_fit_valid, static_cast<long long>(c.size_fit.valid));
   // An unfitted P(s) (too few clusters) is NaN, never a number that looks like a result.
   const auto fitted = [&](double v) { return c.size_fit.valid ? v : std::nan(""); };
-  f.set_attr(cg, "size_alpha", fitted(c.size_fit.alpha));
-  f.set_attr(cg, "size_alpha_error", fitted(c.size_fit.alpha_error));
-  f.set_attr(cg, "size_s_min", fitted(c.size_fit.x_min));
+  f.set_attr(cg, sm::size_alpha, fitted(c.size_fit.alpha));
+  f.set_attr(cg, sm::size_alpha_error, fitted(c.size_fit.alpha_error));
+  f.set_attr(cg, sm::size_s_min, fitted(c.size_fit.x_min));
   f.set_attr(cg, "size_ks", fitted(c.size_fit.ks));
-  f.set_attr(cg, "size_tail", static_cast<long long>(c.size_fit.tail));
-  f.set_attr(cg, "fractal_dimension", c.fractal_dimension);
-  f.set_attr(cg, "fractal_dimension_error", c.fractal_dimension_error);
+  f.set_attr(cg, sm::size_tail, static_cast<long long>(c.size_fit.tail));
+  f.set_attr(cg, sm::fractal_dimension, c.fractal_dimension);
+  f.set_attr(cg, sm::fractal_dimension_error, c.fractal_dimension_error);
   f.set_attr(cg, "rg_fit_clusters", static_cast<long long>(c.rg_fit.count));
   const char* axis[3] = {"x", "y", "z"};
-  for (int k = 0; k < 3; ++k) write_histogram(f, g + "/displacement/" + axis[k], r.displacement.component[k], "1");
-  write_histogram(f, g + "/displacement/magnitude", r.displacement.magnitude, "1");
+  for (int k = 0; k < 3; ++k) write_histogram(f, g + "/" + sm::displacement + "/" + axis[k], r.displacement.component[k], "1");
+  write_histogram(f, g + "/" + sm::displacement + "/magnitude", r.displacement.magnitude, "1");
 }
 
 void write_state(io::H5File& f, const std::string& g, const StateResult& r, const shape::SizeDistribution* psd) {
-  f.ensure_group(g + "/rdf");
-  f.write(g + "/rdf/r", r.rdf.r, units("m"));
-  f.write(g + "/rdf/g", r.rdf.g, units("1"));
+  f.ensure_group(g + "/" + sm::rdf);
+  f.write(g + "/" + sm::rdf_r, r.rdf.r, units("m"));
+  f.write(g + "/" + sm::rdf_g, r.rdf.g, units("1"));
   f.set_attr(g + "/rdf", "density", r.rdf.density);
   f.set_attr(g + "/rdf", "points", static_cast<long long>(r.rdf.points));
   f.set_attr(g + "/rdf", "region", r.region.kind == Region::Kind::box ? "box" : "cylinder");
@@ -67,18 +68,18 @@ void write_state(io::H5File& f, const std::string& g, const StateResult& r, cons
     f.set_attr(g + "/rdf", "region_radius", r.region.radius);
   }
   const CoordinationDistribution& cn = r.coordination_distribution;
-  f.ensure_group(g + "/coordination");
+  f.ensure_group(g + "/" + sm::state_coordination);
   std::vector<std::uint32_t> z(cn.count.size());
   for (std::size_t k = 0; k < z.size(); ++k) z[k] = static_cast<std::uint32_t>(k);
-  f.write(g + "/coordination/z", z);
-  f.write(g + "/coordination/count", cn.count);
-  f.set_attr(g + "/coordination", "mean", cn.mean);
+  f.write(g + "/" + sm::state_coordination_z, z);
+  f.write(g + "/" + sm::state_coordination_count, cn.count);
+  f.set_attr(g + "/" + sm::state_coordination, sm::mean, cn.mean);
   f.set_attr(g + "/coordination", "source", r.coordination_from_contacts ? "contacts" : "distance");
   if (psd) {
-    f.ensure_group(g + "/psd");
-    f.write(g + "/psd/diameter", psd->diameter, units("m"));
-    f.write(g + "/psd/percent_passing", psd->percent_passing, units("%"));
-    f.set_attr(g + "/psd", "d50", psd->d50);
+    f.ensure_group(g + "/" + sm::psd);
+    f.write(g + "/" + sm::psd_diameter, psd->diameter, units("m"));
+    f.write(g + "/" + sm::psd_percent_passing, psd->percent_passing, units("%"));
+    f.set_attr(g + "/" + sm::psd, sm::d50, psd->d50);
   }
 }
 
@@ -177,6 +178,118 @@ void write_micro_vtp(const std::filesystem::path& path, const MicroFile& c) {
     for (auto* a : {&d2, &eq, &cl, &ok}) d.point_data.push_back(std::move(*a));
   }
   io::write_vtp(path, d);
+}
+
+Histogram read_histogram(const io::H5File& f, const std::string& group) {
+  Histogram h;
+  h.edges = f.read<double>(group + "/" + sm::edges);
+  h.count = f.read<std::uint64_t>(group + "/" + sm::count);
+  h.density = f.read<double>(group + "/" + sm::density);
+  h.used = static_cast<std::uint64_t>(f.attr_int(group, sm::histogram_used).value_or(0));
+  h.outside = static_cast<std::uint64_t>(f.attr_int(group, sm::histogram_outside).value_or(0));
+  if (h.count.size() != h.density.size() || (!h.count.empty() && h.edges.size() != h.count.size() + 1))
+    throw DataError(f.path().string() + ": the histogram " + group + " has tables of uneven length; rewrite the file with its tool");
+  return h;
+}
+
+namespace {
+
+double attr_or_nan(const io::H5File& f, const std::string& object, const std::string& name) {
+  const auto v = f.attr_doubles(object, name);
+  return v.size() == 1 ? v[0] : std::nan("");
+}
+
+}  // namespace
+
+void check_micro_tables(const io::H5File& f) {
+  const std::string fix = "rewrite it with tracks2micro";
+  for (const char* g : {"/grains", "/increments", "/states"}) io::table_rows(f, g, fix);
+  for (const char* g : {"/grains", "/increments", "/states"}) io::require_finite_table(f, g, {"d50"}, fix);
+}
+
+MicroTables read_micro_tables(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::micro, "pass the output of tracks2micro");
+  check_micro_tables(f);
+  MicroTables m;
+  m.source = read_micro_source(f);
+  m.state_d50 = f.read<double>(sm::state_d50);
+  for (std::size_t t = 0; t < m.state_d50.size(); ++t) {
+    const std::string g = std::string(sm::states) + "/" + std::to_string(t) + "/";
+    MicroStateTables st;
+    st.rdf_r = f.read<double>(g + sm::rdf_r);
+    st.rdf_g = f.read<double>(g + sm::rdf_g);
+    st.coordination = f.read<std::uint64_t>(g + sm::state_coordination_count);
+    st.coordination_mean = attr_or_nan(f, g + sm::state_coordination, sm::mean);
+    if (f.exists(g + sm::psd)) {
+      st.psd.diameter = f.read<double>(g + sm::psd_diameter);
+      st.psd.percent_passing = f.read<double>(g + sm::psd_percent_passing);
+      st.psd.d50 = attr_or_nan(f, g + sm::psd, sm::d50);
+    }
+    // Each pair is drawn as x against y: unequal columns would reach the charts as nonsense.
+    if (st.rdf_r.size() != st.rdf_g.size() || st.psd.diameter.size() != st.psd.percent_passing.size())
+      throw DataError(path.string() + ": state " + std::to_string(t) + "'s g(r) or PSD columns differ in length; rewrite it with tracks2micro");
+    m.states.push_back(std::move(st));
+  }
+  const auto from = f.read<std::uint64_t>(sm::increment_from), to = f.read<std::uint64_t>(sm::increment_to);
+  const auto d50 = f.read<double>(sm::increment_d50);
+  if (to.size() != from.size() || d50.size() != from.size())
+    throw DataError(path.string() + ": /increments/from, /to and /d50 differ in length; rewrite it with tracks2micro");
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    const std::string g = std::string(sm::increments) + "/" + std::to_string(k) + "/";
+    MicroIncrementTables inc;
+    inc.from = from[k], inc.to = to[k], inc.d50 = d50[k];
+    inc.pdf_d2min = read_histogram(f, g + sm::pdf_d2min);
+    inc.pdf_eps_q = read_histogram(f, g + sm::pdf_eps_q);
+    const char* axis[4] = {"x", "y", "z", "magnitude"};
+    for (int a = 0; a < 4; ++a) inc.displacement[a] = read_histogram(f, g + sm::displacement + "/" + axis[a]);
+    const std::string c = g + sm::clusters;
+    inc.cluster_size = f.read<double>(g + sm::cluster_size);
+    inc.cluster_rg = f.read<double>(g + sm::cluster_rg);
+    inc.selected = static_cast<std::size_t>(f.attr_int(c, sm::selected).value_or(0));
+    inc.size_fit_valid = f.attr_int(c, sm::size_fit_valid).value_or(0) != 0;
+    inc.size_alpha = attr_or_nan(f, c, sm::size_alpha);
+    inc.size_alpha_error = attr_or_nan(f, c, sm::size_alpha_error);
+    inc.size_s_min = attr_or_nan(f, c, sm::size_s_min);
+    inc.size_tail = static_cast<std::size_t>(f.attr_int(c, sm::size_tail).value_or(0));
+    inc.fractal_dimension = attr_or_nan(f, c, sm::fractal_dimension);
+    inc.fractal_dimension_error = attr_or_nan(f, c, sm::fractal_dimension_error);
+    if (inc.cluster_size.size() != inc.cluster_rg.size())
+      throw DataError(path.string() + ": " + c + "/size and /radius_of_gyration differ in length; rewrite it with tracks2micro");
+    m.increments.push_back(std::move(inc));
+  }
+  std::vector<hsize_t> label_dims, d2_dims;
+  m.grain_label = f.read<std::uint32_t>(sm::grain_label, &label_dims);
+  m.grain_d2min = f.read<double>(sm::grain_d2min, &d2_dims);
+  m.grains = label_dims.empty() ? 0 : label_dims[0];
+  if (label_dims.size() != 2 || label_dims[1] != m.states.size() || d2_dims.size() != 2 || d2_dims[0] != m.grains ||
+      d2_dims[1] != m.increments.size())
+    throw DataError(path.string() + ": " + sm::grain_label + " is not grains x states or " + sm::grain_d2min +
+                    " not grains x increments; rewrite it with tracks2micro");
+  return m;
+}
+
+std::vector<double> d2min_of_increment(const MicroTables& m, const std::string& name, const SimulationGrains& grains,
+                                       std::size_t from, std::size_t to) {
+  if (m.source != "fdem_results")
+    throw UsageError("--micro " + name + " was made from " + m.source + ", not from simulation frames; run tracks2micro on the results file");
+  std::size_t k = m.increments.size();
+  for (std::size_t q = 0; q < m.increments.size(); ++q)
+    if (m.increments[q].from == from && m.increments[q].to == to) k = q;
+  if (k == m.increments.size())
+    throw UsageError("--micro " + name + " has no increment " + std::to_string(from) + " -> " + std::to_string(to) +
+                     "; run tracks2micro RESULTS MICRO --from " + std::to_string(from) + " --to " + std::to_string(to) +
+                     " or leave out --micro");
+  const std::size_t t = m.states.size(), kk = m.increments.size();
+  std::vector<double> out(grains.label.size(), std::nan(""));
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < m.grains; ++i) {
+    const auto it = grains.row.find(m.grain_label[i * t + from]);
+    if (it != grains.row.end()) out[it->second] = m.grain_d2min[i * kk + k], ++found;
+  }
+  if (found != grains.label.size())
+    throw UsageError("--micro " + name + " lacks " + std::to_string(grains.label.size() - found) +
+                     " of the simulation's grains; make it from the same results file with tracks2micro");
+  return out;
 }
 
 }  // namespace graintwin::micro

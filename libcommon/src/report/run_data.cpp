@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "graintwin/contacts/contacts_file.hpp"
 #include "graintwin/contacts/fabric.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/model_file.hpp"
@@ -57,34 +58,6 @@ std::vector<fs::path> per_scan(const std::vector<fs::path>& given, const std::ve
   return out;
 }
 
-micro::Histogram read_histogram(const io::H5File& f, const std::string& group) {
-  micro::Histogram h;
-  h.edges = f.read<double>(group + "/" + schema::micro::edges);
-  h.count = f.read<std::uint64_t>(group + "/" + schema::micro::count);
-  h.density = f.read<double>(group + "/" + schema::micro::density);
-  h.used = static_cast<std::uint64_t>(f.attr_int(group, "used").value_or(0));
-  h.outside = static_cast<std::uint64_t>(f.attr_int(group, "outside").value_or(0));
-  if (h.count.size() != h.density.size() || (!h.count.empty() && h.edges.size() != h.count.size() + 1))
-    throw DataError(f.path().string() + ": the histogram " + group + " has tables of uneven length; rewrite the file with its tool");
-  return h;
-}
-
-double attr_double(const io::H5File& f, const std::string& object, const std::string& name) {
-  const auto v = f.attr_doubles(object, name);
-  return v.size() == 1 ? v[0] : std::nan("");
-}
-
-/// A rose table: the edges and counts under `group` (kind=contacts or kind=forces spelling).
-micro::ForceRose read_rose(const io::H5File& f, const std::string& group, const std::string& counts_name) {
-  micro::ForceRose r;
-  r.theta_edges = f.read<double>(group + "/" + schema::contacts::theta_edges);
-  r.phi_edges = f.read<double>(group + "/" + schema::contacts::phi_edges);
-  r.counts = f.read<std::uint64_t>(group + "/" + counts_name);
-  if (r.theta_edges.size() < 2 || r.phi_edges.size() < 2 || r.counts.size() != (r.theta_edges.size() - 1) * (r.phi_edges.size() - 1))
-    throw DataError(f.path().string() + ": the rose " + group + " does not have one count per bin; rewrite the file with its tool");
-  return r;
-}
-
 ScanData read_scan(const RunFiles& files, std::size_t s) {
   ScanData d;
   d.name = files.scan_names[s];
@@ -98,16 +71,13 @@ ScanData read_scan(const RunFiles& files, std::size_t s) {
     d.grains = sh.grains.size();
   }
   if (!files.contacts[s].empty()) {
-    namespace sc = schema::contacts;
-    const io::H5File c = io::H5File::open(files.contacts[s]);
-    const auto pair_dims = c.info(sc::pair).dims;
-    if (pair_dims.size() != 2 || pair_dims[1] != 2)
-      throw DataError(files.contacts[s].string() + ": " + sc::pair + " is not a table of (low, high) label pairs; rewrite it with labels2contacts");
-    d.contacts = pair_dims[0];
-    d.coordination = c.read<std::uint64_t>(sc::coordination_count);
-    d.coordination_mean = attr_double(c, "/coordination", "mean");
-    d.rose_normal = read_rose(c, sc::rose_normal, sc::counts);
-    d.rose_branch = read_rose(c, sc::rose_branch, sc::counts);
+    const contacts::ContactsFile c = contacts::read_contacts_file(files.contacts[s]);
+    d.contacts = c.contacts.size();
+    d.coordination = c.coordination.histogram;
+    d.coordination_mean = c.coordination.mean;
+    const auto counts_only = [](const contacts::Rose& r) { return micro::ForceRose{r.theta_edges, r.phi_edges, r.counts, {}}; };
+    d.rose_normal = counts_only(c.rose_normal);
+    d.rose_branch = counts_only(c.rose_branch);
   }
   return d;
 }
@@ -137,22 +107,19 @@ void check_tables(const io::H5File& f, const std::string& kind) {
     tables({"/grains"}, "ct2labels");
     finite("/grains", {"centroid", "volume"}, "ct2labels");
   } else if (kind == schema::kind::contacts) {
-    tables({"/contacts", "/grains", "/coordination"}, "labels2contacts");
-    finite("/contacts", {"normal", "normal_pca", "branch", "point", "centroid", "area", "vector_area"}, "labels2contacts");
+    contacts::check_contacts_tables(f);
   } else if (kind == schema::kind::tracks) {
     tables({"/tracks", "/steps", "/scans"}, "shapes2tracks");
     finite("/tracks", {}, "shapes2tracks");
   } else if (kind == schema::kind::micro) {
-    tables({"/grains", "/increments", "/states"}, "tracks2micro");
-    for (const char* g : {"/grains", "/increments", "/states"}) finite(g, {"d50"}, "tracks2micro");
+    micro::check_micro_tables(f);
   } else if (kind == schema::kind::fdem_results) {
     tables({"/grains", "/series", "/stages"}, "fdemrun");
     finite("/series", {"time", "kinetic"}, "fdemrun");
     if (f.exists("/frames"))
       for (const std::string& frame : f.list("/frames")) finite("/frames/" + frame + "/grains", {"centroid", "rotation"}, "fdemrun");
   } else if (kind == schema::kind::forces) {
-    tables({"/frames", "/grains", "/windows"}, "fdem2forces");
-    for (const char* g : {"/frames", "/grains", "/windows"}) finite(g, {}, "fdem2forces");
+    micro::check_forces_tables(f);
   }
 }
 
@@ -244,96 +211,6 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
   check(files.simulation_micro, schema::kind::micro);
   check(files.forces, schema::kind::forces);
   return history;
-}
-
-MicroData read_micro_data(const fs::path& path) {
-  namespace sm = schema::micro;
-  const io::H5File f = io::H5File::open(path);
-  MicroData m;
-  m.source = micro::read_micro_source(f);
-  m.state_d50 = f.read<double>(sm::state_d50);
-  for (std::size_t t = 0; t < m.state_d50.size(); ++t) {
-    const std::string g = std::string(sm::states) + "/" + std::to_string(t);
-    MicroState st;
-    st.rdf_r = f.read<double>(g + "/rdf/r");
-    st.rdf_g = f.read<double>(g + "/rdf/g");
-    st.coordination = f.read<std::uint64_t>(g + "/coordination/count");
-    st.coordination_mean = attr_double(f, g + "/coordination", "mean");
-    if (f.exists(g + "/psd")) {
-      st.psd.diameter = f.read<double>(g + "/psd/diameter");
-      st.psd.percent_passing = f.read<double>(g + "/psd/percent_passing");
-      st.psd.d50 = attr_double(f, g + "/psd", "d50");
-    }
-    // Each pair is drawn as x against y: unequal columns would reach the charts as nonsense.
-    if (st.rdf_r.size() != st.rdf_g.size() || st.psd.diameter.size() != st.psd.percent_passing.size())
-      throw DataError(path.string() + ": state " + std::to_string(t) + "'s g(r) or PSD columns differ in length; rewrite it with tracks2micro");
-    m.states.push_back(std::move(st));
-  }
-  const auto from = f.read<std::uint64_t>(sm::increment_from), to = f.read<std::uint64_t>(sm::increment_to);
-  const auto d50 = f.read<double>(sm::increment_d50);
-  if (to.size() != from.size() || d50.size() != from.size())
-    throw DataError(path.string() + ": /increments/from, /to and /d50 differ in length; rewrite it with tracks2micro");
-  for (std::size_t k = 0; k < from.size(); ++k) {
-    const std::string g = std::string(sm::increments) + "/" + std::to_string(k);
-    MicroIncrement inc;
-    inc.from = from[k], inc.to = to[k], inc.d50 = d50[k];
-    inc.pdf_d2min = read_histogram(f, g + "/pdf_d2min");
-    inc.pdf_eps_q = read_histogram(f, g + "/pdf_eps_q");
-    const char* axis[4] = {"x", "y", "z", "magnitude"};
-    for (int a = 0; a < 4; ++a) inc.displacement[a] = read_histogram(f, g + "/displacement/" + axis[a]);
-    const std::string c = g + "/clusters";
-    inc.cluster_size = f.read<double>(c + "/size");
-    inc.cluster_rg = f.read<double>(c + "/radius_of_gyration");
-    inc.selected = static_cast<std::size_t>(f.attr_int(c, "selected").value_or(0));
-    inc.size_fit_valid = f.attr_int(c, "size_fit_valid").value_or(0) != 0;
-    inc.size_alpha = attr_double(f, c, "size_alpha");
-    inc.size_alpha_error = attr_double(f, c, "size_alpha_error");
-    inc.size_s_min = attr_double(f, c, "size_s_min");
-    inc.size_tail = static_cast<std::size_t>(f.attr_int(c, "size_tail").value_or(0));
-    inc.fractal_dimension = attr_double(f, c, "fractal_dimension");
-    inc.fractal_dimension_error = attr_double(f, c, "fractal_dimension_error");
-    if (inc.cluster_size.size() != inc.cluster_rg.size())
-      throw DataError(path.string() + ": " + c + "/size and /radius_of_gyration differ in length; rewrite it with tracks2micro");
-    m.increments.push_back(std::move(inc));
-  }
-  return m;
-}
-
-ForcesData read_forces_data(const fs::path& path) {
-  namespace sf = schema::forces;
-  const io::H5File f = io::H5File::open(path);
-  ForcesData d;
-  const auto index = f.read<std::uint64_t>(sf::frame_index), contacts = f.read<std::uint64_t>(sf::frame_contacts);
-  const auto time = f.read<double>(sf::frame_time), scale = f.read<double>(sf::frame_strong_scale), theta = f.read<double>(sf::frame_weak_theta);
-  if (contacts.size() != index.size() || time.size() != index.size() || scale.size() != index.size() || theta.size() != index.size())
-    throw DataError(path.string() + ": the /frames tables differ in length; rewrite it with fdem2forces");
-  for (std::size_t k = 0; k < index.size(); ++k) {
-    const std::string g = std::string(sf::frames) + "/" + std::to_string(k);
-    ForcesFrame fr;
-    fr.index = index[k], fr.time = time[k], fr.contacts = contacts[k], fr.strong_scale = scale[k], fr.weak_theta = theta[k];
-    fr.pdf = read_histogram(f, g + "/pdf");
-    fr.rose = read_rose(f, g + "/rose", sf::rose_count);
-    fr.rose.mean_force = f.read<double>(g + "/rose/" + sf::rose_mean_force);
-    if (fr.rose.mean_force.size() != fr.rose.counts.size())
-      throw DataError(path.string() + ": " + g + "/rose/" + sf::rose_mean_force + " does not have one value per rose bin; rewrite it with fdem2forces");
-    d.frames.push_back(std::move(fr));
-  }
-  const auto from = f.read<std::uint64_t>(sf::window_from), to = f.read<std::uint64_t>(sf::window_to);
-  const auto r = f.read<double>(sf::window_r), p = f.read<double>(sf::window_p);
-  const auto count = f.read<std::uint64_t>(sf::window_count);
-  std::vector<hsize_t> dims;
-  const auto volatility = f.read<double>(sf::grain_volatility, &dims);
-  const auto d2min = f.read<double>(sf::grain_d2min);
-  const std::size_t w = from.size(), g = dims.empty() ? 0 : dims[0];
-  if (to.size() != w || r.size() != w || p.size() != w || count.size() != w || dims.size() != 2 || dims[1] != w ||
-      d2min.size() != volatility.size())
-    throw DataError(path.string() + ": the /windows tables and the grains' volatility and D2min disagree in size; rewrite it with fdem2forces");
-  for (std::size_t k = 0; k < w; ++k) {
-    ForcesWindow win{from[k], to[k], r[k], p[k], count[k], {}, {}};
-    for (std::size_t i = 0; i < g; ++i) win.volatility.push_back(volatility[i * w + k]), win.d2min.push_back(d2min[i * w + k]);
-    d.windows.push_back(std::move(win));
-  }
-  return d;
 }
 
 TriaxialSeries read_triaxial_series(const fs::path& results) {
@@ -439,7 +316,7 @@ ExperimentData read_experiment(const RunFiles& files) {
       throw UsageError("--scan-strains " + files.scan_strains.string() + " lists " + std::to_string(e.applied_axial_strain.size()) +
                        " scans but the run has " + std::to_string(scans) + "; pass the series.json of the scans this run segmented");
   }
-  if (!files.micro.empty()) e.micro = read_micro_data(files.micro);
+  if (!files.micro.empty()) e.micro = micro::read_micro_tables(files.micro);
   return e;
 }
 
@@ -455,8 +332,8 @@ SimulationData read_simulation(const RunFiles& files, std::size_t frames_shown, 
     s.rose_frames = pick_evenly(s.frames, frames_shown);
     s.branch_roses = simulation_branch_roses(files.simulation, s.rose_frames, theta_bins, 36);
   }
-  if (!files.simulation_micro.empty()) s.micro = read_micro_data(files.simulation_micro);
-  if (!files.forces.empty()) s.forces = read_forces_data(files.forces);
+  if (!files.simulation_micro.empty()) s.micro = micro::read_micro_tables(files.simulation_micro);
+  if (!files.forces.empty()) s.forces = micro::read_forces_tables(files.forces);
   return s;
 }
 

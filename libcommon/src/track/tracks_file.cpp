@@ -127,6 +127,9 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
     if (out->size() != r.scans) throw DataError(path.string() + ": /steps/" + name + " does not have one entry per scan");
   }
   r.scan_files = f.read_strings(st::scan_file);
+  r.scan_d50 = f.read<double>(st::scan_d50);
+  if (r.scan_d50.size() != r.scans)
+    throw DataError(path.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
   r.parameters_json = f.read_string(st::parameters);
   if (r.rotation_defined.size() != cells || r.scan_files.size() != r.scans)
     throw DataError(path.string() + " has tables of different sizes; rewrite it with shapes2tracks");

@@ -77,6 +77,18 @@ inline constexpr const char* theta_edges = "theta_edges";              ///< (n_t
 inline constexpr const char* phi_edges = "phi_edges";                  ///< (n_phi + 1) rad
 inline constexpr const char* counts = "counts";                        ///< uint64 (n_theta x n_phi)
 inline constexpr const char* density = "density";                      ///< (n_theta x n_phi) 1/sr
+// Tables (groups) and attributes.
+inline constexpr const char* grains = "/grains";                       ///< group: per-grain table (N)
+inline constexpr const char* coordination = "/coordination";           ///< group: Z histogram; attributes below
+inline constexpr const char* codes = "codes";                          ///< attribute of fit_status: the codes' meaning
+inline constexpr const char* min_voxels = "min_voxels";                ///< attribute of /contacts
+inline constexpr const char* refined = "refined";                      ///< attribute of /contacts, 0 or 1
+inline constexpr const char* window_vox = "window_vox";                ///< attribute of /contacts, voxels
+inline constexpr const char* gap_tolerance_vox = "gap_tolerance_vox";  ///< attribute of /contacts, voxels
+inline constexpr const char* min_confidence = "min_confidence";        ///< attribute of /contacts
+inline constexpr const char* coordination_mean = "mean";               ///< attribute of /coordination: mean Z
+inline constexpr const char* grains_counted = "grains_counted";        ///< attribute of /coordination
+inline constexpr const char* include_edge_grains = "include_edge_grains";  ///< attribute of /coordination, 0 or 1
 }  // namespace graintwin::schema::contacts
 
 // kind=tracks (shapes2tracks), layout in docs/formats.md. N tracks, T scans.
@@ -143,10 +155,39 @@ inline constexpr const char* states = "/states";                       ///< grou
 inline constexpr const char* state_file = "/states/file";              ///< string (T)
 inline constexpr const char* state_d50 = "/states/d50";                ///< (T) m
 inline constexpr const char* parameters = "/micro/parameters";         ///< string (1), JSON
-// Members of each histogram group (pdf_d2min, pdf_eps_q, displacement/x, ...).
+// Members of each histogram group (pdf_d2min, pdf_eps_q, displacement/x, ...) and its attributes.
 inline constexpr const char* edges = "edges";
 inline constexpr const char* density = "density";
 inline constexpr const char* count = "count";
+inline constexpr const char* histogram_used = "used";        ///< attribute: values binned
+inline constexpr const char* histogram_outside = "outside";  ///< attribute: values outside the edges
+// Members of each state group /states/<t>.
+inline constexpr const char* rdf = "rdf";                              ///< group; attributes density, points, region...
+inline constexpr const char* rdf_r = "rdf/r";                          ///< m
+inline constexpr const char* rdf_g = "rdf/g";                          ///< 1
+inline constexpr const char* state_coordination = "coordination";      ///< group; attributes mean, source
+inline constexpr const char* state_coordination_z = "coordination/z";  ///< uint32: Z = 0 .. max
+inline constexpr const char* state_coordination_count = "coordination/count";  ///< uint64: grains with that Z
+inline constexpr const char* psd = "psd";                              ///< group (optional); attribute d50 (m)
+inline constexpr const char* psd_diameter = "psd/diameter";            ///< m
+inline constexpr const char* psd_percent_passing = "psd/percent_passing";  ///< %
+inline constexpr const char* mean = "mean";                            ///< attribute of coordination
+inline constexpr const char* d50 = "d50";                              ///< attribute of psd, m
+// Members of each increment group /increments/<k>.
+inline constexpr const char* pdf_d2min = "pdf_d2min";                  ///< histogram of D2min / d50^2
+inline constexpr const char* pdf_eps_q = "pdf_eps_q";                  ///< histogram of eps_q
+inline constexpr const char* displacement = "displacement";            ///< group of histograms x, y, z, magnitude (over d50)
+inline constexpr const char* clusters = "clusters";                    ///< group; attributes below
+inline constexpr const char* cluster_size = "clusters/size";           ///< grains per cluster
+inline constexpr const char* cluster_rg = "clusters/radius_of_gyration";  ///< m
+inline constexpr const char* selected = "selected";                    ///< attribute: grains in the top fraction
+inline constexpr const char* size_fit_valid = "size_fit_valid";        ///< attribute, 0 or 1
+inline constexpr const char* size_alpha = "size_alpha";                ///< attribute, NaN unless fitted
+inline constexpr const char* size_alpha_error = "size_alpha_error";    ///< attribute
+inline constexpr const char* size_s_min = "size_s_min";                ///< attribute
+inline constexpr const char* size_tail = "size_tail";                  ///< attribute: clusters in the fitted tail
+inline constexpr const char* fractal_dimension = "fractal_dimension";  ///< attribute
+inline constexpr const char* fractal_dimension_error = "fractal_dimension_error";  ///< attribute
 }  // namespace graintwin::schema::micro
 
 // kind=fdem_results (fdemrun), layout in docs/formats.md. R series rows, P platens, G grains,
@@ -211,6 +252,9 @@ inline constexpr const char* window_r = "/windows/pearson_r";          ///< (W) 
 inline constexpr const char* window_p = "/windows/p_value";            ///< (W) two-sided
 inline constexpr const char* window_count = "/windows/count";          ///< uint64 (W) grains in the correlation
 inline constexpr const char* parameters = "/forces/parameters";        ///< string (1), JSON
+// Members of each frame group /frames/<f>.
+inline constexpr const char* frame_pdf = "pdf";                        ///< histogram of f_n / <f_n> (schema::micro's members)
+inline constexpr const char* frame_rose = "rose";                      ///< group, members below
 // Members of each frame's rose group (the pdf group uses schema::micro's edges/count/density).
 inline constexpr const char* rose_theta_edges = "theta_edges";       ///< rad
 inline constexpr const char* rose_phi_edges = "phi_edges";           ///< rad

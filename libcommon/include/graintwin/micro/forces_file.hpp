@@ -9,7 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/micro/distributions.hpp"
 #include "graintwin/micro/forces.hpp"
+
+namespace graintwin::io {
+class H5File;
+}
 
 namespace graintwin::micro {
 
@@ -70,6 +75,36 @@ void write_forces_file(const std::filesystem::path& path, const ForcesFile& cont
 void write_force_chain_vtp(const std::filesystem::path& path, const std::vector<Eigen::Vector3d>& centroids,
                            const std::vector<std::uint32_t>& labels, const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
                            const std::vector<double>& normal_forces, double mean, const std::vector<std::size_t>& chain);
+
+/// The tables of one frame of a kind=forces file.
+struct ForcesFrameTables {
+  std::size_t index = 0;  ///< frame of the results file
+  double time = 0.0;      ///< s
+  std::size_t contacts = 0;
+  double strong_scale = 0.0, weak_theta = 0.0;
+  Histogram pdf;   ///< of f_n / <f_n>
+  ForceRose rose;  ///< counts and mean normal force (N)
+};
+/// The tables of one strain window of a kind=forces file.
+struct ForcesWindowTables {
+  std::size_t from = 0, to = 0;
+  double pearson_r = 0.0, p_value = 0.0;
+  std::size_t count = 0;
+  std::vector<double> volatility, d2min;  ///< per grain
+};
+/// The per-frame and per-window tables of a kind=forces file.
+struct ForcesTables {
+  std::vector<ForcesFrameTables> frames;
+  std::vector<ForcesWindowTables> windows;
+};
+
+/// The checks read_forces_tables makes on the tables of an open kind=forces file (io/table_checks):
+/// /frames, /grains and /windows columns agree in length and hold no infinity.
+void check_forces_tables(const io::H5File& file);
+
+/// Reads the frame and window tables of a kind=forces file. UsageError when it is not one;
+/// DataError naming the file when its tables disagree in size or hold values fdem2forces never writes.
+ForcesTables read_forces_tables(const std::filesystem::path& path);
 
 /// A ParaView collection (.pvd) listing `files` (relative to the .pvd's folder) at `times` (s).
 void write_pvd(const std::filesystem::path& path, const std::vector<std::string>& files, const std::vector<double>& times);

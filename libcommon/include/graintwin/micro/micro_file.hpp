@@ -8,6 +8,9 @@
 #include <vector>
 
 #include "graintwin/micro/analysis.hpp"
+#include "graintwin/micro/distributions.hpp"
+#include "graintwin/micro/simulation.hpp"
+#include "graintwin/shape/grain_measure.hpp"
 
 namespace graintwin::io {
 class H5File;
@@ -36,10 +39,60 @@ void write_micro_file(const std::filesystem::path& path, const MicroFile& conten
 /// increment it is present in; point arrays per increment k: `d2min_k`, `eps_q_k`, `cluster_k`
 /// and `defined_k` (1 where the local deformation is defined; the values are 0 elsewhere, since
 /// ParaView's filters cannot take NaN). Grains present in no increment are left out.
+void write_micro_vtp(const std::filesystem::path& path, const MicroFile& content);
+
 /// What the states of a kind=micro file came from ("tracks" or "fdem_results"): the "source" of its
 /// /micro/parameters JSON. DataError naming the file when that is not a JSON object with a string source.
 std::string read_micro_source(const io::H5File& file);
 
-void write_micro_vtp(const std::filesystem::path& path, const MicroFile& content);
+/// The histogram written by write_histogram under `group` of an open file. DataError naming the
+/// file and the group when its counts, densities and edges do not agree in length.
+Histogram read_histogram(const io::H5File& file, const std::string& group);
+
+/// The tables of one state of a kind=micro file.
+struct MicroStateTables {
+  std::vector<double> rdf_r, rdf_g;        ///< m, 1
+  std::vector<std::uint64_t> coordination;  ///< grains with Z = index
+  double coordination_mean = 0.0;
+  shape::SizeDistribution psd;              ///< empty when the file holds none
+};
+/// The tables of one increment of a kind=micro file.
+struct MicroIncrementTables {
+  std::size_t from = 0, to = 0;
+  double d50 = 0.0;  ///< m
+  Histogram pdf_d2min, pdf_eps_q;
+  Histogram displacement[4];  ///< x, y, z, magnitude, over d50
+  std::vector<double> cluster_size, cluster_rg;  ///< s, R_g (m)
+  std::size_t selected = 0;
+  bool size_fit_valid = false;
+  double size_alpha = 0.0, size_alpha_error = 0.0, size_s_min = 0.0;
+  std::size_t size_tail = 0;
+  double fractal_dimension = 0.0, fractal_dimension_error = 0.0;
+};
+/// The per-state and per-increment tables of a kind=micro file and the grains' labels and D2min.
+struct MicroTables {
+  std::string source;  ///< "tracks" or "fdem_results" (its /micro/parameters)
+  std::vector<double> state_d50;  ///< T, m
+  std::vector<MicroStateTables> states;          ///< T
+  std::vector<MicroIncrementTables> increments;  ///< K
+  std::size_t grains = 0;                        ///< N
+  std::vector<std::uint32_t> grain_label;        ///< N x T, 0 = absent
+  std::vector<double> grain_d2min;               ///< N x K, D2min / d50^2
+};
+
+/// The checks read_micro_tables makes on the tables of an open kind=micro file (io/table_checks):
+/// /grains, /increments and /states columns agree in length, only d50 is never NaN, no infinity.
+void check_micro_tables(const io::H5File& file);
+
+/// Reads the tables of a kind=micro file. UsageError when it is not one; DataError naming the
+/// file when its tables disagree in length or hold values tracks2micro never writes.
+MicroTables read_micro_tables(const std::filesystem::path& path);
+
+/// D2min / d50^2 of the increment `from` -> `to` of `micro` (made by tracks2micro from simulation
+/// frames; `name` is its file) for each grain of `grains` (its row order), looked up by label in
+/// state `from`; NaN where undefined. UsageError naming --micro and the fix when the file was made
+/// from tracks, has no such increment, or lacks some of the grains.
+std::vector<double> d2min_of_increment(const MicroTables& micro, const std::string& name, const SimulationGrains& grains,
+                                       std::size_t from, std::size_t to);
 
 }  // namespace graintwin::micro

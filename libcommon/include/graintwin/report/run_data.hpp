@@ -11,6 +11,8 @@
 
 #include "graintwin/micro/distributions.hpp"
 #include "graintwin/micro/forces.hpp"
+#include "graintwin/micro/forces_file.hpp"
+#include "graintwin/micro/micro_file.hpp"
 #include "graintwin/shape/grain_measure.hpp"
 
 namespace graintwin::report {
@@ -71,53 +73,13 @@ struct ScanData {
   micro::ForceRose rose_normal, rose_branch;  ///< counts only (no mean_force)
 };
 
-/// The parts of a kind=micro file the charts show.
-struct MicroState {
-  std::vector<double> rdf_r, rdf_g;        ///< m, 1
-  std::vector<std::uint64_t> coordination;  ///< grains with Z = index
-  double coordination_mean = 0.0;
-  shape::SizeDistribution psd;              ///< empty when the file holds none
-};
-struct MicroIncrement {
-  std::size_t from = 0, to = 0;
-  double d50 = 0.0;  ///< m
-  micro::Histogram pdf_d2min, pdf_eps_q;
-  micro::Histogram displacement[4];  ///< x, y, z, magnitude, over d50
-  std::vector<double> cluster_size, cluster_rg;  ///< s, R_g (m)
-  std::size_t selected = 0;
-  bool size_fit_valid = false;
-  double size_alpha = 0.0, size_alpha_error = 0.0, size_s_min = 0.0;
-  std::size_t size_tail = 0;
-  double fractal_dimension = 0.0, fractal_dimension_error = 0.0;
-};
-struct MicroData {
-  std::string source;  ///< "tracks" or "fdem_results" (its /micro/parameters)
-  std::vector<double> state_d50;
-  std::vector<MicroState> states;
-  std::vector<MicroIncrement> increments;
-};
-MicroData read_micro_data(const fs::path& path);
-
-/// The parts of a kind=forces file the charts show.
-struct ForcesFrame {
-  std::size_t index = 0;  ///< frame of the results file
-  double time = 0.0;
-  std::size_t contacts = 0;
-  double strong_scale = 0.0, weak_theta = 0.0;
-  micro::Histogram pdf;
-  micro::ForceRose rose;
-};
-struct ForcesWindow {
-  std::size_t from = 0, to = 0;
-  double pearson_r = 0.0, p_value = 0.0;
-  std::size_t count = 0;
-  std::vector<double> volatility, d2min;  ///< per grain
-};
-struct ForcesData {
-  std::vector<ForcesFrame> frames;
-  std::vector<ForcesWindow> windows;
-};
-ForcesData read_forces_data(const fs::path& path);
+/// The parts of kind=micro and kind=forces files the charts show, as their modules read them.
+using MicroState = micro::MicroStateTables;
+using MicroIncrement = micro::MicroIncrementTables;
+using MicroData = micro::MicroTables;
+using ForcesFrame = micro::ForcesFrameTables;
+using ForcesWindow = micro::ForcesWindowTables;
+using ForcesData = micro::ForcesTables;
 
 /// The triaxial time series of a kind=fdem_results file: log axial and volumetric strains and the
 /// stress ratio sigma_1 / sigma_3 (fdemrun's triaxial test). `missing` names the columns

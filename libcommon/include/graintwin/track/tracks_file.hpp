@@ -33,6 +33,7 @@ struct TracksTable {
   std::vector<double> confidence;                         ///< N x T
   std::vector<std::uint64_t> matched, lost, found, started, grains;  ///< T
   std::vector<std::string> scan_files;
+  std::vector<double> scan_d50;  ///< T, m: d50 of each scan's grains
   std::string parameters_json;
 };
 /// UsageError naming the file if it is not a tracks file; DataError if its tables disagree.

@@ -1,0 +1,31 @@
+#pragma once
+// shapes2tracks' stage: a series of scans' shapes files in, the content of a kind=tracks file out
+// (grains matched scan to scan, chained into tracks, their displacements and rotations).
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "graintwin/track/tracks.hpp"
+#include "graintwin/track/tracks_file.hpp"
+
+namespace graintwin::track {
+
+/// The tracks of the scans whose kind=shapes files are `paths` (in scan order): each file read
+/// (errors name it; DataError when it holds no grain), consecutive scans matched and chained
+/// (chain_tracks with `chain`), then every track's displacements (m) and rotations
+/// (track_kinematics with `rotation`). `parameters_json` records the options. `match_progress`
+/// and `rotation_progress` (may be empty) get the fraction of each stage done; each is released
+/// when its stage ends (a progress bar held only by it then finishes).
+TracksFile track_series(const std::vector<std::filesystem::path>& paths, const ChainOptions& chain,
+                        const RotationOptions& rotation, std::function<void(double)> match_progress = {},
+                        std::function<void(double)> rotation_progress = {});
+
+/// The options of a run as the JSON object stored in /tracks/parameters: method, window, volume
+/// filter, gap, backward check and rotation settings, and the improved matcher's own settings.
+std::string tracks_parameters_json(const ChainOptions& chain, const RotationOptions& rotation);
+
+/// "sh", "axes" or "none": the name parse_rotation_method reads.
+const char* rotation_method_name(RotationMethod method);
+
+}  // namespace graintwin::track
