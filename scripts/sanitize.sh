@@ -27,7 +27,15 @@ built=$(date +%s)
 export LSAN_OPTIONS="suppressions=$ROOT/tests/fuzz/lsan.supp:print_suppressions=0"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# Tests that cannot run sanitized (docs/testing.md): gmsh 4.8 frees memory it did not allocate
+# with malloc when it builds geometry from a triangulated surface (discreteFace::createGeometry),
+# which ASan aborts; and tools run under a 2 GB address-space limit cannot even start, since ASan's
+# shadow memory reserves terabytes of address space. All six pass in the normal build.
+unsanitizable='^(Gmsh\.TriangulatedSurfaceBecomesValidTetsOfItsVolume|GmshWorkers\.MeshAsThisProcessDoesAndSurviveACrash'
+unsanitizable+='|GmshWorkers\.OverrunStopsTheWorkerAndTheNextRequestIsServed|Volconvert\.RawLargerThanTheMemoryIsRefusedWithTheNumbers'
+unsanitizable+='|Labels2shapes\.OptionsOutsideTheirRangeAndFittersBeyondTheMemoryAreRefused'
+unsanitizable+='|Shapes2mesh\.MeshesBeyondTheMemoryAreRefusedWithTheNumbersBeforeMeshing)$'
 status=0
-ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)" --timeout 3600 "$@" || status=$?
+ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)" --timeout 3600 -E "$unsanitizable" "$@" || status=$?
 echo "sanitize: build $((built - start)) s, tests $(($(date +%s) - built)) s, ctest exit $status"
 exit $status
