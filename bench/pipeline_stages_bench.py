@@ -1,0 +1,140 @@
+#!/usr/bin/env python3
+"""Time per grain of every pipeline stage, series by series, side by side (docs/benchmarks.md,
+section pipeline_stages), with the share of grains on each meshing path.
+
+Runs Makefile.pipeline's stages one after another (inspect, segment, contacts, shapes, mesh; and
+simulate with --simulate) into a scratch folder for each series, and measures each stage's wall
+time and CPU time (user + system of its processes). Per grain: CPU time over the grains the stage
+handled (every scan's grains for the per-scan stages, the reference scan's for mesh and simulate).
+
+    python3 bench/pipeline_stages_bench.py [--series sand_small sand_angular soil_crop] [--simulate]
+        [--build build] [--scratch /tmp/graintwin_stages] [--no-publish]
+"""
+import argparse
+import glob
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import time
+
+import h5py
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_doc import SOURCE, publish  # noqa: E402
+
+PER_SCAN = ("inspect", "segment", "contacts", "shapes")
+PATH_NAMES = ("gmsh remeshed", "kept surface", "ellipsoid")
+ORIGIN_NAMES = ("SH fit", "voxels", "ellipsoid")
+
+
+def children_cpu():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run_stage(series, stage, out, build):
+    cmd = ["make", "-s", "-f", "Makefile.pipeline", f"SERIES={series}", f"OUT={out}", f"BIN={build}/bin", stage]
+    cpu0, t0 = children_cpu(), time.perf_counter()
+    done = subprocess.run(cmd, cwd=SOURCE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    wall, cpu = time.perf_counter() - t0, children_cpu() - cpu0
+    if done.returncode != 0:
+        sys.exit(f"pipeline_stages_bench: {' '.join(cmd)} failed:\n{done.stderr.strip()}")
+    return wall, cpu
+
+
+def grains_of(labels_path):
+    with h5py.File(labels_path, "r") as f:
+        return int(f["grains/label"].shape[0])
+
+
+def mesh_paths(model_path):
+    with h5py.File(model_path, "r") as f:
+        path = f["mesh/path"][:]
+        origin = f["mesh/surface_origin"][:]
+        overran = int(f["mesh/overran_budget"][:].sum())
+        seconds = f["mesh/seconds"][:]
+    return {
+        "paths": [int((path == k).sum()) for k in range(len(PATH_NAMES))],
+        "origins": [int((origin == k).sum()) for k in range(len(ORIGIN_NAMES))],
+        "overran": overran,
+        "slowest_s": float(seconds.max()),
+    }
+
+
+def bench_series(series, stages, build, scratch):
+    folder = os.path.join(SOURCE, "sample_volumes", series)
+    scans = sorted(glob.glob(os.path.join(folder, "scan_*.h5")))
+    if not scans:
+        sys.exit(f"pipeline_stages_bench: no scans in {folder}; pick series from sample_volumes/")
+    out = os.path.join(scratch, series)
+    shutil.rmtree(out, ignore_errors=True)
+    rows = {}
+    for stage in stages:
+        wall, cpu = run_stage(series, stage, out, build)
+        rows[stage] = {"wall_s": wall, "cpu_s": cpu}
+        print(f"{series:14s} {stage:9s} wall {wall:7.2f} s  cpu {cpu:7.2f} s", flush=True)
+    names = [os.path.splitext(os.path.basename(s))[0] for s in scans]
+    per_scan = [grains_of(os.path.join(out, n, "labels.h5")) for n in names]
+    for stage, row in rows.items():
+        row["grains"] = sum(per_scan) if stage in PER_SCAN else per_scan[0]
+        row["cpu_ms_per_grain"] = 1e3 * row["cpu_s"] / row["grains"]
+    result = {"scans": len(scans), "grains": per_scan[0], "stages": rows}
+    if "mesh" in rows:
+        result["mesh"] = mesh_paths(os.path.join(out, "model.h5"))
+    return result
+
+
+def table(results, stages):
+    series = list(results)
+    lines = ["| stage | " + " | ".join(f"{s}: wall s / CPU s / CPU ms per grain" for s in series) + " |",
+             "|---|" + "---|" * len(series)]
+    for stage in stages:
+        cells = []
+        for s in series:
+            r = results[s]["stages"].get(stage)
+            cells.append("-" if r is None else f"{r['wall_s']:.1f} / {r['cpu_s']:.1f} / {r['cpu_ms_per_grain']:.1f}")
+        lines.append(f"| {stage} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def mesh_table(results):
+    lines = ["| series | grains | on each path (" + ", ".join(PATH_NAMES) + ") | surface from ("
+             + ", ".join(ORIGIN_NAMES) + ") | over the budget | slowest grain, s |", "|---|---|---|---|---|---|"]
+    for s, r in results.items():
+        m = r.get("mesh")
+        if not m:
+            continue
+        share = lambda counts: ", ".join(f"{c} ({100.0 * c / r['grains']:.0f} %)" for c in counts)  # noqa: E731
+        lines.append(f"| {s} | {r['grains']} | {share(m['paths'])} | {share(m['origins'])} | {m['overran']} | {m['slowest_s']:.2f} |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--series", nargs="+", default=["sand_small", "sand_angular", "soil_crop"])
+    ap.add_argument("--simulate", action="store_true", help="also time the simulate stage (minutes per series)")
+    ap.add_argument("--build", default=os.path.join(SOURCE, "build"))
+    ap.add_argument("--scratch", default="/tmp/graintwin_stages")
+    ap.add_argument("--no-publish", action="store_true")
+    a = ap.parse_args()
+    stages = ["inspect", "segment", "contacts", "shapes", "mesh"] + (["simulate"] if a.simulate else [])
+    results = {s: bench_series(s, stages, os.path.abspath(a.build), a.scratch) for s in a.series}
+    text = (
+        "Time of each pipeline stage per grain, on 2 cores (`python3 bench/pipeline_stages_bench.py`; "
+        f"{os.cpu_count()} cores here, {time.strftime('%Y-%m-%d')}). Wall and CPU (user + system) seconds of the "
+        "stage's processes, and CPU milliseconds per grain (the per-scan stages over every scan's grains, mesh"
+        + (" and simulate" if a.simulate else "") + " over the reference scan's).\n\n"
+        + table(results, stages) + "\n\nMeshing paths (shapes2mesh, `/mesh/path`, `/mesh/surface_origin`):\n\n"
+        + mesh_table(results) + "\n")
+    print(text)
+    with open(os.path.join(a.scratch, "pipeline_stages.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    if not a.no_publish:
+        publish("pipeline_stages", text)
+
+
+if __name__ == "__main__":
+    main()
