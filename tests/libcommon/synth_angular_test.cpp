@@ -14,6 +14,8 @@
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/synth/angular_grains.hpp"
 #include "graintwin/synth/grains.hpp"
+#include "graintwin/synth/ground_truth.hpp"
+#include "graintwin/synth/packing.hpp"
 
 using namespace graintwin;
 using graintwin::synth::AngularGrain;
@@ -201,4 +203,58 @@ TEST(MakeGrains, AngularGrainsHaveTheirDrawnSizeAndAnSHFit) {
   }
   EXPECT_EQ(synth::parse_grain_shape("angular"), synth::GrainShape::angular);
   EXPECT_THROW(synth::parse_grain_shape("crushed"), UsageError);
+}
+
+// Contacts on sharp tables: the packer's kernel (pair_contact) measures radial depths and takes
+// a table normal at its deepest point, which on a flat face pressed on a face, or an edge on a
+// face, lies at a corner or an edge, where the table's normal is blended: it finds the contact,
+// not its normal. The truth's re-measurement (separating_contact) gives the exact overlap and the
+// face normal for both, and minus the gap when apart.
+TEST(AngularContacts, TruthGivesTheExactOverlapAndNormalOfFacesAndEdges) {
+  const double e = 1.0e-3, overlap = 0.01 * e, reach = 0.25 * e;
+  const shape::RadialTable cube_table = cube(e).table(64);
+  const double one_degree = std::cos(std::numbers::pi / 180.0);
+  synth::PackedGrain a, b;
+  b.position = Eigen::Vector3d(e - overlap, 0.2 * e, 0.1 * e);  // faces x = +e/2 of a and x = -e/2 of b overlap
+  const auto face = synth::pair_contact(cube_table, a, cube_table, b, 0.1 * e);
+  ASSERT_TRUE(face.has_value());
+  const synth::PairContact face_truth = synth::separating_contact(cube_table, a, cube_table, b, *face, reach);
+  EXPECT_NEAR(face_truth.overlap, overlap, 1e-3 * overlap);
+  EXPECT_GT(face_truth.normal.x(), one_degree);
+  // b turned 45 degrees about z: its edge (a node line of the table, so exact) points at a's face.
+  b.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.25 * std::numbers::pi, Eigen::Vector3d::UnitZ()));
+  b.position = Eigen::Vector3d(0.5 * e + std::sqrt(0.5) * e - overlap, 0.0, 0.0);
+  const auto edge = synth::pair_contact(cube_table, a, cube_table, b, 0.1 * e);
+  ASSERT_TRUE(edge.has_value());
+  const synth::PairContact edge_truth = synth::separating_contact(cube_table, a, cube_table, b, *edge, reach);
+  EXPECT_NEAR(edge_truth.overlap, overlap, 1e-3 * overlap);
+  EXPECT_GT(edge_truth.normal.x(), one_degree);
+  std::printf("[ contact ] face on face: kernel overlap %.3f of the true, normal %.1f deg off\n", face->overlap / overlap,
+              std::acos(std::min(1.0, std::abs(face->normal.x()))) * 180.0 / std::numbers::pi);
+  std::printf("[ contact ] edge on face: kernel overlap %.3f of the true, normal %.1f deg off; re-measured %.4f, "
+              "%.2f deg off\n",
+              edge->overlap / overlap, std::acos(std::min(1.0, std::abs(edge->normal.x()))) * 180.0 / std::numbers::pi,
+              edge_truth.overlap / overlap, std::acos(std::min(1.0, edge_truth.normal.x())) * 180.0 / std::numbers::pi);
+  // Apart by a gap: minus the gap, along the face normal.
+  b.position.x() += 2.0 * overlap;
+  const auto apart = synth::pair_contact(cube_table, a, cube_table, b, 0.1 * e);
+  ASSERT_TRUE(apart.has_value());
+  const synth::PairContact apart_truth = synth::separating_contact(cube_table, a, cube_table, b, *apart, reach);
+  EXPECT_NEAR(apart_truth.overlap, -overlap, 1e-3 * overlap);
+  EXPECT_GT(apart_truth.normal.x(), one_degree);
+}
+
+// Smooth bodies: for two spheres the re-measured contact is the exact one, to the table's
+// sampling (its nodes lie on the sphere, so a support is short by at most r (1 - cos(cell / 2))).
+TEST(AngularContacts, TruthOfTwoSpheresIsExact) {
+  const double r = 1.0e-3, overlap = 0.01 * r;
+  const shape::RadialTable ball = shape::RadialTable::from_function([r](const Eigen::Vector3d&) { return r; }, 64);
+  synth::PackedGrain a, b;
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+  b.position = (2.0 * r - overlap) * axis;
+  const auto first = synth::pair_contact(ball, a, ball, b, 0.1 * r);
+  ASSERT_TRUE(first.has_value());
+  const synth::PairContact truth = synth::separating_contact(ball, a, ball, b, *first, 0.25 * r);
+  EXPECT_NEAR(truth.overlap, overlap, 2.0 * r * (1.0 - std::cos(1.0 / 63.0)));
+  EXPECT_GT(truth.normal.dot(axis), std::cos(0.5 * std::numbers::pi / 180.0));
 }

@@ -32,7 +32,7 @@ namespace graintwin::synth {
 struct AngularShapeParams {
   int min_facets = 8;              ///< fewest planes drawn per grain (>= 4)
   int max_facets = 20;             ///< most planes drawn (>= min_facets, <= 64); spike cuts may add a few
-  double min_core_ratio = 0.6;     ///< core semi-axes 1 : b : c with b, c / b uniform in [this, 0.95]
+  double min_core_ratio = 0.7;     ///< core semi-axes 1 : b : c with b, c / b uniform in [this, 0.95]
   double facet_cut = 0.15;         ///< planes cut up to this fraction into the core, in [0, 0.5]
   double spike_limit = 1.5;        ///< no vertex beyond this many core radii (> 1)
   int max_dents = 2;               ///< dents per grain, uniform in 0..max_dents (<= 8)
