@@ -111,10 +111,14 @@ std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTabl
     TrueContact& t = out[k];
     t.low = static_cast<std::uint32_t>(c.a + 1);
     t.high = static_cast<std::uint32_t>(c.b + 1);
-    t.overlap = pc.overlap;
+    // Each measure overstates in its own failure mode: the kernel's at sharp edges and corners,
+    // the separating one where the patches are not convex (a bump in a dent, roughness), whose
+    // convex hulls overlap more than the grains. Neither understates, so the smaller is kept;
+    // the normal is the separating one (on a rough patch, that of the local hulls' contact plane).
+    t.overlap = std::min(c.contact.overlap, pc.overlap);
     t.point = pc.point;
     t.normal = pc.normal;
-    t.touching = std::abs(pc.overlap) <= tolerance;
+    t.touching = std::abs(t.overlap) <= tolerance;
   }
   return out;
 }

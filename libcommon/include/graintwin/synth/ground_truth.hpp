@@ -42,7 +42,10 @@ PairContact separating_contact(const shape::RadialTable& a, const PackedGrain& g
 /// Every pair closer than `search_gap` (m), overlapping pairs included: find_contacts() (the
 /// packer's contact search) with labels index + 1 and `touching` set for |overlap| <= tolerance,
 /// each contact re-measured by separating_contact() within a quarter of the smaller grain's
-/// volume-equivalent radius. Parallel and deterministic (sorted by (low, high)).
+/// volume-equivalent radius: its normal, and the smaller of the two overlaps (the kernel's
+/// overstates at sharp edges, the separating one on non-convex patches such as a bump in a dent,
+/// where the local convex hulls overlap more than the grains; neither understates). Parallel and
+/// deterministic (sorted by (low, high)).
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
                                        const std::vector<PackedGrain>& poses, double search_gap,
                                        double tolerance);
