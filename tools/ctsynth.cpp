@@ -457,7 +457,7 @@ int main(int argc, char** argv) {
         truth.sphericity.push_back(st.sphericity);
         truth.aspect_ratio.push_back(st.aspect_ratio);
       }
-      truth.contacts = true_contacts(tables, poses, search_gap, relax_report.tolerance);
+      truth.contacts = true_contacts(tables, poses, search_gap, relax_report.tolerance, shape_kind == GrainShape::angular);
       const auto touching = std::count_if(truth.contacts.begin(), truth.contacts.end(),
                                           [](const TrueContact& c) { return c.touching; });
       write_ground_truth(out.temp_path() / scan_name("truth", k), truth, ctx.history());

@@ -258,3 +258,24 @@ TEST(AngularContacts, TruthOfTwoSpheresIsExact) {
   EXPECT_NEAR(truth.overlap, overlap, 2.0 * r * (1.0 - std::cos(1.0 / 63.0)));
   EXPECT_GT(truth.normal.dot(axis), std::cos(0.5 * std::numbers::pi / 180.0));
 }
+
+// true_contacts re-measures only when asked (ctsynth asks for angular grains): an edge pressed
+// on a face keeps the kernel's overlap without it and gets the exact one with it.
+TEST(AngularContacts, TrueContactsReMeasureOnlyWhenAsked) {
+  const double e = 1.0e-3, overlap = 0.01 * e, tolerance = 0.02 * e;
+  const shape::RadialTable cube_table = cube(e).table(64);
+  synth::PackedGrain a, b;
+  b.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.25 * std::numbers::pi, Eigen::Vector3d::UnitZ()));
+  b.position = Eigen::Vector3d(0.5 * e + std::sqrt(0.5) * e - overlap, 0.0, 0.0);
+  const auto kernel = synth::pair_contact(cube_table, a, cube_table, b, 0.1 * e);
+  ASSERT_TRUE(kernel.has_value());
+  const auto plain = synth::true_contacts({&cube_table, &cube_table}, {a, b}, 0.1 * e, tolerance);
+  const auto remeasured = synth::true_contacts({&cube_table, &cube_table}, {a, b}, 0.1 * e, tolerance, true);
+  ASSERT_EQ(plain.size(), 1u);
+  ASSERT_EQ(remeasured.size(), 1u);
+  EXPECT_EQ(plain[0].overlap, kernel->overlap);
+  EXPECT_EQ(plain[0].normal, kernel->normal);
+  EXPECT_NEAR(remeasured[0].overlap, overlap, 1e-3 * overlap);
+  EXPECT_GT(remeasured[0].normal.x(), std::cos(std::numbers::pi / 180.0));
+  EXPECT_TRUE(remeasured[0].touching);
+}

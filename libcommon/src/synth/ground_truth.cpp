@@ -99,7 +99,8 @@ PairContact separating_contact(const shape::RadialTable& a, const PackedGrain& g
 }
 
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
-                                       const std::vector<PackedGrain>& poses, double search_gap, double tolerance) {
+                                       const std::vector<PackedGrain>& poses, double search_gap, double tolerance,
+                                       bool separating) {
   const std::vector<GrainContact> found = find_contacts(shapes, poses, search_gap);
   std::vector<TrueContact> out(found.size());
 #pragma omp parallel for schedule(dynamic)
@@ -107,7 +108,8 @@ std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTabl
     const GrainContact& c = found[k];
     const auto radius = [](const shape::RadialTable* t) { return std::cbrt(3.0 * t->volume() / (4.0 * std::numbers::pi)); };
     const double reach = 0.25 * std::min(radius(shapes[c.a]), radius(shapes[c.b]));
-    const PairContact pc = separating_contact(*shapes[c.a], poses[c.a], *shapes[c.b], poses[c.b], c.contact, reach);
+    const PairContact pc =
+        separating ? separating_contact(*shapes[c.a], poses[c.a], *shapes[c.b], poses[c.b], c.contact, reach) : c.contact;
     TrueContact& t = out[k];
     t.low = static_cast<std::uint32_t>(c.a + 1);
     t.high = static_cast<std::uint32_t>(c.b + 1);
