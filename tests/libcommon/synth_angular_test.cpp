@@ -16,6 +16,7 @@
 #include "graintwin/synth/grains.hpp"
 #include "graintwin/synth/ground_truth.hpp"
 #include "graintwin/synth/packing.hpp"
+#include "graintwin/synth/render.hpp"
 
 using namespace graintwin;
 using graintwin::synth::AngularGrain;
@@ -278,4 +279,33 @@ TEST(AngularContacts, TrueContactsReMeasureOnlyWhenAsked) {
   EXPECT_NEAR(remeasured[0].overlap, overlap, 1e-3 * overlap);
   EXPECT_GT(remeasured[0].normal.x(), std::cos(std::numbers::pi / 180.0));
   EXPECT_TRUE(remeasured[0].touching);
+}
+
+// Rendering keeps sharp grains' volume: the analytic partial volumes (a secant plane per boundary
+// voxel, split where the surface bends) of angular grains 16 voxels across, at random poses, sum
+// to their table's volume within 0.1 % (measured: 0.023 % worst of 5), point samples within 1 %.
+TEST(AngularRender, PartialVolumesSumToTheTableVolume) {
+  const double voxel = 1e-5, r = 8e-5;
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> jitter(0.0, voxel);
+  double worst_analytic = 0.0;
+  for (int i = 0; i < 5; ++i) {
+    shape::RadialTable unit;
+    synth::random_angular_grain(AngularShapeParams{}, rng, 96, &unit);
+    const shape::RadialTable t = unit.scaled(r);
+    const std::size_t side = static_cast<std::size_t>(std::ceil(2.0 * t.max_radius() / voxel)) + 4;
+    const Eigen::Vector3d centre = Eigen::Vector3d::Constant(0.5 * side * voxel) +
+                                   Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+    const synth::PlacedGrain g{&t, centre, Eigen::Quaterniond::UnitRandom(), 1};
+    for (int k : {0, 4}) {
+      const synth::GrainImages im =
+          synth::render_grains({g}, {side, side, side}, {voxel, voxel, voxel}, {0, 0, 0}, synth::RenderParams{k});
+      double s = 0.0;
+      for (float f : im.fraction.values()) s += f;
+      const double err = s * voxel * voxel * voxel / t.volume() - 1.0;
+      EXPECT_LT(std::abs(err), k == 0 ? 0.001 : 0.01) << "grain " << i << ", supersample " << k;
+      if (k == 0) worst_analytic = std::max(worst_analytic, std::abs(err));
+    }
+  }
+  std::printf("[ render ] angular grains, 16 voxels across: worst analytic volume error %.3f %%\n", 100 * worst_analytic);
 }
