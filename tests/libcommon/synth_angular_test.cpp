@@ -16,6 +16,7 @@
 #include "graintwin/synth/grains.hpp"
 #include "graintwin/synth/ground_truth.hpp"
 #include "graintwin/synth/packing.hpp"
+#include "graintwin/synth/psd.hpp"
 #include "graintwin/synth/render.hpp"
 
 using namespace graintwin;
@@ -308,4 +309,56 @@ TEST(AngularRender, PartialVolumesSumToTheTableVolume) {
     }
   }
   std::printf("[ render ] angular grains, 16 voxels across: worst analytic volume error %.3f %%\n", 100 * worst_analytic);
+}
+
+// Angular grains pack in stages (the fit low-passed to degree 7 and 11, then the sharp tables):
+// every pair's truth depth (the smaller of the kernel's and the separating one) and every wall
+// depth is within the tolerance, and every grain touches something on average.
+TEST(AngularPacking, SharpGrainsMeetTheToleranceInStages) {
+  // About 20 grains of the default PSD; the cylinder (height = diameter) is sized to hold them at
+  // solid fraction 0.45 exactly.
+  std::mt19937_64 rng(12);
+  const std::vector<double> diameters = synth::sample_diameters(synth::Psd{}, 0.45 * 2.65e-9, rng);
+  synth::GrainSetParams gp;
+  gp.shape = synth::GrainShape::angular;
+  gp.seed = 12;
+  const synth::GrainSet grains = synth::make_grains(gp, diameters);
+  const auto shapes = grains.table_pointers();
+  std::vector<std::vector<shape::RadialTable>> smooth;
+  std::vector<std::vector<const shape::RadialTable*>> stages;
+  for (int degree : {7, 11}) smooth.push_back(synth::smoothed_tables(grains, degree, gp.voxel_size));
+  for (const auto& tables : smooth) {
+    stages.emplace_back();
+    for (const auto& t : tables) stages.back().push_back(&t);
+  }
+  stages.push_back(shapes);
+  double volume = 0.0;
+  for (const auto& st : grains.stats) volume += st.volume;
+  synth::Container c;
+  c.kind = synth::Container::Kind::cylinder;
+  c.radius = std::cbrt(volume / (0.45 * 2.0 * std::numbers::pi));
+  c.height = 2.0 * c.radius;
+  synth::PackingParams p;
+  p.seed = 3;
+  p.contact_tolerance = 0.02;
+  synth::PackingReport r;
+  std::vector<synth::PackedGrain> packed;
+  try {
+    packed = synth::pack_in_stages(stages, c, p, &r);
+  } catch (const Error& e) {
+    FAIL() << e.message();
+  }
+  ASSERT_EQ(packed.size(), shapes.size());
+  const double tol = r.tolerance;
+  EXPECT_LE(r.max_overlap, tol);
+  const auto contacts = synth::true_contacts(shapes, packed, tol, tol, true);
+  std::size_t touching = 0;
+  for (const auto& t : contacts) {
+    EXPECT_LE(t.overlap, 1.01 * tol) << t.low << "-" << t.high;
+    touching += t.touching;
+  }
+  for (std::size_t i = 0; i < packed.size(); ++i) EXPECT_LE(synth::wall_penetration(*shapes[i], packed[i], c), 1.01 * tol);
+  EXPECT_GE(touching, packed.size());
+  std::printf("[ packing ] %zu angular grains at %.2f: max overlap %.2f um (tolerance %.2f um), %zu touching, %d sweeps\n",
+              packed.size(), r.solid_fraction, r.max_overlap * 1e6, tol * 1e6, touching, r.sweeps);
 }
