@@ -2,11 +2,13 @@
 
 #include <Eigen/QR>
 #include <atomic>
+#include <memory>
 #include <cmath>
 #include <random>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/shape/sh_basis.hpp"
+#include "graintwin/shape/sh_fitter.hpp"
 
 namespace graintwin::synth {
 
@@ -14,7 +16,8 @@ GrainShape parse_grain_shape(const std::string& name) {
   if (name == "sphere") return GrainShape::sphere;
   if (name == "ellipsoid") return GrainShape::ellipsoid;
   if (name == "sand") return GrainShape::sand;
-  throw UsageError("grain shape '" + name + "' is not one of sphere, ellipsoid, sand");
+  if (name == "angular") return GrainShape::angular;
+  throw UsageError("--grain-shape '" + name + "' is not one of sphere, ellipsoid, sand, angular");
 }
 
 std::vector<const shape::RadialTable*> GrainSet::table_pointers() const {
@@ -56,6 +59,7 @@ double grain_bytes(double diameter, double voxel_size, int degree) {
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,
                      const std::function<void(double)>& progress) {
   if (p.aspect_ratio < 1.0) throw UsageError("aspect-ratio must be at least 1");
+  if (p.shape == GrainShape::angular) validate(p.angular);
   const int degree = p.sand.degree;
   const std::size_t n = diameters.size();
   GrainSet set;
@@ -73,6 +77,12 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
               return 1.0 / std::sqrt(d.x() * d.x() / (ell_a * ell_a) + (d.y() * d.y() + d.z() * d.z()) / (ell_b * ell_b));
             }, degree, 2 * shape::sh_count(degree))
           : Eigen::VectorXd();
+  // Angular grains are fitted on one direction set, so the pseudo-inverse is computed once.
+  std::unique_ptr<const shape::ShFitter> fitter;
+  if (p.shape == GrainShape::angular) {
+    fitter = std::make_unique<const shape::ShFitter>(degree);
+    set.sh_fit_rms.resize(n);
+  }
   std::atomic<std::size_t> done{0};
   for_each_grain(n, [&](std::size_t i) {
     const double r = 0.5 * diameters[i];
@@ -83,6 +93,17 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
       std::mt19937_64 rng(p.seed * 0x9E3779B97F4A7C15ull + i);
       c = shape::random_sand_coeffs(p.sand, rng) * r;
       t = shape::radial_table_from_sh(c, degree, nodes);
+    } else if (p.shape == GrainShape::angular) {
+      std::mt19937_64 rng(p.seed * 0x9E3779B97F4A7C15ull + i);
+      AngularGrain g = random_angular_grain(p.angular, rng, nodes, &t);
+      g.scale(r);
+      t = t.scaled(r);
+      const auto& dirs = fitter->directions();
+      Eigen::VectorXd radii(static_cast<Eigen::Index>(dirs.size()));
+      for (std::size_t k = 0; k < dirs.size(); ++k) radii[static_cast<Eigen::Index>(k)] = g.radius(dirs[k]);
+      c = fitter->fit(radii);
+      const Eigen::VectorXd residual = fitter->design() * c - radii;
+      set.sh_fit_rms[i] = std::sqrt(residual.squaredNorm() / static_cast<double>(residual.size())) / r;
     } else if (p.shape == GrainShape::ellipsoid) {
       t = shape::ellipsoid_table(r * ell_a, r * ell_b, r * ell_b, nodes);
       c = r * unit_ellipsoid;

@@ -1,7 +1,7 @@
 #pragma once
-// The grains of a synthetic sample: shapes (sphere, ellipsoid or random SH sand grain) scaled to
-// diameters drawn from a PSD, with their SH coefficients and radial tables, made in parallel and
-// deterministically (grain i draws from its own random stream).
+// The grains of a synthetic sample: shapes (sphere, ellipsoid, random SH sand grain or angular
+// grain, angular_grains.hpp) scaled to diameters drawn from a PSD, with their SH coefficients and
+// radial tables, made in parallel and deterministically (grain i draws from its own random stream).
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
@@ -10,16 +10,18 @@
 
 #include "graintwin/shape/radial_table.hpp"
 #include "graintwin/shape/sand_shape.hpp"
+#include "graintwin/synth/angular_grains.hpp"
 
 namespace graintwin::synth {
 
-enum class GrainShape { sphere, ellipsoid, sand };
-/// "sphere", "ellipsoid", "sand"; UsageError otherwise.
+enum class GrainShape { sphere, ellipsoid, sand, angular };
+/// "sphere", "ellipsoid", "sand", "angular"; UsageError otherwise.
 GrainShape parse_grain_shape(const std::string& name);
 
 struct GrainSetParams {
   GrainShape shape = GrainShape::sand;
   shape::SandShapeParams sand;     ///< sand.degree is also the SH degree stored for every shape
+  AngularShapeParams angular;      ///< angular grains
   double aspect_ratio = 1.3;       ///< ellipsoids: prolate spheroids a/c, volume-equivalent
   double voxel_size = 27.5e-6;     ///< m; sets the table resolution (surface error <= 0.02 voxel)
   std::uint64_t seed = 1;
@@ -31,6 +33,11 @@ struct GrainSet {
   std::vector<shape::RadialTable> tables; ///< body frame, origin at the centroid, final size
   Eigen::MatrixXd coeffs_body;            ///< N x (L+1)^2 SH coefficients (m) of the body-frame surface
   std::vector<shape::ShapeStats> stats;
+  /// Angular grains (empty for the others, whose coefficients are exact): RMS over the fit
+  /// directions of the exact radius minus its SH fit at sh_degree, relative to the grain's
+  /// volume-equivalent radius. Sharp edges cannot be represented by a finite SH sum; this says
+  /// how far the stored coefficients are from the rendered surface.
+  std::vector<double> sh_fit_rms;
   std::vector<const shape::RadialTable*> table_pointers() const;
 };
 
@@ -41,8 +48,8 @@ double grain_bytes(double diameter, double voxel_size, int degree);
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,
                      const std::function<void(double)>& progress = {});
 
-/// The grains' surfaces low-passed to SH degree `degree` (coefficients above it dropped; same body
-/// frame and origin), tabulated like make_grains() does at `voxel_size`: smooth stand-ins for
+/// The grains' surfaces low-passed to SH degree `degree` (coefficients above it dropped; for angular
+/// grains, of their SH fit; same body frame and origin), tabulated like make_grains() does at `voxel_size`: smooth stand-ins for
 /// packing with the roughness off (pack_in_stages()). UsageError unless 0 <= degree <= sh_degree.
 std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size);
 

@@ -26,10 +26,18 @@ struct TrueContact {
 
 /// Every pair closer than `search_gap` (m), overlapping pairs included: find_contacts() (the
 /// packer's contact search) with labels index + 1 and `touching` set for |overlap| <= tolerance.
-/// Parallel and deterministic (sorted by (low, high)).
+/// With `separating` (ctsynth sets it for angular grains) each contact is re-measured by
+/// separating_contact() within a quarter of the smaller grain's volume-equivalent radius: its
+/// normal, and the smaller of the two overlaps (the kernel's overstates at sharp edges, the
+/// separating one on non-convex patches such as a bump in a dent, where the local convex hulls
+/// overlap more than the grains; neither understates). Smooth grains keep the kernel's contacts:
+/// on rough SH sand the two normals differ by a median 4 degrees (90th percentile 11, 297 contacts
+/// of a 2.4 mm cylinder), the kernel's being the local bump's and the separating one that of the
+/// local hulls, and earlier accuracy figures were measured against the kernel's. Parallel and
+/// deterministic (sorted by (low, high)).
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
                                        const std::vector<PackedGrain>& poses, double search_gap,
-                                       double tolerance);
+                                       double tolerance, bool separating = false);
 
 /// Everything written to one truth_NNN.h5.
 struct GroundTruth {
