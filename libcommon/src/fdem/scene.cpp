@@ -182,25 +182,9 @@ TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>&
   return spec;
 }
 
-}  // namespace
-
-double Scene::total_duration() const {
-  double t = 0;
-  for (const StageSpec& s : stages) t += s.duration;
-  return t;
-}
-
-Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file) {
-  const std::string file = path.string();
-  toml::table root;
-  try {
-    root = toml::parse_file(file);
-  } catch (const toml::parse_error& e) {
-    throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + shorten_quotes(std::string(e.description())) +
-                     "; fix the TOML syntax");
-  }
-  const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages", "triaxial"});
-  Scene s;
+/// The [model] table (or --model): the shapes2mesh model file and its sample cylinder.
+void parse_model(toml::table& root, const Table& top, const std::filesystem::path& path,
+                 const std::filesystem::path& model_file, const std::string& file, Scene& s) {
   if (!model_file.empty() && !root.contains("model")) root.insert("model", toml::table{});
   if (const toml::table* model = root["model"].as_table()) {
     const Table t(*model, file + ": [model]", {"file", "kind"});
@@ -221,6 +205,10 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   } else if (top.has("model")) {
     top.fail("model must be a [model] table");
   }
+}
+
+/// The [sample] table: the sample cylinder, over the model file's.
+void parse_sample(const toml::table& root, const Table& top, const std::string& file, Scene& s) {
   if (const toml::table* sample = root["sample"].as_table()) {
     const Table t(*sample, file + ": [sample]", {"axis_xy", "radius", "z_min", "z_max", "membrane_thickness"});
     SampleCylinder c = s.sample.value_or(SampleCylinder{});
@@ -235,6 +223,10 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   } else if (top.has("sample")) {
     top.fail("sample must be a [sample] table");
   }
+}
+
+/// The [run] table; returns its duration (0 when not given).
+double parse_run(const toml::table& root, const Table& top, const std::string& file, Scene& s) {
   double duration = 0;
   if (const toml::table* run = root["run"].as_table()) {
     const Table r(*run, file + ": [run]",
@@ -266,7 +258,12 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   } else if (top.has("run")) {
     top.fail("run must be a [run] table");
   }
+  return duration;
+}
 
+/// The [[materials]] tables, over the model file's materials of the same name; returns every
+/// material's name, in order.
+std::vector<std::string> parse_materials(const toml::table& root, const std::string& file, Scene& s) {
   std::vector<std::string> material_names;
   if (s.model)
     for (const Material& mat : s.model->model->materials) s.materials.push_back(mat), material_names.push_back(mat.name);
@@ -309,7 +306,12 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   }
   if (s.materials.empty()) s.materials.push_back(Material{}), material_names.push_back(Material{}.name);
   s.size_penalties.resize(s.materials.size());
+  return material_names;
+}
 
+/// The [[grains]] tables: primitives meshed by fdemrun.
+void parse_grains(const toml::table& root, const std::string& file, const std::vector<std::string>& material_names,
+                  Scene& s) {
   std::uint32_t first_label = 1;  // primitives are numbered after the model file's labels
   if (s.model)
     for (const Grain& g : s.model->model->grains) first_label = std::max(first_label, g.label + 1);
@@ -374,6 +376,11 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     spec.angular_velocity = t.vector("angular_velocity", Eigen::Vector3d::Zero());
     s.grains.push_back(spec);
   }
+}
+
+/// Checks across the model file's grains and the scene's: at least one grain, labels unique, and a
+/// grain for every material whose penalty is measured on its grains' meshes.
+void check_grains(const std::string& file, const Scene& s) {
   if (s.grains.empty() && !s.model)
     throw UsageError(file + " has no [[grains]] and no [model]; add at least one grain");
   std::set<std::uint32_t> labels;
@@ -392,7 +399,10 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     if (s.size_penalties[k].per_size > 0 && !(s.size_penalties[k].element_size > 0) && !used[k])
       throw UsageError(file + ": material '" + s.materials[k].name + "' sets penalty_per_size but no grain uses it; " +
                        "give it penalty_element_size or drop the key");
+}
 
+/// The [[platens]] tables, else the model file's platens; returns their names, in order.
+std::vector<std::string> parse_platens(const toml::table& root, const std::string& file, Scene& s) {
   std::vector<std::string> platen_names;
   for (const toml::table* p : tables(root, "platens", file)) {
     const Table t(*p, file + ": [[platens]] " + std::to_string(s.platens.size() + 1),
@@ -418,7 +428,12 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
       s.platens.push_back(PlatenSpec{p, Eigen::Vector3d::Zero()});
       platen_names.push_back(p.name);
     }
+  return platen_names;
+}
 
+/// The [[stages]] tables.
+void parse_stages(const toml::table& root, const std::string& file, const std::vector<std::string>& platen_names,
+                  Scene& s) {
   for (const toml::table* st : tables(root, "stages", file)) {
     const Table t(*st, file + ": [[stages]] " + std::to_string(s.stages.size() + 1), {"name", "duration", "damping", "platens"});
     StageSpec spec;
@@ -441,6 +456,10 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
     }
     s.stages.push_back(spec);
   }
+}
+
+/// The [triaxial] table; true when the scene is a triaxial test (which runs its own stages).
+bool parse_triaxial_table(const toml::table& root, const Table& top, const std::string& file, double duration, Scene& s) {
   if (const toml::table* triaxial = root["triaxial"].as_table()) {
     const Table t(*triaxial, file + ": [triaxial]",
                   {"boundary", "confining_pressure", "membrane_young", "membrane_poisson", "membrane_thickness",
@@ -451,10 +470,15 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
       t.fail("a triaxial test runs its own stages (consolidation, membrane, shearing); remove [[stages]] and [run] duration");
     if (!s.sample) t.fail("a triaxial test needs the sample cylinder: take the grains from a shapes2mesh [model] or give [sample]");
     s.triaxial = parse_triaxial(t, s.sample);
-    return s;
+    return true;
   } else if (top.has("triaxial")) {
     top.fail("triaxial must be a [triaxial] table");
   }
+  return false;
+}
+
+/// Without [[stages]], one stage of [run] duration; both set is an error.
+void finish_stages(const std::string& file, double duration, Scene& s) {
   if (s.stages.empty()) {
     if (!(duration > 0)) throw UsageError(file + ": give [run] duration (s) or at least one [[stages]] table");
     StageSpec only;
@@ -465,6 +489,37 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   } else if (duration > 0) {
     throw UsageError(file + ": [run] duration and [[stages]] both set the run's length; keep one");
   }
+}
+
+}  // namespace
+
+double Scene::total_duration() const {
+  double t = 0;
+  for (const StageSpec& s : stages) t += s.duration;
+  return t;
+}
+
+Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file) {
+  const std::string file = path.string();
+  toml::table root;
+  try {
+    root = toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    throw UsageError(file + " line " + std::to_string(e.source().begin.line) + ": " + shorten_quotes(std::string(e.description())) +
+                     "; fix the TOML syntax");
+  }
+  const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages", "triaxial"});
+  Scene s;
+  parse_model(root, top, path, model_file, file, s);
+  parse_sample(root, top, file, s);
+  const double duration = parse_run(root, top, file, s);
+  const std::vector<std::string> material_names = parse_materials(root, file, s);
+  parse_grains(root, file, material_names, s);
+  check_grains(file, s);
+  const std::vector<std::string> platen_names = parse_platens(root, file, s);
+  parse_stages(root, file, platen_names, s);
+  if (parse_triaxial_table(root, top, file, duration, s)) return s;
+  finish_stages(file, duration, s);
   return s;
 }
 

@@ -1,0 +1,171 @@
+// The contact model's boundaries: the triaxial test's cylinder wall and the membrane's balls (with
+// their own hash grid over the grains' boxes).
+#include <fmt/format.h>
+
+#include <numbers>
+#include <unordered_map>
+
+#include "contact_state.hpp"
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::fdem {
+
+BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                                   const CylinderWallState& wall, double dt, std::span<Eigen::Vector3d> f) {
+  State& s = *state_;
+  const auto grain_count = static_cast<std::int64_t>(s.grains.size());
+  s.wall_hits.resize(s.grains.size());
+#pragma omp parallel for schedule(dynamic, 16) if (grain_count >= static_cast<std::int64_t>(kParallelGrains))
+  for (std::int64_t g = 0; g < grain_count; ++g) {
+    std::vector<WallHit>& hits = s.wall_hits[g];
+    hits.clear();
+    const Aabb& box = s.trees.bounds(static_cast<std::size_t>(g));
+    if (!(box.lo.array() <= box.hi.array()).all()) continue;
+    // The box corner farthest from the axis, and the bounding sphere, decide whether the wall can
+    // touch the grain.
+    const double fx = std::max(std::abs(box.lo.x() - wall.axis_xy.x()), std::abs(box.hi.x() - wall.axis_xy.x()));
+    const double fy = std::max(std::abs(box.lo.y() - wall.axis_xy.y()), std::abs(box.hi.y() - wall.axis_xy.y()));
+    if (fx * fx + fy * fy <= wall.radius * wall.radius) continue;
+    if ((s.sphere_centre[g].head<2>() - wall.axis_xy).norm() + s.sphere_radius[g] <= wall.radius) continue;
+    const Material& m = s.material_of(static_cast<std::uint32_t>(g));
+    const auto grain = static_cast<std::uint32_t>(g);
+    for (std::uint32_t node : s.surface(grain)) {
+      const auto [p, arm] = s.place(node, grain, x);
+      const Eigen::Vector3d radial(p.x() - wall.axis_xy.x(), p.y() - wall.axis_xy.y(), 0.0);
+      const double rho = radial.norm();
+      if (!(rho > wall.radius)) continue;
+      const Eigen::Vector3d outward = radial / rho;
+      const double area = s.facing_area(node, -outward, x, s.pose[g]);
+      if (!(area > 0)) continue;
+      const ContactLaw law = contact_law(m.normal_penalty, m.tangential_penalty, area, s.node_mass[node], m.damping_ratio, 0.0);
+      hits.push_back({node, arm, node_contact_force(law, -outward, rho - wall.radius,
+                                                    s.velocity(node, grain, v) - wall.radial_velocity * outward,
+                                                    Eigen::Vector3d::Zero(), dt)});
+    }
+  }
+  BoundaryContactStats stats;
+  for (std::uint32_t g = 0; g < grain_count; ++g)
+    for (const auto& [node, arm, law] : s.wall_hits[g]) {
+      if (s.pose[g].rigid) s.loads[g].add(arm, law.force);
+      else f[node] += law.force;
+      stats.radial_force += law.normal_force;
+      stats.elastic_energy += law.elastic_energy;
+      stats.dissipated += law.dissipated;
+      ++stats.contacts;
+    }
+  return stats;
+}
+
+BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                                   std::span<const Eigen::Vector3d> centres,
+                                                   std::span<const Eigen::Vector3d> ball_velocity,
+                                                   std::span<const Eigen::Vector3d> ball_spin,
+                                                   const BallContactOptions& balls, double dt, std::span<Eigen::Vector3d> f,
+                                                   std::span<Eigen::Vector3d> ball_force,
+                                                   std::span<Eigen::Vector3d> ball_moment) {
+  State& s = *state_;
+  const std::size_t n = centres.size();
+  if (ball_velocity.size() != n || ball_spin.size() != n || ball_force.size() != n || ball_moment.size() != n)
+    throw DataError("fdem contact: ball positions, velocities, spins, forces and moments must have one entry per ball");
+  if (!(balls.radius > 0) || !(balls.mass > 0)) throw UsageError("membrane balls need a positive radius and mass");
+  const double r = balls.radius;
+  // Broad phase: the grains' boxes, inflated by the ball radius, in a hash grid of cells as large
+  // as the largest box, so a box spans at most 8 cells and a ball looks in one.
+  double cell = 0;
+  for (std::size_t g = 0; g < s.grains.size(); ++g) {
+    const Aabb& box = s.trees.bounds(g);
+    if ((box.lo.array() <= box.hi.array()).all()) cell = std::max(cell, (box.hi - box.lo).maxCoeff());
+  }
+  cell += 2 * r;
+  const auto index = [cell](double c) { return static_cast<std::int64_t>(std::floor(c / cell)); };
+  const auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
+    const auto bits = [](std::int64_t a) { return static_cast<std::uint64_t>(a + (1 << 20)) & 0x1FFFFFu; };
+    return bits(i) << 42 | bits(j) << 21 | bits(k);
+  };
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
+  for (std::uint32_t g = 0; g < s.grains.size(); ++g) {
+    const Aabb& box = s.trees.bounds(g);
+    if (!(box.lo.array() <= box.hi.array()).all()) continue;
+    const Aabb grown = box.inflated(r);
+    for (std::int64_t i = index(grown.lo.x()); i <= index(grown.hi.x()); ++i)
+      for (std::int64_t j = index(grown.lo.y()); j <= index(grown.hi.y()); ++j)
+        for (std::int64_t k = index(grown.lo.z()); k <= index(grown.hi.z()); ++k) grid[key(i, j, k)].push_back(g);
+  }
+  const auto spring_of = [&](std::uint32_t ball, std::uint32_t grain) -> Eigen::Vector3d {
+    const auto it = std::lower_bound(s.ball_history.begin(), s.ball_history.end(), std::make_pair(ball, grain),
+                                     [](const BallHistoryEntry& h, const std::pair<std::uint32_t, std::uint32_t>& k) {
+                                       return std::tie(h.ball, h.grain) < std::tie(k.first, k.second);
+                                     });
+    return it != s.ball_history.end() && it->ball == ball && it->grain == grain ? it->spring : Eigen::Vector3d::Zero();
+  };
+  const double area = std::numbers::pi * r * r;
+  if (s.ball_hits.size() < n) s.ball_hits.resize(n);
+#pragma omp parallel for schedule(dynamic, 64) if (n >= kParallelNodes / 4)
+  for (std::int64_t b = 0; b < static_cast<std::int64_t>(n); ++b) {
+    std::vector<BallHit>& out = s.ball_hits[b];
+    out.clear();
+    const Eigen::Vector3d& c = centres[b];
+    const auto it = grid.find(key(index(c.x()), index(c.y()), index(c.z())));
+    if (it == grid.end()) continue;
+    for (std::uint32_t g : it->second) {
+      if (!s.trees.bounds(g).inflated(r).contains(c)) continue;
+      SurfaceTrees::Nearest near;
+      if (!s.nearest(g, c, r + s.max_penetration, x, near)) continue;
+      const Eigen::Vector3d d = near.closest.point - c;  // from the centre to the surface
+      const double dist = std::sqrt(near.distance2);
+      const bool inside = d.dot(s.pseudonormal(near.triangle, near.closest.feature, x)) > 0;
+      BallHit hit;
+      hit.overlap = inside ? r + dist : r - dist;
+      if (!(hit.overlap > 0)) continue;
+      const Eigen::Vector3d face = s.normal_of(near.triangle, x).normalized();
+      hit.normal = dist > 1e-12 * r ? Eigen::Vector3d((inside ? 1.0 : -1.0) * d / dist) : face;
+      const Eigen::Vector3d w = near.closest.weights;
+      const Eigen::Vector3d surface_velocity = s.surface_velocity(near.triangle, w, v);
+      const Eigen::Vector3d contact_velocity = ball_velocity[b] + ball_spin[b].cross(-r * hit.normal);
+      const Material& m = s.material_of(g);
+      hit.law = node_contact_force(contact_law(m.normal_penalty, m.tangential_penalty, area, balls.mass, m.damping_ratio,
+                                               balls.friction),
+                                   hit.normal, hit.overlap, contact_velocity - surface_velocity,
+                                   spring_of(static_cast<std::uint32_t>(b), g), dt);
+      hit.grain = g;
+      hit.triangle = near.triangle;
+      hit.weights = w;
+      out.push_back(hit);
+    }
+    std::sort(out.begin(), out.end(), [](const BallHit& p, const BallHit& q) { return p.grain < q.grain; });
+  }
+  BoundaryContactStats stats;
+  s.ball_history.clear();
+  for (std::uint32_t b = 0; b < n; ++b)
+    for (const BallHit& h : s.ball_hits[b]) {
+      const Eigen::Vector3d& force = h.law.force;
+      ball_force[b] += force;
+      ball_moment[b] += (-r * h.normal).cross(force - h.law.normal_force * h.normal);
+      if (s.pose[h.grain].rigid) {
+        s.loads[h.grain].add(s.surface_arm(h.triangle, h.weights), -force);
+      } else {
+        const auto& tri = s.triangles[h.triangle];
+        for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
+      }
+      stats.elastic_energy += h.law.elastic_energy;
+      stats.dissipated += h.law.dissipated;
+      stats.max_overlap = std::max(stats.max_overlap, h.overlap);
+      ++stats.contacts;
+      s.ball_history.push_back({b, h.grain, h.law.spring});
+    }
+  return stats;
+}
+
+double ContactModel::ball_stable_time_step(const BallContactOptions& balls) const {
+  const State& s = *state_;
+  double dt = std::numeric_limits<double>::infinity();
+  for (const Material& m : s.materials) {
+    const double k_n = m.normal_penalty * std::numbers::pi * balls.radius * balls.radius;
+    if (!(k_n > 0) || !(balls.mass > 0)) continue;
+    const double beta = m.damping_ratio;
+    dt = std::min(dt, kTimeStepSafety * 2.0 / std::sqrt(k_n / balls.mass) * (std::sqrt(1 + beta * beta) - beta));
+  }
+  return dt;
+}
+
+}  // namespace graintwin::fdem

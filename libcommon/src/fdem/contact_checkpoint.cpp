@@ -1,0 +1,137 @@
+// The contact model's checkpoint: tangential spring histories (grain pairs and membrane balls) and
+// the last step's contact records, saved and loaded with their consistency checks.
+#include <fmt/format.h>
+
+#include "contact_state.hpp"
+#include "graintwin/core/error.hpp"
+#include "graintwin/io/h5file.hpp"
+
+namespace graintwin::fdem {
+
+void ContactModel::save(io::H5File& file, const std::string& group) const {
+  const State& s = *state_;
+  file.ensure_group(group);
+  file.set_attr(group, "entries", static_cast<long long>(s.history.size()));
+  file.set_attr(group, "ball_entries", static_cast<long long>(s.ball_history.size()));
+  file.set_attr(group, "record_entries", static_cast<long long>(s.records.size()));
+  if (!s.records.empty()) {  // the last step's contacts, for a frame written before the next step
+    std::vector<std::uint32_t> pair(2 * s.records.size());
+    std::vector<double> values;
+    values.reserve(10 * s.records.size());
+    for (std::size_t i = 0; i < s.records.size(); ++i) {
+      const ContactRecord& r = s.records[i];
+      pair[2 * i] = r.a;
+      pair[2 * i + 1] = r.b;
+      values.insert(values.end(), {r.point[0], r.point[1], r.point[2], r.normal[0], r.normal[1], r.normal[2], r.force[0],
+                                   r.force[1], r.force[2], r.overlap});
+    }
+    const hsize_t n = s.records.size();
+    io::DatasetOptions exact;
+    exact.compress = false;
+    file.write(group + "/record_pair", pair.data(), {n, 2});
+    file.write(group + "/record_values", values.data(), {n, 10}, exact);
+  }
+  if (!s.history.empty()) {
+    std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
+    std::vector<double> spring(3 * s.history.size());
+    for (std::size_t i = 0; i < s.history.size(); ++i) {
+      const HistoryEntry& h = s.history[i];
+      pair[2 * i] = h.a;
+      pair[2 * i + 1] = h.b;
+      node[i] = h.node;
+      for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+    }
+    const hsize_t n = s.history.size();
+    file.write(group + "/pair", pair.data(), {n, 2});
+    file.write(group + "/node", node.data(), {n});
+    file.write(group + "/spring", spring.data(), {n, 3}, io::units("N"));
+  }
+  if (!s.ball_history.empty()) {  // membrane balls' friction springs
+    std::vector<std::uint32_t> ball_grain(2 * s.ball_history.size());
+    std::vector<double> spring(3 * s.ball_history.size());
+    for (std::size_t i = 0; i < s.ball_history.size(); ++i) {
+      const BallHistoryEntry& h = s.ball_history[i];
+      ball_grain[2 * i] = h.ball;
+      ball_grain[2 * i + 1] = h.grain;
+      for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+    }
+    const hsize_t n = s.ball_history.size();
+    file.write(group + "/ball_grain", ball_grain.data(), {n, 2});
+    file.write(group + "/ball_spring", spring.data(), {n, 3}, io::units("N"));
+  }
+}
+
+void ContactModel::load(const io::H5File& file, const std::string& group) {
+  State& s = *state_;
+  auto bad = [&](const std::string& why) {
+    return DataError(fmt::format("{}: the contact history in {} {}; write the checkpoint with this model.",
+                                 file.path().string(), group, why));
+  };
+  const auto entries = file.attr_int(group, "entries");
+  if (!entries || *entries < 0) throw bad("has no 'entries' count");
+  // Each count is checked against its tables before it sizes anything: a damaged count must
+  // not allocate (a record_entries of 2^32 asked for 377 GB).
+  std::vector<HistoryEntry> history;
+  if (*entries > 0) {
+    std::vector<hsize_t> pair_dims, node_dims, spring_dims;
+    const auto pair = file.read<std::uint32_t>(group + "/pair", &pair_dims);
+    const auto node = file.read<std::uint32_t>(group + "/node", &node_dims);
+    const auto spring = file.read<double>(group + "/spring", &spring_dims);
+    const auto n = static_cast<hsize_t>(*entries);
+    if (pair_dims != std::vector<hsize_t>{n, 2} || node_dims != std::vector<hsize_t>{n} ||
+        spring_dims != std::vector<hsize_t>{n, 3})
+      throw bad(fmt::format("does not hold {} entries in pair (n x 2), node (n) and spring (n x 3)", n));
+    history.resize(n);
+    for (std::size_t i = 0; i < history.size(); ++i)
+      history[i] = {pair[2 * i], pair[2 * i + 1], node[i], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
+  }
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    const HistoryEntry& h = history[i];
+    if (h.a >= s.grains.size() || h.b <= h.a || h.node >= s.node_count)
+      throw bad(fmt::format("names grain pair ({}, {}) and node {} outside a model of {} grains and {} nodes", h.a,
+                            h.b, h.node, s.grains.size(), s.node_count));
+    if (i > 0 && !key_less(history[i - 1], h.a, h.b, h.node)) throw bad("is not sorted by pair and node");
+  }
+  const auto ball_entries = file.attr_int(group, "ball_entries").value_or(0);
+  if (ball_entries < 0) throw bad("has a negative 'ball_entries' count");
+  std::vector<BallHistoryEntry> ball_history;
+  if (ball_entries > 0) {
+    std::vector<hsize_t> pair_dims, spring_dims;
+    const auto ball_grain = file.read<std::uint32_t>(group + "/ball_grain", &pair_dims);
+    const auto spring = file.read<double>(group + "/ball_spring", &spring_dims);
+    const auto n = static_cast<hsize_t>(ball_entries);
+    if (pair_dims != std::vector<hsize_t>{n, 2} || spring_dims != std::vector<hsize_t>{n, 3})
+      throw bad(fmt::format("does not hold {} ball entries in ball_grain (n x 2) and ball_spring (n x 3)", n));
+    ball_history.resize(n);
+    for (std::size_t i = 0; i < ball_history.size(); ++i) {
+      ball_history[i] = {ball_grain[2 * i], ball_grain[2 * i + 1], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
+      const BallHistoryEntry& h = ball_history[i];
+      if (h.grain >= s.grains.size()) throw bad(fmt::format("names grain {} of a model of {} grains", h.grain, s.grains.size()));
+      if (i > 0 && std::make_pair(ball_history[i - 1].ball, ball_history[i - 1].grain) >= std::make_pair(h.ball, h.grain))
+        throw bad("is not sorted by ball and grain");
+    }
+  }
+  const auto record_entries = file.attr_int(group, "record_entries").value_or(0);
+  if (record_entries < 0) throw bad("has a negative 'record_entries' count");
+  std::vector<ContactRecord> records;
+  if (record_entries > 0) {
+    std::vector<hsize_t> pair_dims, value_dims;
+    const auto pair = file.read<std::uint32_t>(group + "/record_pair", &pair_dims);
+    const auto values = file.read<double>(group + "/record_values", &value_dims);
+    const auto n = static_cast<hsize_t>(record_entries);
+    if (pair_dims != std::vector<hsize_t>{n, 2} || value_dims != std::vector<hsize_t>{n, 10})
+      throw bad(fmt::format("does not hold {} contact records in record_pair (n x 2) and record_values (n x 10)", n));
+    records.resize(n);
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      const double* v = values.data() + 10 * i;
+      records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9]};
+    }
+  }
+  s.history = std::move(history);
+  s.ball_history = std::move(ball_history);
+  s.records = std::move(records);
+  s.need_rebuild = true;
+  s.overlap_configuration = false;
+}
+
+}  // namespace graintwin::fdem
