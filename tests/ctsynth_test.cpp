@@ -101,6 +101,10 @@ TEST(Ctsynth, SameSeedSameBytesOtherSeedOtherBytes) {
   };
   EXPECT_EQ(vol("a"), vol("b")) << "the bytes must not depend on the thread count";
   EXPECT_NE(vol("a"), vol("c"));
+  // The series' own scene.toml, the effective options, gives the same series again.
+  const auto again = run_tool("ctsynth", {(dir / "a" / "scene.toml").string(), (dir / "d").string(), "-q"});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(vol("a"), vol("d"));
 }
 
 // The other grain shapes: spheres come out as spheres and ellipsoids with the asked aspect ratio,

@@ -156,7 +156,7 @@ int main(int argc, char** argv) {
       ->check(number_in(above(0, synth::kDensestPacking)))->capture_default_str();
   app.add_option("--contact-tolerance", o.contact_tolerance,
                  "Largest interpenetration, as a fraction of the smallest grain radius; pairs within it touch")
-      ->check(number_in(cli::NumberRange{0, 0.5, true, true}))->capture_default_str();
+      ->check(number_in(cli::NumberRange{0, 0.5, true, true, ""}))->capture_default_str();
   app.add_option("--pack-degrees", o.pack_degrees,
                  "Sand and angular grains: pack with the roughness off, then on: grow the grains low-passed to the first SH "
                  "degree, then relax at each next degree and at the true shapes (increasing; degrees from --sh-degree "
@@ -190,7 +190,7 @@ int main(int argc, char** argv) {
   app.add_option("--grey-offset", o.grey_offset, "uint16 value of grey 0")
       ->check(number_in(closed(0, 65535)))->capture_default_str();
   app.add_option("--strains", o.strains, "Nominal axial strain of each scan (compression positive)")
-      ->delimiter(',')->check(number_in(cli::NumberRange{0, 0.5, false, true}))->capture_default_str();
+      ->delimiter(',')->check(number_in(cli::NumberRange{0, 0.5, false, true, ""}))->capture_default_str();
   app.add_option("--bulge", o.bulge, "Mean lateral strain / axial strain (0.5 keeps the volume)")
       ->check(number_in(closed(0, 2)))->capture_default_str();
   app.add_option("--band", o.band, "Shear band: none, single or crossed")->capture_default_str();
@@ -487,7 +487,7 @@ int main(int argc, char** argv) {
     series["history"] = ctx.history();
     std::ofstream(out.temp_path() / "series.json") << series.dump(2) << "\n";
     std::ofstream(out.temp_path() / "scene.toml") << "# effective scene of this series (ctsynth " << graintwin::version
-                                                  << ")\n" << app.config_to_str(true, false);
+                                                  << ")\n" << tool.effective_config();
     io::commit_outputs({&out});
   });
 }

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
+#include <sstream>
 
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/core/error.hpp"
@@ -96,6 +97,14 @@ void Tool::set_examples(const std::vector<std::string>& examples) {
   for (const auto& e : examples) footer += "  " + e + "\n";
   footer += "\nExit codes: 0 ok, 1 data error, 2 usage error, 130 interrupted.\nDocs: docs/tools/" + name_ + ".md";
   app_.footer(footer);
+}
+
+std::string Tool::effective_config() const {
+  std::istringstream all(app_.config_to_str(true, false));
+  std::string out, line;
+  while (std::getline(all, line))
+    if (!line.ends_with("=\"\"")) out += line + "\n";
+  return out;
 }
 
 std::string Tool::config_file_problem(int argc, char** argv) const {

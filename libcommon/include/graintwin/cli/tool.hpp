@@ -73,6 +73,10 @@ class Tool {
   /// place of --config: its keys are option names, and options given on the command line win.
   void use_positional_config(const std::string& name, std::filesystem::path& target,
                              const std::string& description);
+  /// The parsed options as a configuration file that gives this run again (CLI11's TOML of every
+  /// option and its value), less the options left empty: "" means "the default", which leaving the
+  /// key out gives too, and a length option would refuse "" when the file is read back.
+  std::string effective_config() const;
   /// Example lines shown under "Examples:" at the end of --help, plus the docs pointer.
   void set_examples(const std::vector<std::string>& examples);
 
