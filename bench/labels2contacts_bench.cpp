@@ -2,7 +2,7 @@
 // about 20 000 grains on one core (and on all cores), and the refinement cost per contact; (2) normal
 // accuracy against voxels per diameter on touching spheres (the spam protocol) for the PCA, vector-
 // area and refined normals, charted with the anchors' spam figures; (3) false contacts against the
-// true gap; (4) whole ctsynth scenes (spheres, and the bundled sand_small) through ct2labels against
+// true gap; (4) whole ctsynth scenes (spheres, the bundled sand_small and sand_angular) through ct2labels against
 // their ground truth: normals, touching recall, false contacts, coordination and anisotropy.
 //   build/bin/labels2contacts_bench [--quick]
 #include <fmt/format.h>
@@ -356,9 +356,10 @@ int main(int argc, char** argv) {
   bench::run_child("spheres", "ctsynth", {(bin / "ctsynth").string(), (tmp / "spheres.toml").string(), (tmp / "spheres").string(), "-q"});
   omp_set_num_threads(cores);
   std::vector<SceneResult> scenes;
-  const fs::path sand = kSource + "/sample_volumes/sand_small";
+  const fs::path sand = kSource + "/sample_volumes/sand_small", angular = kSource + "/sample_volumes/sand_angular";
   for (const auto& [name, dir] : std::vector<std::pair<std::string, fs::path>>{{"67 spheres (0.45-0.65 mm)", tmp / "spheres"},
-                                                                                {"sand_small (210 sand grains)", sand}}) {
+                                                                                {"sand_small (210 sand grains)", sand},
+                                                                                {"sand_angular (190 angular grains)", angular}}) {
     const fs::path labels = tmp / (dir.filename().string() + "_labels.h5");
     bench::run_child(name, "ct2labels", {(bin / "ct2labels").string(), (dir / "scan_000.h5").string(), labels.string(), "-q", "-f"});
     scenes.push_back(evaluate_scene(name, dir / "scan_000.h5", dir / "truth_000.h5", labels));

@@ -115,6 +115,8 @@ TEST(LengthIn, ChecksLengthsWithUnitsAgainstAPhysicalRange) {
   EXPECT_NE(refusal<std::string>(diameter, "0").find("[10 um, 1 m]"), std::string::npos);
   const CLI::Validator membrane = cli::length_in(1e-6, 0.01, true);
   EXPECT_EQ(refusal<std::string>(membrane, "0"), "");
+  EXPECT_EQ(refusal<std::string>(membrane, "0mm"), "") << "zero with a unit is none too";
+  EXPECT_NE(refusal<std::string>(diameter, "0mm").find("[10 um, 1 m]"), std::string::npos);
   EXPECT_NE(refusal<std::string>(membrane, "-1mm").find("(or 0 for none)"), std::string::npos);
   const CLI::Validator position = cli::length_in(-1.0, 1.0);
   EXPECT_EQ(refusal<std::string>(position, "-1.5mm"), "") << "positions may be zero or negative";

@@ -120,7 +120,7 @@ CLI::Validator length_in(double lo_m, double hi_m, bool allow_zero) {
         } catch (const UsageError& e) {
           return e.message();
         }
-        if (m >= lo_m && m <= hi_m) return {};
+        if ((m >= lo_m && m <= hi_m) || (allow_zero && m == 0.0)) return {};  // "0mm" is none too
         return "must be a length in " + text + (allow_zero ? " (or 0 for none)" : "") + ", not " + shown(input);
       },
       "length in " + text + (allow_zero ? " or 0" : ""));
