@@ -5,6 +5,7 @@
 // read as states (grain table checks, grain-grain contacts and their normal forces) and the strong
 // network.
 #include <gtest/gtest.h>
+#include <omp.h>
 #include <gsl/gsl_sf_zeta.h>
 
 #include <algorithm>
@@ -274,6 +275,15 @@ TEST(Structure, EdgeCorrectionMakesAnIdealGasFlatInACylinder) {
   EXPECT_NEAR(sphere_fraction_inside(cyl, {0, 0, 1.0}, 0.3, fibonacci_directions(2000)), 0.5, 0.01);
   const Region fit = enclosing_region(p, Region::Kind::cylinder);
   EXPECT_NEAR(fit.radius, 1.0, 0.02);
+  // The same bits on one thread as on several (the bins are summed in a fixed order).
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const PairCorrelation one = pair_correlation(p, cyl, 0.6, 12);
+  omp_set_num_threads(std::max(2, threads));
+  const PairCorrelation many = pair_correlation(p, cyl, 0.6, 12);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one.g, many.g);
+  EXPECT_EQ(one.g, g.g);
 }
 
 TEST(Structure, CoordinationOfALattice) {

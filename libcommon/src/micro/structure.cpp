@@ -91,33 +91,40 @@ PairCorrelation pair_correlation(const std::vector<Eigen::Vector3d>& points, con
   if (in.size() < 2 || !(volume > 0.0)) return g;
   const auto dirs = fibonacci_directions(directions);
   const track::PointGrid grid(in, r_max);
-  std::vector<double> sum(bins, 0.0);
-  // Two rows of bins per thread (up to --rdf-bins each): no more threads than processors.
+  // Each block of points fills its own row of bins, and the rows are summed in block order: the
+  // sums, and so g(r), are the same bit for bit whatever the threads and their schedule.
+  constexpr std::size_t kBlock = 64;
+  const std::size_t blocks = (in.size() + kBlock - 1) / kBlock;
+  std::vector<double> partial(blocks * bins, 0.0);
 #pragma omp parallel num_threads(useful_threads(in.size()))
   {
-    std::vector<double> local(bins, 0.0), weight(bins);
-#pragma omp for schedule(dynamic, 64)
-    for (std::ptrdiff_t ii = 0; ii < std::ptrdiff_t(in.size()); ++ii) {
-      const std::size_t i = std::size_t(ii);
-      // Weights per bin, computed only where the sphere can leave the region.
-      const double depth = region.depth(in[i]);
-      for (std::size_t b = 0; b < bins; ++b) {
-        if (g.r[b] <= depth) {
-          weight[b] = 1.0;
-          continue;
+    std::vector<double> weight(bins);
+#pragma omp for schedule(dynamic, 1)
+    for (std::ptrdiff_t block = 0; block < std::ptrdiff_t(blocks); ++block) {
+      double* local = &partial[std::size_t(block) * bins];
+      const std::size_t end = std::min(in.size(), (std::size_t(block) + 1) * kBlock);
+      for (std::size_t i = std::size_t(block) * kBlock; i < end; ++i) {
+        // Weights per bin, computed only where the sphere can leave the region.
+        const double depth = region.depth(in[i]);
+        for (std::size_t b = 0; b < bins; ++b) {
+          if (g.r[b] <= depth) {
+            weight[b] = 1.0;
+            continue;
+          }
+          const double f = sphere_fraction_inside(region, in[i], g.r[b], dirs);
+          weight[b] = f > 0.0 ? 1.0 / f : 0.0;
         }
-        const double f = sphere_fraction_inside(region, in[i], g.r[b], dirs);
-        weight[b] = f > 0.0 ? 1.0 / f : 0.0;
+        grid.for_each_within(in[i], r_max, [&](std::size_t j, double d2) {
+          if (j == i || d2 <= 0.0) return;
+          const std::size_t b = std::min(bins - 1, std::size_t(std::sqrt(d2) / width));
+          local[b] += weight[b];
+        });
       }
-      grid.for_each_within(in[i], r_max, [&](std::size_t j, double d2) {
-        if (j == i || d2 <= 0.0) return;
-        const std::size_t b = std::min(bins - 1, std::size_t(std::sqrt(d2) / width));
-        local[b] += weight[b];
-      });
     }
-#pragma omp critical
-    for (std::size_t b = 0; b < bins; ++b) sum[b] += local[b];
   }
+  std::vector<double> sum(bins, 0.0);
+  for (std::size_t block = 0; block < blocks; ++block)
+    for (std::size_t b = 0; b < bins; ++b) sum[b] += partial[block * bins + b];
   const double n = double(in.size());
   for (std::size_t b = 0; b < bins; ++b) {
     const double shell = 4.0 / 3.0 * std::numbers::pi * (std::pow(g.edges[b + 1], 3) - std::pow(g.edges[b], 3));
