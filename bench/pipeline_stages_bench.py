@@ -6,6 +6,7 @@ Runs Makefile.pipeline's stages one after another (inspect, segment, contacts, s
 simulate with --simulate) into a scratch folder for each series, and measures each stage's wall
 time and CPU time (user + system of its processes). Per grain: CPU time over the grains the stage
 handled (every scan's grains for the per-scan stages, the reference scan's for mesh and simulate).
+Each run writes into a new folder of its own under --scratch (printed; nothing else there is touched).
 
     python3 bench/pipeline_stages_bench.py [--series sand_small sand_angular soil_crop] [--simulate]
         [--build build] [--scratch /tmp/graintwin_stages] [--no-publish]
@@ -15,7 +16,7 @@ import glob
 import json
 import os
 import resource
-import shutil
+import tempfile
 import subprocess
 import sys
 import time
@@ -64,13 +65,12 @@ def mesh_paths(model_path):
     }
 
 
-def bench_series(series, stages, build, scratch):
+def bench_series(series, stages, build, run_dir):
     folder = os.path.join(SOURCE, "sample_volumes", series)
     scans = sorted(glob.glob(os.path.join(folder, "scan_*.h5")))
     if not scans:
         sys.exit(f"pipeline_stages_bench: no scans in {folder}; pick series from sample_volumes/")
-    out = os.path.join(scratch, series)
-    shutil.rmtree(out, ignore_errors=True)
+    out = os.path.join(run_dir, series)
     rows = {}
     for stage in stages:
         wall, cpu = run_stage(series, stage, out, build)
@@ -82,6 +82,12 @@ def bench_series(series, stages, build, scratch):
         row["grains"] = sum(per_scan) if stage in PER_SCAN else per_scan[0]
         row["cpu_ms_per_grain"] = 1e3 * row["cpu_s"] / row["grains"]
     result = {"scans": len(scans), "grains": per_scan[0], "stages": rows}
+    if "contacts" in rows:
+        contacts = 0
+        for n in names:
+            with h5py.File(os.path.join(out, n, "contacts.h5"), "r") as f:
+                contacts += int(f["contacts/pair"].shape[0])
+        result["contacts"] = contacts
     if "mesh" in rows:
         result["mesh"] = mesh_paths(os.path.join(out, "model.h5"))
     return result
@@ -97,6 +103,17 @@ def table(results, stages):
             r = results[s]["stages"].get(stage)
             cells.append("-" if r is None else f"{r['wall_s']:.1f} / {r['cpu_s']:.1f} / {r['cpu_ms_per_grain']:.1f}")
         lines.append(f"| {stage} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def targets(results):
+    """The measures against the stages' speed targets for real scans."""
+    lines = ["| series | contacts: wall ms per contact (target 1) | mesh: CPU ms per grain (target 100 per core) |", "|---|---|---|"]
+    for s, r in results.items():
+        c, m = r["stages"].get("contacts"), r["stages"].get("mesh")
+        per_contact = f"{1e3 * c['wall_s'] / r['contacts']:.2f} ({1e3 * c['wall_s'] / r['contacts']:.2f} x target)" if c and r.get("contacts") else "-"
+        per_grain = f"{m['cpu_ms_per_grain']:.0f} ({m['cpu_ms_per_grain'] / 100:.2f} x target)" if m else "-"
+        lines.append(f"| {s} | {per_contact} | {per_grain} |")
     return "\n".join(lines)
 
 
@@ -121,16 +138,20 @@ def main():
     ap.add_argument("--no-publish", action="store_true")
     a = ap.parse_args()
     stages = ["inspect", "segment", "contacts", "shapes", "mesh"] + (["simulate"] if a.simulate else [])
-    results = {s: bench_series(s, stages, os.path.abspath(a.build), a.scratch) for s in a.series}
+    os.makedirs(a.scratch, exist_ok=True)
+    run_dir = tempfile.mkdtemp(prefix="pipeline_stages-", dir=a.scratch)
+    print(f"outputs in {run_dir}", flush=True)
+    results = {s: bench_series(s, stages, os.path.abspath(a.build), run_dir) for s in a.series}
     text = (
         "Time of each pipeline stage per grain, on 2 cores (`python3 bench/pipeline_stages_bench.py`; "
         f"{os.cpu_count()} cores here, {time.strftime('%Y-%m-%d')}). Wall and CPU (user + system) seconds of the "
         "stage's processes, and CPU milliseconds per grain (the per-scan stages over every scan's grains, mesh"
         + (" and simulate" if a.simulate else "") + " over the reference scan's).\n\n"
-        + table(results, stages) + "\n\nMeshing paths (shapes2mesh, `/mesh/path`, `/mesh/surface_origin`):\n\n"
+        + table(results, stages) + "\n\nAgainst the speed targets for real scans (labels2contacts at most 1 ms per "
+        "contact, shapes2mesh at most 0.1 s per grain per core):\n\n" + targets(results) + "\n\nMeshing paths (shapes2mesh, `/mesh/path`, `/mesh/surface_origin`):\n\n"
         + mesh_table(results) + "\n")
     print(text)
-    with open(os.path.join(a.scratch, "pipeline_stages.json"), "w") as f:
+    with open(os.path.join(run_dir, "pipeline_stages.json"), "w") as f:
         json.dump(results, f, indent=1)
     if not a.no_publish:
         publish("pipeline_stages", text)
