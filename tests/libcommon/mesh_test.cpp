@@ -18,6 +18,7 @@
 #include "graintwin/mesh/gmsh_adapter.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
+#include "graintwin/mesh/neighbour_cut.hpp"
 #include "graintwin/mesh/surface.hpp"
 #include "graintwin/mesh/surface_remesh.hpp"
 #include "graintwin/mesh/tet_mesh.hpp"
@@ -513,6 +514,93 @@ TEST(GrainMesher, NonStarGrainFromLabelsKeepsItsCavityOnTheKeptSurfacePath) {
     EXPECT_FALSE(inside(r.mesh, Vector3d(8, 11.5, 16) * UGrain::h)) << "order " << order;
     EXPECT_TRUE(inside(r.mesh, Vector3d(8, 6, 16) * UGrain::h)) << "order " << order;
     EXPECT_TRUE(inside(r.mesh, Vector3d(8, 17, 16) * UGrain::h)) << "order " << order;
+  }
+}
+
+/// Two balls of radius 7.5 voxels (1e-5 m) whose centres are 13 voxels apart along x, labelled 3 and 4
+/// and split where segmentation would: at the voxel face x = 15.5 midway. The SH fits are the whole
+/// balls, so each overshoots that face by a voxel, into the other's voxels.
+struct TouchingBalls {
+  static constexpr double h = 1e-5, radius = 7.5, face = 15.5;
+  Volume<std::uint32_t> labels{{24, 24, 32}, {h, h, h}};
+  std::array<Vector3d, 2> centre{Vector3d(9, 11.5, 11.5) * h, Vector3d(22, 11.5, 11.5) * h};
+  std::array<std::array<std::size_t, 6>, 2> bbox{};
+  TouchingBalls() {
+    for (std::size_t z = 0; z < 24; ++z)
+      for (std::size_t y = 0; y < 24; ++y)
+        for (std::size_t x = 0; x < 32; ++x) {
+          const Vector3d p = Vector3d(double(x), double(y), double(z)) * h;
+          const int g = x < 16 ? 0 : 1;
+          if ((p - centre[g]).norm() <= radius * h) labels(z, y, x) = 3 + g;
+        }
+    bbox[0] = {4, 4, 2, 20, 20, 16};
+    bbox[1] = {4, 4, 16, 20, 20, 30};
+  }
+  shape::GrainShape grain(int g) const {
+    shape::GrainShape s = sh_grain(radius * h, 0.0, centre[g]);
+    s.label = 3 + g;
+    return s;
+  }
+};
+
+TEST(NeighbourCut, ZeroOnTheSharedFaceNegativeInTheNeighbour) {
+  const TouchingBalls b;
+  const mesh::NeighbourCut cut(b.labels, 3, b.bbox[0], 6);
+  ASSERT_TRUE(cut.any());
+  const double h = TouchingBalls::h;
+  EXPECT_NEAR(cut.side(Vector3d(TouchingBalls::face, 11.5, 11.5) * h), 0.0, 1e-6);
+  EXPECT_GT(cut.side(Vector3d(14.5, 11.5, 11.5) * h), 0.5);
+  EXPECT_LT(cut.side(Vector3d(16.5, 11.5, 11.5) * h), -0.5);
+  EXPECT_EQ(cut.side(Vector3d(100, 11.5, 11.5) * h), 1.0);  // outside its box: nothing known, nothing cut
+  // The ray from the centre along +x stops at the face; along -x it is not cut.
+  EXPECT_NEAR(cut.radial_limit(b.centre[0], Vector3d::UnitX(), 8 * h), (TouchingBalls::face - 9) * h, 1e-3 * h);
+  EXPECT_EQ(cut.radial_limit(b.centre[0], -Vector3d::UnitX(), 8 * h), 8 * h);
+  // A grain alone in its box has nothing to cut.
+  Volume<std::uint32_t> alone = b.labels;
+  for (auto& v : alone.values()) v = v == 4 ? 0 : v;
+  EXPECT_FALSE(mesh::NeighbourCut(alone, 3, b.bbox[0], 6).any());
+}
+
+TEST(GrainMesher, SurfacesOvershootingTheirNeighbourAreCutAtTheSharedFace) {
+  const TouchingBalls b;
+  const mesh::ShSurfaceBasis basis(4, 4);
+  const double h = TouchingBalls::h, face = TouchingBalls::face * h;
+  // The cap of the ball beyond the face, one voxel high, over the ball's volume.
+  const double cap = M_PI * h * h * (3 * TouchingBalls::radius * h - h) / 3.0, ball = 4.0 / 3.0 * M_PI * std::pow(TouchingBalls::radius * h, 3);
+  for (const bool voxels : {false, true}) {
+    std::array<double, 2> reach{};  // grain 3's largest x, grain 4's smallest
+    for (int g : {0, 1}) {
+      shape::GrainShape grain = b.grain(g);
+      if (voxels) grain.flags = shape::shape_flag::unreliable_fit;
+      mesh::GrainMeshOptions o;
+      o.order = 1;
+      const auto uncut_options = [&] { auto u = o; u.cut_at_neighbours = false; return u; }();
+      const auto r = mesh::mesh_grain(grain, basis, &b.labels, b.bbox[g], o);
+      EXPECT_EQ(r.origin, voxels ? mesh::SurfaceOrigin::voxels : mesh::SurfaceOrigin::sh) << r.note;
+      expect_valid(r.mesh);
+      double far = g == 0 ? -1.0 : 1.0;
+      for (const Vector3d& p : r.mesh.nodes) far = g == 0 ? std::max(far, p.x()) : std::min(far, p.x());
+      reach[g] = far;
+      // No node beyond the face (the voxel surface: within a tenth of a voxel, as marching tetrahedra
+      // interpolate the cut field linearly between voxel centres).
+      EXPECT_LE((g == 0 ? 1 : -1) * (far - face), (voxels ? 0.1 : 0.01) * h) << (voxels ? "voxels" : "SH") << ", grain " << 3 + g;
+      if (!voxels) {
+        EXPECT_NEAR(r.cut_share, cap / ball, 0.25 * cap / ball);
+        // Uncut, the SH ball reaches a voxel beyond the face.
+        const auto uncut = mesh::mesh_grain(grain, basis, &b.labels, b.bbox[g], uncut_options);
+        EXPECT_EQ(uncut.cut_share, 0.0);
+        double uncut_far = g == 0 ? -1.0 : 1.0;
+        for (const Vector3d& p : uncut.mesh.nodes) uncut_far = g == 0 ? std::max(uncut_far, p.x()) : std::min(uncut_far, p.x());
+        EXPECT_GT((g == 0 ? 1 : -1) * (uncut_far - face), 0.5 * h);
+      } else {
+        EXPECT_GE(r.cut_share, 0.0);
+      }
+    }
+    // The two grains touch without overlapping: the cut SH surfaces both at the face, the voxel
+    // surfaces within a voxel of it (marching tetrahedra interpolate the cut field linearly between
+    // voxel centres).
+    EXPECT_LE(reach[0] - reach[1], 0.02 * h) << (voxels ? "voxels" : "SH");
+    EXPECT_GT(reach[0] - reach[1], (voxels ? -1.0 : -0.05) * h) << (voxels ? "voxels" : "SH");
   }
 }
 

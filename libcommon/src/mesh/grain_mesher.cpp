@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -12,6 +13,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/resources.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
+#include "graintwin/mesh/neighbour_cut.hpp"
 #include "graintwin/mesh/surface_remesh.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
@@ -147,10 +149,18 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
   const auto size_for = [&](const TriangleSurface& s, double volume) {
     return choose_element_size(surface_area(s), grain.equivalent_diameter, total_mean_curvature(s) / volume, order, targets);
   };
+  // The boundary with the neighbours' voxels, out to where any of the grain's surfaces can reach
+  // (the voxel surface's padding, 2 + 3 sigma voxels, and a voxel more for the SH fit's overshoot).
+  std::optional<NeighbourCut> cut;
+  if (labels && options.cut_at_neighbours) {
+    cut.emplace(*labels, grain.label, bbox, static_cast<std::size_t>(3.0 + std::ceil(3.0 * options.smooth_vox)));
+    if (!cut->any()) cut.reset();
+  }
   const int degree = static_cast<int>(std::lround(std::sqrt(static_cast<double>(grain.coeffs.size())))) - 1;
   const auto on_sh_surface = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
     const Eigen::Vector3d d = (p - grain.centroid).normalized();
-    return grain.centroid + shape::sh_radius(grain.coeffs, degree, d) * d;
+    const double r = shape::sh_radius(grain.coeffs, degree, d);
+    return grain.centroid + (cut ? cut->radial_limit(grain.centroid, d, r) : r) * d;
   };
   // Meshes with `run` at r.size.h, then once more at 0.7 h when elements miss the quality floor
   // (keeping the better mesh; a failed or overrun remesh keeps the first).
@@ -191,6 +201,11 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     add_note("SH fit flagged unreliable");
   } else {
     sh_candidate = sh_surface(sh.sphere, sh.basis, grain.coeffs, grain.centroid);
+    if (cut) {
+      const double whole = enclosed_volume(sh_candidate);
+      cut_radial_surface(sh_candidate, grain.centroid, *cut);
+      r.cut_share = whole > 0.0 ? 1.0 - enclosed_volume(sh_candidate) / whole : 0.0;
+    }
     const SurfaceCheck c = check_surface(sh_candidate);
     sh_ok = c.ok();
     if (!sh_ok) {
@@ -235,6 +250,21 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     const int stride = std::clamp(static_cast<int>(std::lround(kSourceSpacingPerSize * h_estimate / voxel)), 1, kMaxSourceStride);
     source = largest_piece(voxel_surface(*labels, grain.label, bbox, options.smooth_vox, stride, true));
     r.origin = SurfaceOrigin::voxels;
+    if (cut) {
+      // Vertex by vertex: cutting the field instead split thin parts of large grains (the coarse
+      // samples fell in the neighbours). A cut that folds the surface is not kept.
+      TriangleSurface cut_source = source;
+      if (cut_surface(cut_source, *cut) > 0) {
+        const SurfaceCheck c = check_surface(cut_source);
+        if (c.embedded()) {
+          const double whole = enclosed_volume(source);
+          r.cut_share = whole > 0.0 ? 1.0 - enclosed_volume(cut_source) / whole : 0.0;
+          source = std::move(cut_source);
+        } else {
+          add_note("the voxel surface cut at the neighbours has " + c.problems() + "; kept uncut");
+        }
+      }
+    }
   }
   const SurfaceCheck source_check = sh_kept || source.triangles.empty() ? SurfaceCheck{} : check_surface(source);
   if (!sh_kept && !source.triangles.empty() && !source_check.embedded()) {
@@ -291,6 +321,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
 
   // 3. The inertia ellipsoid (gmsh's exact sphere, scaled): no surface of the grain was usable.
   r.origin = SurfaceOrigin::ellipsoid, r.path = MeshPath::ellipsoid;
+  r.cut_share = 0.0;
   r.surface_volume = 4.0 / 3.0 * M_PI * grain.semi_axes.prod();
   // Without a surface, the curvature of the sphere of the grain's diameter (3 / R^2).
   r.size = choose_element_size(grain.surface_area, grain.equivalent_diameter, 12.0 / (grain.equivalent_diameter * grain.equivalent_diameter),

@@ -82,6 +82,9 @@ struct GrainMeshOptions {
   double gamma_floor = 0.1;       ///< elements below this gamma make the grain remeshed once at 0.7 h
   double rigid_diameter = 0.0;    ///< grains smaller than this (m) get a coarse linear mesh and are rigid
   double smooth_vox = 0.7;        ///< Gaussian sigma of the voxel surface (voxels)
+  /// With labels: every surface is cut where it reaches into a neighbour's labelled voxels
+  /// (NeighbourCut), so that neighbours touch at their segmented interface instead of overlapping.
+  bool cut_at_neighbours = true;
   /// Grains with an SH surface: boundary nodes moved onto the exact SH surface (TetOptions::project);
   /// for 10-node grains rather than gmsh's curving on the triangulated surface + optimize(HighOrder).
   bool snap_to_sh = true;
@@ -118,12 +121,16 @@ struct GrainMeshResult {
   MeshQuality quality;
   TetReport gmsh;
   double surface_volume = 0.0;    ///< volume enclosed by the surface handed to gmsh, m^3
+  /// Share of the surface's volume cut off where it reached into neighbours' labelled voxels
+  /// (GrainMeshOptions::cut_at_neighbours; 0 without labels, or for the ellipsoid).
+  double cut_share = 0.0;
   bool remeshed = false;          ///< meshed again at 0.7 h for quality
   std::string note;               ///< why the SH surface was not used, or what is wrong ("" = nothing)
 };
 
 /// Meshes one grain. `labels` (may be null) enables the voxel surface for grains whose SH fit is
-/// flagged unreliable or whose SH surface fails check_surface; `bbox` is the grain's box in it. SH
+/// flagged unreliable or whose SH surface fails check_surface, and the cut at the neighbours
+/// (options.cut_at_neighbours); `bbox` is the grain's box in it. SH
 /// surfaces take options.sh_path (gmsh_surface under budget_seconds, falling back to kept_surface),
 /// voxel surfaces kept_surface; the inertia ellipsoid is the last resort.
 /// Thread-safe (the gmsh part runs one grain at a time per worker process, or in this process).
