@@ -357,6 +357,36 @@ TEST(Fdemrun, RelaxedOverlapsPartTheBoxesAndLiftTheGrainOutOfThePlatenAtSaneSpee
   EXPECT_EQ(run["initial_overlaps"]["moved_grains"].get<int>(), 3);
 }
 
+TEST(Fdemrun, KeptInitialOverlapsStartTheBoxesAtRestWhereThePenaltyFiresThemApart) {
+  // The two 4-node boxes start 0.08 mm into each other (within the 0.1 mm a step's search looks,
+  // so the penalty sees them; deeper kept overlaps: fdem_contact_test); the rigid box rests on the
+  // platen. (Half a box deep, as in kOverlapScene, a kept node sits near the middle of the other
+  // box and flips between its faces: docs/fdemrun.md.)
+  test::TempDir dir;
+  const std::string wide =
+      replaced(replaced(replaced(kOverlapScene, "position = [0, 0, 0.2e-3]", "position = [0, 0, 0.5e-3]"), "position = [3.5e-3, 0, 0.6e-3]",
+                        "position = [3.92e-3, 0, 0.6e-3]"),
+               "frame_interval", "overlap_tolerance = 0.45\nframe_interval");
+  const auto fired = write_scene(dir, "fired.toml", wide);
+  const auto kept = write_scene(dir, "kept.toml", replaced(wide, "frame_interval", "keep_initial_overlaps = true\nframe_interval"));
+  const auto fastest = [&](const std::filesystem::path& scene, const std::string& name) {
+    const auto out = dir / name;
+    const auto r = run_tool("fdemrun", {scene.string(), out.string()});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const fdem::ResultsFrame last = fdem::read_results_frame(out, fdem::results_frame_count(out) - 1);
+    double v = 0;
+    for (const double c : last.velocity) v = std::max(v, std::abs(c));
+    return std::make_pair(v, r.err);
+  };
+  const auto [fired_speed, fired_log] = fastest(fired, "fired.h5");
+  const auto [kept_speed, kept_log] = fastest(kept, "kept.h5");
+  EXPECT_GT(fired_speed, 1.0) << fired_log;
+  // At rest but for gravity over the run (20 us: 0.2 mm/s).
+  EXPECT_LT(kept_speed, 0.01) << kept_log;
+  EXPECT_NE(kept_log.find("initial overlaps kept force-free ([run] keep_initial_overlaps), the deepest 0.08 mm"), std::string::npos)
+      << kept_log;
+}
+
 TEST(Fdemrun, ARunBeyondTheStepCeilingIsRefusedWithTheNumbers) {
   test::TempDir dir;
   const auto out = (dir / "out.h5").string();

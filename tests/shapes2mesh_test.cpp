@@ -306,6 +306,9 @@ TEST(Shapes2mesh, BadInputsFailCleanly) {
   test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), in.shapes.string(), out}, 2, "pass the output of ct2labels");
   test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), out, "--order", "3"}, 2, "--order");
   test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), (dir / "m.vtk").string()}, 2, "must end in .h5");
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), out, "--sample-cylinder", "inscribed"}, 2,
+                             "--sample-cylinder inscribed needs LABELS and the scan's packing; pass the labels file, or leave it at auto");
+  test::expect_clean_failure("shapes2mesh", dir, {in.shapes.string(), out, "--sample-cylinder", "round"}, 2, "--sample-cylinder");
   shape::ShapesFile empty = shape::read_shapes_file(in.shapes);
   empty.grains.clear();
   shape::write_shapes_file(dir / "empty.h5", empty, {"empty"});

@@ -203,6 +203,11 @@ int main(int argc, char** argv) {
       built = std::make_unique<Solver>(model, options);
     }
     Solver& solver = *built;
+    if (scene.overlaps.keep && solver.contact_model()) {
+      solver.contact_model()->keep_initial_overlaps(settled.remaining);
+      spdlog::info("{} initial overlaps kept force-free ([run] keep_initial_overlaps), the deepest {:.3g} mm", settled.remaining.size(),
+                   1e3 * settled.deepest_after);
+    }
     const StepLimits limits = solver.time_step_limits();
     double dt = scene.time_step;
     if (dt > 0) {

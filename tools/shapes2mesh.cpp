@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
   mo.budget_seconds = 5.0;
   int subdivisions = 4;
   double rigid_below_d50 = 0.3, platen_friction = 0.0, size_cap_d50 = 2.0;
-  std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan", sh_meshing = "kept";
+  std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan", sh_meshing = "kept", sample_choice = "auto";
   mesh::EquivalentPackingOptions po;
   po.aspect = 0.0;  // the scan's unless given
   tool.add_input("SHAPES", shapes_path, "Shapes of the reference scan (.h5, kind=shapes)");
@@ -200,6 +200,11 @@ int main(int argc, char** argv) {
       ->check(cli::length_in(1e-6, 0.01))->capture_default_str();
   app.add_option("--platen-friction", platen_friction, "Coulomb friction of the platens (smooth: 0)")
       ->check(number_in(closed(0, 2)))->capture_default_str();
+  app.add_option("--sample-cylinder", sample_choice,
+                 "The twin's sample: auto (ct2labels' cylinder from LABELS when it is bounded, else the cylinder around "
+                 "the meshed grains) or inscribed (for a crop from inside a sample: the largest vertical cylinder inside "
+                 "the scan's box, with only the grains it holds whole, a voxel to spare; needs LABELS)")
+      ->check(CLI::IsMember({"auto", "inscribed"}))->capture_default_str();
   app.add_option("--tracked-only", tracks_path, "Keep only grains tracked from the first scan to the last in this kind=tracks file")
       ->check(CLI::ExistingFile);
   app.add_option("--packing", packing,
@@ -262,15 +267,31 @@ int main(int argc, char** argv) {
           throw UsageError("grain " + std::to_string(g.label) + " of " + shapes_path.string() + " is not in " + labels_path.string() +
                            "; pass the labels file the shapes were measured from");
     }
+    if (sample_choice == "inscribed" && (!labels || equivalent))
+      throw UsageError("--sample-cylinder inscribed needs LABELS and the scan's packing; pass the labels file, or leave it at auto");
+    std::optional<fdem::SampleCylinder> inscribed;
+    std::unordered_set<std::uint32_t> held;
+    if (sample_choice == "inscribed") {
+      inscribed = mesh::inscribed_cylinder(labels->labels, thickness);
+      held = mesh::labels_within(labels->labels, inscribed->axis_xy, inscribed->radius, labels->labels.voxel_size()[2]);
+    }
+    // The grains meshed: those the inscribed cylinder holds whole (--sample-cylinder inscribed),
+    // of them those tracked through the series (--tracked-only).
     std::vector<const shape::GrainShape*> grains;
+    for (const auto& g : shapes.grains)
+      if (!inscribed || held.count(g.label)) grains.push_back(&g);
+    if (inscribed) {
+      spdlog::info("inscribed cylinder: radius {:.3f} mm, axis ({:.3f}, {:.3f}) mm; {} of {} grains lie whole inside it, the rest "
+                   "are left out",
+                   inscribed->radius * 1e3, inscribed->axis_xy.x() * 1e3, inscribed->axis_xy.y() * 1e3, grains.size(), shapes.grains.size());
+      if (grains.empty()) throw DataError("no grain of " + shapes_path.string() + " lies whole inside the scan's inscribed cylinder; leave --sample-cylinder at auto");
+    }
     if (!tracks_path.empty()) {
       const auto keep = tracked_labels(tracks_path);
-      for (const auto& g : shapes.grains)
-        if (keep.count(g.label)) grains.push_back(&g);
-      spdlog::info("{} of {} grains are tracked through {}", grains.size(), shapes.grains.size(), tracks_path.string());
+      const std::size_t before = grains.size();
+      std::erase_if(grains, [&](const shape::GrainShape* g) { return !keep.count(g->label); });
+      spdlog::info("{} of {} grains are tracked through {}", grains.size(), before, tracks_path.string());
       if (grains.empty()) throw DataError(tracks_path.string() + " tracks none of the grains of " + shapes_path.string() + "; pass the tracks of this scan series");
-    } else {
-      for (const auto& g : shapes.grains) grains.push_back(&g);
     }
     mo.rigid_diameter = rigid_below_d50 * shapes.psd.d50;
     mo.size.coarsest_size = mesh::neighbour_size_cap(shapes.psd.d50, size_cap_d50, mo.order, mo.size);
@@ -403,6 +424,9 @@ int main(int argc, char** argv) {
       cylinder.radius = sample->container.radius;
       cylinder.z_min = 0.0, cylinder.z_max = sample->container.height;
       sample_source = "equivalent packing";
+    } else if (inscribed) {
+      cylinder = *inscribed;
+      sample_source = "inscribed in the scan";
     } else if (labels && std::isfinite(labels->sample.region.radius) && labels->sample.region.radius > 0) {
       const auto& c = labels->sample.region;
       cylinder.axis_xy = {c.centre_x, c.centre_y};
@@ -440,6 +464,7 @@ int main(int argc, char** argv) {
         {"membrane_thickness_m", thickness}, {"platen_friction", platen_friction}, {"sample_source", sample_source},
         {"tracked_only", tracks_path.string()}, {"gmsh_processes", workers.size()}, {"packing", packing},
         {"grain_budget_s", mo.budget_seconds}, {"sh_meshing", sh_meshing}};
+    parameters["sample_cylinder"] = sample_choice;
     if (sample)
       parameters["equivalent_packing"] = {{"grains", po.grains}, {"solid_fraction", po.solid_fraction}, {"aspect", po.aspect},
                                           {"seed", po.seed}, {"packed_solid_fraction", sample->report.solid_fraction},

@@ -448,6 +448,88 @@ TEST(ContactModel, OverlapsOfTheMovedGrainsAloneAfterAnOverlapCheck) {
   EXPECT_THROW(contact.overlaps(x, platen, std::vector<std::uint8_t>{1}), DataError);
 }
 
+TEST(ContactModel, KeptInitialOverlapsCarryNoForceAndOnlyTheOverlapBeyondThemPushes) {
+  // The cube starts 0.05 mm into the slab, as a scanned twin's grains overlap where they touch.
+  const Model m = pressed_cubes(0.05 * kMm);
+  const auto force_on_cube = [&](ContactModel& contact, double extra) {
+    std::vector<Eigen::Vector3d> x = m.nodes;
+    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) x[i].z() -= extra;
+    auto f = zeros(m.nodes.size());
+    contact.add_forces(x, zeros(m.nodes.size()), {}, 1e-9, f);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) sum += f[i];
+    return sum.z();
+  };
+  ContactModel plain(m, unit_masses(m), {}), kept(m, unit_masses(m), {});
+  kept.keep_initial_overlaps(kept.overlaps(m.nodes, {}));
+  EXPECT_GT(force_on_cube(plain, 0.0), 0.0);
+  EXPECT_EQ(force_on_cube(kept, 0.0), 0.0) << "the start's overlap is force-free";
+  // Pressed 0.01 mm further: the kept contact pushes as a fresh one 0.01 mm deep does.
+  const double pressed = force_on_cube(kept, 0.01 * kMm);
+  ContactModel fresh(pressed_cubes(0.01 * kMm), unit_masses(m), {});
+  auto f = zeros(m.nodes.size());
+  const Model shallow = pressed_cubes(0.01 * kMm);
+  fresh.add_forces(shallow.nodes, zeros(m.nodes.size()), {}, 1e-9, f);
+  double expected = 0;
+  for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) expected += f[i].z();
+  EXPECT_NEAR(pressed, expected, 1e-9 * std::abs(expected));
+  // Opened to 0.03 mm deep, the offset shrinks to it and stays there: back at the start's 0.05 mm the
+  // contact pushes like a fresh 0.02 mm one.
+  EXPECT_EQ(force_on_cube(kept, -0.02 * kMm), 0.0);
+  EXPECT_GT(force_on_cube(kept, 0.0), 0.0);
+  // Only the first step adopts: a contact made later has no offset.
+  ContactModel late(m, unit_masses(m), {});
+  late.keep_initial_overlaps(late.overlaps(m.nodes, {}));
+  EXPECT_EQ(force_on_cube(late, -0.1 * kMm), 0.0);  // apart: no contact, and the adoption is spent
+  EXPECT_GT(force_on_cube(late, 0.0), 0.0);
+}
+
+TEST(ContactModel, KeptInitialOverlapsDeeperThanTheSearchAreFoundAndKept) {
+  // 0.2 mm in: twice the deepest penetration a step looks for (a tenth of the cube's 1 mm side), as
+  // where a scanned twin's meshes overlap by a couple of voxels. The pair's search looks deeper.
+  const double start = 0.2 * kMm, further = 0.01 * kMm;
+  const Model m = pressed_cubes(start);
+  const auto force_on_cube = [&](ContactModel& contact, double extra) {
+    std::vector<Eigen::Vector3d> x = m.nodes;
+    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) x[i].z() -= extra;
+    auto f = zeros(m.nodes.size());
+    contact.add_forces(x, zeros(m.nodes.size()), {}, 1e-9, f);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) sum += f[i];
+    return sum.z();
+  };
+  ContactModel kept(m, unit_masses(m), {});
+  const std::vector<Overlap> overlaps = kept.overlaps(m.nodes, {});
+  ASSERT_EQ(overlaps.size(), 1u);
+  EXPECT_NEAR(overlaps[0].depth, start, 1e-12);
+  kept.keep_initial_overlaps(overlaps);
+  EXPECT_EQ(force_on_cube(kept, 0.0), 0.0);
+  // Pressed further, the deep nodes push. Not quite as a fresh contact of that depth does: the
+  // slab's nodes within 0.2 mm of the cube's sides are closer to those sides than to its bottom, so
+  // their overlaps (and offsets) are horizontal and pressing down adds nothing to them. Without the
+  // deeper search no node would be found at all, and the cube would sink freely.
+  const double pressed = force_on_cube(kept, further);
+  const Model shallow = pressed_cubes(further);
+  ContactModel fresh(shallow, unit_masses(shallow), {});
+  auto f = zeros(shallow.nodes.size());
+  fresh.add_forces(shallow.nodes, zeros(shallow.nodes.size()), {}, 1e-9, f);
+  double expected = 0;
+  for (std::uint32_t i = shallow.grains[1].node_begin; i < shallow.grains[1].node_end; ++i) expected += f[i].z();
+  ASSERT_GT(expected, 0.0);
+  EXPECT_GT(pressed, 0.5 * expected);
+  EXPECT_LE(pressed, expected * (1 + 1e-9));
+  // A restart keeps the offsets and the pair's deeper search: the same force again.
+  const auto path = std::filesystem::temp_directory_path() / "fdem_contact_kept_overlap_test.h5";
+  {
+    io::H5File file = io::H5File::create(path);
+    kept.save(file, "/contact");
+  }
+  ContactModel restarted(m, unit_masses(m), {});
+  restarted.load(io::H5File::open(path), "/contact");
+  std::filesystem::remove(path);
+  EXPECT_EQ(force_on_cube(restarted, further), pressed);
+}
+
 TEST(ContactModel, OverlapsOfSixteenThousandGrainsComeThroughTheBroadPhase) {
   // 16 000 faceted spheres on a cubic lattice 0.9 diameters apart: each overlaps its six lattice
   // neighbours by about a tenth of a diameter and no other grain (the diagonal ones are 1.27

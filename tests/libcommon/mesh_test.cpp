@@ -604,6 +604,31 @@ TEST(GrainMesher, SurfacesOvershootingTheirNeighbourAreCutAtTheSharedFace) {
   }
 }
 
+TEST(SampleCylinder, InscribedInTheScanHoldsOnlyWholeGrains) {
+  // A crop 30 voxels wide (x) and 20 deep (y), 10 tall, of voxels 1e-5 m with its first voxel centred
+  // at the origin: the inscribed cylinder's axis is the box's middle, its radius 10 voxels.
+  const double h = 1e-5;
+  Volume<std::uint32_t> labels({10, 20, 30}, {h, h, h});
+  const auto block = [&](std::uint32_t label, std::size_t x0, std::size_t x1, std::size_t y0, std::size_t y1) {
+    for (std::size_t z = 2; z < 8; ++z)
+      for (std::size_t y = y0; y < y1; ++y)
+        for (std::size_t x = x0; x < x1; ++x) labels(z, y, x) = label;
+  };
+  block(1, 13, 17, 8, 12);  // at the middle
+  block(2, 0, 4, 0, 4);     // in a corner
+  block(3, 14, 16, 0, 3);   // at the middle of a long side, touching the cylinder
+  const fdem::SampleCylinder c = mesh::inscribed_cylinder(labels, 0.3e-3);
+  EXPECT_NEAR(c.axis_xy.x(), 14.5 * h, 1e-12);
+  EXPECT_NEAR(c.axis_xy.y(), 9.5 * h, 1e-12);
+  EXPECT_NEAR(c.radius, 10 * h, 1e-12);
+  EXPECT_NEAR(c.z_min, -0.5 * h, 1e-12);
+  EXPECT_NEAR(c.z_max, 9.5 * h, 1e-12);
+  EXPECT_EQ(c.membrane_thickness, 0.3e-3);
+  // Grain 3 reaches the side's voxel faces, 10 voxels from the axis: whole only without a margin.
+  EXPECT_EQ(mesh::labels_within(labels, c.axis_xy, c.radius, h), (std::unordered_set<std::uint32_t>{1}));
+  EXPECT_EQ(mesh::labels_within(labels, c.axis_xy, c.radius + 1.5 * h, 0.0), (std::unordered_set<std::uint32_t>{1, 3}));
+}
+
 TEST(GrainMesher, OverrunOnTheShSurfaceFallsBackToTheKeptSurfaceAndIsReported) {
   // A budget far shorter than any gmsh run: gmsh's remeshing of the SH surface always overruns (in a worker, which is
   // stopped and replaced), and the kept-surface path, which gets at least 10 s, meshes it.

@@ -261,7 +261,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
         const auto& tri = s.triangles[h.triangle];
         for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * h.law.force;
       }
-      s.history.push_back({c.a, c.b, h.node, h.law.spring});
+      s.history.push_back({c.a, c.b, h.node, h.law.spring, h.offset});
     }
     const CandidateSum& sum = s.sums[i];
     if (node_rigid[0]) s.loads[c.a] += sum.load[0];
@@ -272,7 +272,20 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.max_overlap = std::max(stats.max_overlap, sum.record.overlap);
     s.records.push_back(sum.record);
   }
+  s.adopt_initial_overlaps = false;
   return stats;
+}
+
+void ContactModel::keep_initial_overlaps(std::span<const Overlap> overlaps) {
+  State& s = *state_;
+  s.adopt_initial_overlaps = true;
+  s.deep_pairs.clear();
+  const auto grain_count = static_cast<std::uint32_t>(s.grains.size());
+  for (const Overlap& o : overlaps)
+    if (o.b < grain_count && o.depth > 0) s.deep_pairs.push_back({o.a, o.b, o.depth + s.max_penetration});
+  std::sort(s.deep_pairs.begin(), s.deep_pairs.end(),
+            [](const DeepPair& l, const DeepPair& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+  s.need_rebuild = true;  // the lists of these pairs reach deeper
 }
 
 std::span<const RigidLoad> ContactModel::rigid_loads() const { return state_->loads; }

@@ -14,6 +14,16 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
   file.set_attr(group, "entries", static_cast<long long>(s.history.size()));
   file.set_attr(group, "ball_entries", static_cast<long long>(s.ball_history.size()));
   file.set_attr(group, "record_entries", static_cast<long long>(s.records.size()));
+  file.set_attr(group, "deep_pair_entries", static_cast<long long>(s.deep_pairs.size()));
+  if (!s.deep_pairs.empty()) {  // the pairs whose kept initial overlaps the search reaches
+    std::vector<std::uint32_t> pair(2 * s.deep_pairs.size());
+    std::vector<double> depth(s.deep_pairs.size());
+    for (std::size_t i = 0; i < s.deep_pairs.size(); ++i)
+      pair[2 * i] = s.deep_pairs[i].a, pair[2 * i + 1] = s.deep_pairs[i].b, depth[i] = s.deep_pairs[i].depth;
+    const hsize_t n = s.deep_pairs.size();
+    file.write(group + "/deep_pair", pair.data(), {n, 2});
+    file.write(group + "/deep_pair_depth", depth.data(), {n}, io::units("m"));
+  }
   if (!s.records.empty()) {  // the last step's contacts, for a frame written before the next step
     std::vector<std::uint32_t> pair(2 * s.records.size());
     std::vector<double> values;
@@ -33,18 +43,20 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
   }
   if (!s.history.empty()) {
     std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
-    std::vector<double> spring(3 * s.history.size());
+    std::vector<double> spring(3 * s.history.size()), offset(s.history.size());
     for (std::size_t i = 0; i < s.history.size(); ++i) {
       const HistoryEntry& h = s.history[i];
       pair[2 * i] = h.a;
       pair[2 * i + 1] = h.b;
       node[i] = h.node;
       for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
+      offset[i] = h.offset;
     }
     const hsize_t n = s.history.size();
     file.write(group + "/pair", pair.data(), {n, 2});
     file.write(group + "/node", node.data(), {n});
     file.write(group + "/spring", spring.data(), {n, 3}, io::units("N"));
+    file.write(group + "/offset", offset.data(), {n}, io::units("m"));
   }
   if (!s.ball_history.empty()) {  // membrane balls' friction springs
     std::vector<std::uint32_t> ball_grain(2 * s.ball_history.size());
@@ -81,9 +93,16 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
     if (pair_dims != std::vector<hsize_t>{n, 2} || node_dims != std::vector<hsize_t>{n} ||
         spring_dims != std::vector<hsize_t>{n, 3})
       throw bad(fmt::format("does not hold {} entries in pair (n x 2), node (n) and spring (n x 3)", n));
+    // Checkpoints written before initial overlaps could be kept have no offsets: none were kept.
+    std::vector<double> offset(n, 0.0);
+    if (file.exists(group + "/offset")) {
+      std::vector<hsize_t> offset_dims;
+      offset = file.read<double>(group + "/offset", &offset_dims);
+      if (offset_dims != std::vector<hsize_t>{n}) throw bad(fmt::format("does not hold {} entries in offset (n)", n));
+    }
     history.resize(n);
     for (std::size_t i = 0; i < history.size(); ++i)
-      history[i] = {pair[2 * i], pair[2 * i + 1], node[i], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}};
+      history[i] = {pair[2 * i], pair[2 * i + 1], node[i], {spring[3 * i], spring[3 * i + 1], spring[3 * i + 2]}, offset[i]};
   }
   for (std::size_t i = 0; i < history.size(); ++i) {
     const HistoryEntry& h = history[i];
@@ -127,7 +146,29 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
       records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9]};
     }
   }
+  // Checkpoints written before initial overlaps could be kept have none.
+  const auto deep_entries = file.attr_int(group, "deep_pair_entries").value_or(0);
+  if (deep_entries < 0) throw bad("has a negative 'deep_pair_entries' count");
+  std::vector<DeepPair> deep_pairs;
+  if (deep_entries > 0) {
+    std::vector<hsize_t> pair_dims, depth_dims;
+    const auto pair = file.read<std::uint32_t>(group + "/deep_pair", &pair_dims);
+    const auto depth = file.read<double>(group + "/deep_pair_depth", &depth_dims);
+    const auto n = static_cast<hsize_t>(deep_entries);
+    if (pair_dims != std::vector<hsize_t>{n, 2} || depth_dims != std::vector<hsize_t>{n})
+      throw bad(fmt::format("does not hold {} deep pairs in deep_pair (n x 2) and deep_pair_depth (n)", n));
+    deep_pairs.resize(n);
+    for (std::size_t i = 0; i < deep_pairs.size(); ++i) {
+      deep_pairs[i] = {pair[2 * i], pair[2 * i + 1], depth[i]};
+      const DeepPair& d = deep_pairs[i];
+      if (d.a >= s.grains.size() || d.b <= d.a || d.b >= s.grains.size() || !(d.depth > 0) || !std::isfinite(d.depth))
+        throw bad(fmt::format("names grain pair ({}, {}) with search depth {} outside a model of {} grains", d.a, d.b, d.depth,
+                              s.grains.size()));
+      if (i > 0 && std::tie(deep_pairs[i - 1].a, deep_pairs[i - 1].b) >= std::tie(d.a, d.b)) throw bad("has deep pairs not sorted by pair");
+    }
+  }
   s.history = std::move(history);
+  s.deep_pairs = std::move(deep_pairs);
   s.ball_history = std::move(ball_history);
   s.records = std::move(records);
   s.need_rebuild = true;

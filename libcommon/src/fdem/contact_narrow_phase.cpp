@@ -37,10 +37,10 @@ CandidateSum ContactModel::State::sum_hits(const Candidate& c, std::span<const N
 }
 
 template <class Outside>
-bool ContactModel::State::nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, NearNode& listed,
+bool ContactModel::State::nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, double deepest, NearNode& listed,
                                              SearchMemo& memo, SurfaceTrees::Nearest& near, Checks& checks,
                                              Outside outside) const {
-  const double deepest2 = max_penetration * max_penetration;
+  const double deepest2 = deepest * deepest;
   if (options.search_memos && (q - memo.at).squaredNorm() < memo.valid2) {
     if (memo.count == 0) return false;
     double best2 = std::numeric_limits<double>::infinity();
@@ -61,7 +61,7 @@ bool ContactModel::State::nearest_remembered(std::uint32_t to, const Eigen::Vect
   const double margin = memo_margin;
   memo.at = q;
   memo.count = 0;
-  const bool found = trees.nearest_in_body(to, q, max_penetration + 2 * margin, near, listed.hint);
+  const bool found = trees.nearest_in_body(to, q, deepest + 2 * margin, near, listed.hint);
   checks.triangles += near.tested;
   if (!found) {
     memo.valid2 = 2 * margin > slack ? (2 * margin - slack) * (2 * margin - slack) : -1;
@@ -75,7 +75,7 @@ bool ContactModel::State::nearest_remembered(std::uint32_t to, const Eigen::Vect
   }
   if (!options.search_memos) return near.distance2 < deepest2;
   if (!(near.distance2 < deepest2)) {
-    memo.valid2 = d - max_penetration > slack ? (d - max_penetration - slack) * (d - max_penetration - slack) : -1;
+    memo.valid2 = d - deepest > slack ? (d - deepest - slack) * (d - deepest - slack) : -1;
     return false;
   }
   const std::size_t count = trees.slots_within_in_body(to, q, d + 2 * margin + slack, memo.slots);
@@ -109,6 +109,7 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
   const double p_t = std::min(mf.tangential_penalty, mt.tangential_penalty);
   const double mu = std::min(mf.friction, mt.friction);
   const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
+  const double deepest = search_depth(key.a, key.b);
   SurfaceTrees::Nearest near;
   // Between rigid grains the list is sorted by clearance: read it only as far as the pair moved.
   for (std::size_t i = 0; i < nodes.size(); ++i) {
@@ -133,12 +134,12 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
         n.closest.point = body_to.rotation * n.closest.point + body_to.translation;
         return outside(n);
       };
-      close = nearest_remembered(to, q, listed, memos[i], near, checks, outside_in_world);
+      close = nearest_remembered(to, q, deepest, listed, memos[i], near, checks, outside_in_world);
       if (close) near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
     } else {
       place_node();
       if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
-      close = nearest(to, p, max_penetration, x, near, listed.hint);
+      close = nearest(to, p, deepest, x, near, listed.hint);
       checks.triangles += near.tested;
       if (close && listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
     }
@@ -153,9 +154,10 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
     if (!(area > 0)) continue;
     const Eigen::Vector3d w = near.closest.weights;
     const Eigen::Vector3d relative = velocity(node, from, v) - surface_velocity(near.triangle, w, v);
-    const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
-    hit.law = node_contact_force(contact_law(p_n, p_t, area, node_mass[node], beta, mu), hit.normal, hit.overlap,
-                                 relative, spring ? *spring : Eigen::Vector3d::Zero(), dt);
+    const HistoryEntry* previous = previous_entry(key.a, key.b, node);
+    hit.offset = offset_of(previous, hit.overlap);
+    hit.law = node_contact_force(contact_law(p_n, p_t, area, node_mass[node], beta, mu), hit.normal, hit.overlap - hit.offset,
+                                 relative, previous ? previous->spring : Eigen::Vector3d::Zero(), dt);
     hit.node = node;
     hit.triangle = near.triangle;
     hit.weights = w;
@@ -179,11 +181,12 @@ void ContactModel::State::platen_hits(const Candidate& key, const PlatenState& p
     hit.normal = platen.normal;
     const double area = facing_area(node, hit.normal, x, pose[key.a]);
     if (!(area > 0)) continue;
-    const Eigen::Vector3d* spring = previous_spring(key.a, key.b, node);
+    const HistoryEntry* previous = previous_entry(key.a, key.b, node);
+    hit.offset = offset_of(previous, hit.overlap);
     hit.law = node_contact_force(
         contact_law(m.normal_penalty, m.tangential_penalty, area, node_mass[node], m.damping_ratio, platen.friction),
-        hit.normal, hit.overlap, velocity(node, key.a, v) - platen.velocity,
-        spring ? *spring : Eigen::Vector3d::Zero(), dt);
+        hit.normal, hit.overlap - hit.offset, velocity(node, key.a, v) - platen.velocity,
+        previous ? previous->spring : Eigen::Vector3d::Zero(), dt);
     hit.node = node;
     hit.arm = arm;
     hit.point = p + 0.5 * hit.overlap * platen.normal;

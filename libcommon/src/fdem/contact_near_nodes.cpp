@@ -45,8 +45,8 @@ std::array<double, 2> ContactModel::State::pair_motion(std::size_t k) const {
 }
 
 void ContactModel::State::build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x) {
-  const double reach = (max_penetration + skin) * (1 + kReachRoundOff);
   const auto [a, b] = grain_pairs[k];
+  const double reach = (search_depth(a, b) + skin) * (1 + kReachRoundOff);
   collect_near_nodes(a, b, reach, x, near_nodes[k][0]);
   collect_near_nodes(b, a, reach, x, near_nodes[k][1]);
   for (int side : {0, 1}) memos[k][side].assign(near_nodes[k][side].size(), SearchMemo{});

@@ -62,6 +62,9 @@ struct NodeHit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, the direction the node is pushed
   Eigen::Vector3d arm = Eigen::Vector3d::Zero();     ///< from a rigid grain's centroid to the node
   double overlap = 0;
+  /// Of `overlap`, what the contact started with and carries no force (keep_initial_overlaps);
+  /// the force acts on overlap - offset.
+  double offset = 0;
   NodeContactForce law;
 };
 
@@ -121,9 +124,17 @@ struct Checks {
   bool lists_built = false;  ///< the pair's near-node lists were built again this step
 };
 
+/// A grain pair (a < b) whose search looks deeper than max_penetration, to `depth` (m): pairs that
+/// started overlapping, with their overlaps kept (ContactModel::keep_initial_overlaps).
+struct DeepPair {
+  std::uint32_t a = 0, b = 0;
+  double depth = 0;
+};
+
 struct HistoryEntry {
   std::uint32_t a = 0, b = 0, node = 0;
   Eigen::Vector3d spring = Eigen::Vector3d::Zero();
+  double offset = 0;  ///< m, the node contact's force-free overlap (NodeHit::offset)
 };
 inline bool key_less(const HistoryEntry& h, std::uint32_t a, std::uint32_t b, std::uint32_t node) {
   return std::tie(h.a, h.b, h.node) < std::tie(a, b, node);
@@ -177,7 +188,7 @@ struct ContactModel::State {
 
   std::vector<BoxPair> grain_pairs;          ///< broad phase result
   /// Per grain pair (a, b) of the broad phase: the surface nodes of a ([0]) and of b ([1]) that were
-  /// within max_penetration + skin of the other grain's surface at the build. A node moves at most
+  /// within search_depth(a, b) + skin of the other grain's surface at the build. A node moves at most
   /// skin / 2 until the next build and so does every point of the other surface (linear
   /// triangles), so the distance changes by at most skin: an unlisted node stays farther than
   /// max_penetration, where the closest-triangle search would not find it either. Without
@@ -208,6 +219,9 @@ struct ContactModel::State {
   /// The trees and poses are those an overlaps() call left (no step since): overlaps() may update
   /// only the grains that moved.
   bool overlap_configuration = false;
+  /// The next step's node contacts take their overlaps as force-free offsets (keep_initial_overlaps).
+  bool adopt_initial_overlaps = false;
+  std::vector<DeepPair> deep_pairs;  ///< sorted by (a, b)
   std::size_t rebuilds = 0;
 
   std::vector<HistoryEntry> history;  ///< sorted by (a, b, node)
@@ -329,10 +343,27 @@ struct ContactModel::State {
     return sum;
   }
 
-  const Eigen::Vector3d* previous_spring(std::uint32_t a, std::uint32_t b, std::uint32_t node) const {
+  /// How deep the closest-triangle search of grain pair (a < b) looks: max_penetration, deeper for
+  /// a pair that started overlapping (deep_pairs). Fixed for the run, so lists and memos stay bounds.
+  double search_depth(std::uint32_t a, std::uint32_t b) const {
+    if (deep_pairs.empty()) return max_penetration;
+    auto it = std::lower_bound(deep_pairs.begin(), deep_pairs.end(), 0, [&](const DeepPair& d, int) {
+      return std::tie(d.a, d.b) < std::tie(a, b);
+    });
+    return it != deep_pairs.end() && it->a == a && it->b == b ? it->depth : max_penetration;
+  }
+
+  const HistoryEntry* previous_entry(std::uint32_t a, std::uint32_t b, std::uint32_t node) const {
     auto it = std::lower_bound(history.begin(), history.end(), 0,
                                [&](const HistoryEntry& h, int) { return key_less(h, a, b, node); });
-    return it != history.end() && it->a == a && it->b == b && it->node == node ? &it->spring : nullptr;
+    return it != history.end() && it->a == a && it->b == b && it->node == node ? &*it : nullptr;
+  }
+  /// A node contact's force-free overlap this step: what it kept from its start (never more than
+  /// its overlap now: it only shrinks as the contact opens), or all of it in the first step after
+  /// keep_initial_overlaps(), else none.
+  double offset_of(const HistoryEntry* previous, double overlap) const {
+    if (previous) return std::min(previous->offset, overlap);
+    return adopt_initial_overlaps ? overlap : 0.0;
   }
 
   /// Places or refits grain g's tree and sets its bounding sphere; true when one of its surface
@@ -419,8 +450,9 @@ struct ContactModel::State {
   /// grains, from its memo when that still holds, else anew (and remembered). True when a triangle
   /// lies within the deepest detectable penetration; `near` is then in the body frame. `outside`
   /// tells whether the node is outside `to` given a search's answer (in the body frame).
+  /// `deepest`: the pair's search_depth (P of SearchMemo).
   template <class Outside>
-  bool nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, NearNode& listed, SearchMemo& memo,
+  bool nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, double deepest, NearNode& listed, SearchMemo& memo,
                           SurfaceTrees::Nearest& near, Checks& checks, Outside outside) const;
 
   /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces, among `nodes`

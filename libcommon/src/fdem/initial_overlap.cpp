@@ -22,6 +22,9 @@ constexpr std::size_t kMaxPasses = 500;
 /// micrometre of overlap into a separation speed of metres per second, so relaxed grains start
 /// apart, not pressed into each other at the tolerance.
 constexpr double kRelaxedFraction = 0.01;
+/// With kept initial overlaps, relaxation parts only those beyond the tolerance, to this fraction
+/// of it: the rest carry no force, and parting them all would dilate a scanned packing.
+constexpr double kKeptRelaxedFraction = 0.5;
 
 std::string mm(double metres) { return fmt::format("{:.3g} mm", 1e3 * metres); }
 
@@ -86,6 +89,7 @@ OverlapSettlement settle_initial_overlaps(Solver& solver, Model& model, const Ov
   out.beyond = beyond;
   if (beyond == 0) {
     out.deepest_after = out.deepest;
+    out.remaining = std::move(overlaps);
     return out;
   }
   if (!options.relax)
@@ -102,22 +106,25 @@ OverlapSettlement settle_initial_overlaps(Solver& solver, Model& model, const Ov
   std::vector<Eigen::Vector3d> push(grains);
   std::vector<int> pushes(grains);
   std::vector<std::uint8_t> moved(grains);
+  const double relaxed = options.keep ? kKeptRelaxedFraction : kRelaxedFraction;
+  const char* share_text = options.keep ? "half" : "a hundredth";
   for (;;) {
-    const auto [left, count] = worst(overlaps, judge, kRelaxedFraction);
+    const auto [left, count] = worst(overlaps, judge, relaxed);
     if (count == 0) break;
-    spdlog::debug("relaxation pass {}: {} overlaps beyond a hundredth of their tolerance, worst {} ({:.3g} of its tolerance)",
-                  out.passes, count, judge.describe(*left), left->depth / judge.tolerance(*left));
+    spdlog::debug("relaxation pass {}: {} overlaps beyond {} of their tolerance, worst {} ({:.3g} of its tolerance)",
+                  out.passes, count, share_text, judge.describe(*left), left->depth / judge.tolerance(*left));
     if (out.passes == kMaxPasses)
       throw UsageError(fmt::format("{}: relaxing the initial overlaps ([run] relax_overlaps) left {} after {} passes "
-                                   "(the relaxation stops at a hundredth of the tolerance, {}); they have no room to part: move "
+                                   "(the relaxation stops at {} of the tolerance, {}); they have no room to part: move "
                                    "the grains or the platens apart",
-                                   where, judge.describe(*left), kMaxPasses, mm(kRelaxedFraction * judge.tolerance(*left))));
+                                   where, judge.describe(*left), kMaxPasses, share_text, mm(relaxed * judge.tolerance(*left))));
     ++out.passes;
     std::fill(push.begin(), push.end(), Eigen::Vector3d::Zero());
     std::fill(pushes.begin(), pushes.end(), 0);
     for (const Overlap& o : overlaps) {
-      if (!(o.depth > kRelaxedFraction * judge.tolerance(o))) continue;
-      const double distance = o.depth + kRelaxedFraction * judge.tolerance(o);
+      if (!(o.depth > relaxed * judge.tolerance(o))) continue;
+      // Parted to touching, or with kept overlaps to half the tolerance.
+      const double distance = options.keep ? o.depth - 0.5 * relaxed * judge.tolerance(o) : o.depth + kRelaxedFraction * judge.tolerance(o);
       if (judge.platen(o)) {
         push[o.a] += distance * platens[o.b - grains].normal;
         ++pushes[o.a];
@@ -149,6 +156,7 @@ OverlapSettlement settle_initial_overlaps(Solver& solver, Model& model, const Ov
   }
   for (const Overlap& o : overlaps) out.deepest_after = std::max(out.deepest_after, o.depth);
   model.nodes = std::move(x);
+  out.remaining = std::move(overlaps);
   return out;
 }
 

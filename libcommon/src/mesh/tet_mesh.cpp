@@ -172,6 +172,42 @@ fdem::SampleCylinder enclosing_cylinder(const fdem::Model& model, double membran
   return c;
 }
 
+fdem::SampleCylinder inscribed_cylinder(const Volume<std::uint32_t>& labels, double membrane_thickness) {
+  if (labels.empty()) throw DataError("inscribed_cylinder: the labels volume is empty");
+  const Vec3 first = labels.position_xyz(0, 0, 0);
+  const Vec3 last = labels.position_xyz(double(labels.nz() - 1), double(labels.ny() - 1), double(labels.nx() - 1));
+  const Vec3& h = labels.voxel_size();  // (dz, dy, dx)
+  const double x0 = std::min(first[0], last[0]) - 0.5 * h[2], x1 = std::max(first[0], last[0]) + 0.5 * h[2];
+  const double y0 = std::min(first[1], last[1]) - 0.5 * h[1], y1 = std::max(first[1], last[1]) + 0.5 * h[1];
+  fdem::SampleCylinder c;
+  c.membrane_thickness = membrane_thickness;
+  c.axis_xy = {0.5 * (x0 + x1), 0.5 * (y0 + y1)};
+  c.radius = 0.5 * std::min(x1 - x0, y1 - y0);
+  c.z_min = std::min(first[2], last[2]) - 0.5 * h[0];
+  c.z_max = std::max(first[2], last[2]) + 0.5 * h[0];
+  return c;
+}
+
+std::unordered_set<std::uint32_t> labels_within(const Volume<std::uint32_t>& labels, const Eigen::Vector2d& axis_xy, double radius,
+                                                double margin) {
+  // A voxel's farthest corner from the axis is at most half its x-y diagonal beyond its centre.
+  const Vec3& h = labels.voxel_size();
+  const double reach = radius - margin - 0.5 * std::hypot(h[1], h[2]);
+  std::unordered_set<std::uint32_t> outside;
+  for (std::size_t z = 0; z < labels.nz(); ++z)
+    for (std::size_t y = 0; y < labels.ny(); ++y)
+      for (std::size_t x = 0; x < labels.nx(); ++x) {
+        const std::uint32_t l = labels(z, y, x);
+        if (l == 0 || outside.count(l)) continue;
+        const Vec3 p = labels.position_xyz(double(z), double(y), double(x));
+        if (std::hypot(p[0] - axis_xy.x(), p[1] - axis_xy.y()) > reach) outside.insert(l);
+      }
+  std::unordered_set<std::uint32_t> inside;
+  for (const std::uint32_t l : labels.values())
+    if (l != 0 && !outside.count(l)) inside.insert(l);
+  return inside;
+}
+
 std::vector<fdem::Platen> end_platens(const fdem::SampleCylinder& s, double friction) {
   const Vec centre(s.axis_xy.x(), s.axis_xy.y(), 0.0);
   return {fdem::Platen{"bottom", centre + Vec(0, 0, s.z_min), Vec::UnitZ(), friction},

@@ -155,6 +155,15 @@ class ContactModel {
   ContactStepStats add_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
                               std::span<const PlatenState> platens, double dt,
                               std::span<Eigen::Vector3d> f, std::span<const RigidPose> poses = {});
+  /// The node contacts of the next add_forces() carry no force for the overlap they have then: each
+  /// keeps it as an offset, and its force acts on the overlap beyond it; the offset only shrinks
+  /// (to the overlap, as the contact opens) and ends with the contact. For twins of scanned grains,
+  /// whose meshes overlap slightly wherever the grains touch: the scan's contacts start in place
+  /// and force-free (fdemrun's [run] keep_initial_overlaps). `overlaps` (from overlaps() at the
+  /// positions of that step) are the grain pairs whose search must look deeper than usual (a tenth
+  /// of the smallest grain's smallest box side): for the rest of the run, to their depth and that
+  /// tenth beyond.
+  void keep_initial_overlaps(std::span<const Overlap> overlaps);
   /// Adds the cylinder wall's forces on the grains' surface nodes to f (call after add_forces of
   /// the same step). Deterministic for a given thread count.
   BoundaryContactStats add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,

@@ -23,6 +23,9 @@ struct OverlapOptions {
   double tolerance = 0.1;
   /// Move overlapping grains apart before the run instead of refusing the state.
   bool relax = false;
+  /// The overlaps the run starts with (within the tolerance) carry no force
+  /// (ContactModel::keep_initial_overlaps): a scanned twin's contacts start in place and at rest.
+  bool keep = false;
 };
 
 /// What settle_initial_overlaps found and did.
@@ -33,6 +36,7 @@ struct OverlapSettlement {
   std::size_t moved_grains = 0;
   double largest_move = 0;          ///< m, the longest translation of a grain
   double deepest_after = 0;         ///< m, the deepest overlap left after relaxation
+  std::vector<Overlap> remaining;   ///< the overlaps the run starts with (after any relaxation)
 };
 
 /// Checks the initial overlaps of `solver`'s grains with each other and with its platens, on the

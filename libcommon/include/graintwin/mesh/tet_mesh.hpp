@@ -4,10 +4,12 @@
 // validity of curved elements, its boundary surface; and how it joins an fdem::Model.
 #include <array>
 #include <cstdint>
+#include <unordered_set>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "graintwin/core/volume.hpp"
 #include "graintwin/fdem/model.hpp"
 #include "graintwin/mesh/surface.hpp"
 
@@ -61,6 +63,17 @@ void append_grain(fdem::Model& model, const TetMesh& mesh, std::uint32_t label, 
 /// The vertical cylinder around all nodes of `model`: axis through the mean node position (x, y),
 /// radius the largest node distance from it, z range of the nodes.
 fdem::SampleCylinder enclosing_cylinder(const fdem::Model& model, double membrane_thickness);
+
+/// The largest vertical cylinder inside a scan's box: a crop from inside a sample (the soil crop)
+/// has no sample cylinder in view, and the cylinder around its grains leaves the box's corners
+/// empty, which the wall must close before it confines anything. Axis through the middle of the
+/// volume's x-y extent, radius half its narrower side, z range the volume's (voxel faces).
+fdem::SampleCylinder inscribed_cylinder(const Volume<std::uint32_t>& labels, double membrane_thickness);
+
+/// The labels of `labels` whose voxels (as cubes) all lie within `radius` of the vertical axis
+/// through `axis_xy`, widened by `margin` (m): the grains a cylinder holds whole.
+std::unordered_set<std::uint32_t> labels_within(const Volume<std::uint32_t>& labels, const Eigen::Vector2d& axis_xy, double radius,
+                                                double margin);
 
 /// Rigid platens at the cylinder's ends: "bottom" at z_min facing +z, "top" at z_max facing -z.
 std::vector<fdem::Platen> end_platens(const fdem::SampleCylinder& sample, double friction);
