@@ -448,30 +448,32 @@ TEST(ContactModel, OverlapsOfTheMovedGrainsAloneAfterAnOverlapCheck) {
   EXPECT_THROW(contact.overlaps(x, platen, std::vector<std::uint8_t>{1}), DataError);
 }
 
+namespace {
+/// The upward contact force on pressed_cubes' cube in one step with it pushed `extra` further down.
+double upward_force_on_cube(const Model& m, ContactModel& contact, double extra) {
+  std::vector<Eigen::Vector3d> x = m.nodes;
+  for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) x[i].z() -= extra;
+  auto f = zeros(m.nodes.size());
+  contact.add_forces(x, zeros(m.nodes.size()), {}, 1e-9, f);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) sum += f[i];
+  return sum.z();
+}
+}  // namespace
+
 TEST(ContactModel, KeptInitialOverlapsCarryNoForceAndOnlyTheOverlapBeyondThemPushes) {
   // The cube starts 0.05 mm into the slab, as a scanned twin's grains overlap where they touch.
   const Model m = pressed_cubes(0.05 * kMm);
-  const auto force_on_cube = [&](ContactModel& contact, double extra) {
-    std::vector<Eigen::Vector3d> x = m.nodes;
-    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) x[i].z() -= extra;
-    auto f = zeros(m.nodes.size());
-    contact.add_forces(x, zeros(m.nodes.size()), {}, 1e-9, f);
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) sum += f[i];
-    return sum.z();
-  };
+  const auto force_on_cube = [&](ContactModel& contact, double extra) { return upward_force_on_cube(m, contact, extra); };
   ContactModel plain(m, unit_masses(m), {}), kept(m, unit_masses(m), {});
   kept.keep_initial_overlaps(kept.overlaps(m.nodes, {}));
   EXPECT_GT(force_on_cube(plain, 0.0), 0.0);
   EXPECT_EQ(force_on_cube(kept, 0.0), 0.0) << "the start's overlap is force-free";
   // Pressed 0.01 mm further: the kept contact pushes as a fresh one 0.01 mm deep does.
   const double pressed = force_on_cube(kept, 0.01 * kMm);
-  ContactModel fresh(pressed_cubes(0.01 * kMm), unit_masses(m), {});
-  auto f = zeros(m.nodes.size());
   const Model shallow = pressed_cubes(0.01 * kMm);
-  fresh.add_forces(shallow.nodes, zeros(m.nodes.size()), {}, 1e-9, f);
-  double expected = 0;
-  for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) expected += f[i].z();
+  ContactModel fresh(shallow, unit_masses(shallow), {});
+  const double expected = upward_force_on_cube(shallow, fresh, 0.0);
   EXPECT_NEAR(pressed, expected, 1e-9 * std::abs(expected));
   // Opened to 0.03 mm deep, the offset shrinks to it and stays there: back at the start's 0.05 mm the
   // contact pushes like a fresh 0.02 mm one.
@@ -489,15 +491,7 @@ TEST(ContactModel, KeptInitialOverlapsDeeperThanTheSearchAreFoundAndKept) {
   // where a scanned twin's meshes overlap by a couple of voxels. The pair's search looks deeper.
   const double start = 0.2 * kMm, further = 0.01 * kMm;
   const Model m = pressed_cubes(start);
-  const auto force_on_cube = [&](ContactModel& contact, double extra) {
-    std::vector<Eigen::Vector3d> x = m.nodes;
-    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) x[i].z() -= extra;
-    auto f = zeros(m.nodes.size());
-    contact.add_forces(x, zeros(m.nodes.size()), {}, 1e-9, f);
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (std::uint32_t i = m.grains[1].node_begin; i < m.grains[1].node_end; ++i) sum += f[i];
-    return sum.z();
-  };
+  const auto force_on_cube = [&](ContactModel& contact, double extra) { return upward_force_on_cube(m, contact, extra); };
   ContactModel kept(m, unit_masses(m), {});
   const std::vector<Overlap> overlaps = kept.overlaps(m.nodes, {});
   ASSERT_EQ(overlaps.size(), 1u);
@@ -511,10 +505,7 @@ TEST(ContactModel, KeptInitialOverlapsDeeperThanTheSearchAreFoundAndKept) {
   const double pressed = force_on_cube(kept, further);
   const Model shallow = pressed_cubes(further);
   ContactModel fresh(shallow, unit_masses(shallow), {});
-  auto f = zeros(shallow.nodes.size());
-  fresh.add_forces(shallow.nodes, zeros(shallow.nodes.size()), {}, 1e-9, f);
-  double expected = 0;
-  for (std::uint32_t i = shallow.grains[1].node_begin; i < shallow.grains[1].node_end; ++i) expected += f[i].z();
+  const double expected = upward_force_on_cube(shallow, fresh, 0.0);
   ASSERT_GT(expected, 0.0);
   EXPECT_GT(pressed, 0.5 * expected);
   EXPECT_LE(pressed, expected * (1 + 1e-9));
