@@ -17,6 +17,7 @@
 #include "graintwin/fdem/ellipsoid_grain.hpp"
 #include "graintwin/fdem/frames_vtk.hpp"
 #include "graintwin/fdem/initial_overlap.hpp"
+#include "graintwin/fdem/mass_scaling.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
@@ -202,6 +203,17 @@ int main(int argc, char** argv) {
       built.reset();
       built = std::make_unique<Solver>(model, options);
     }
+    // The grains that set the time step made heavier (scene [run] mass_scaled_share), on the
+    // settled model: the solver is built anew on their materials.
+    const MassScaling scaling = scale_fastest_grains(model, *built, scene.mass_scaled_share);
+    if (scaling.grains > 0) {
+      spdlog::info("mass scaling ([run] mass_scaled_share = {:g}): {} grains ({:.2g} % of the mass) made up to {:.3g} times denser; "
+                   "their contact step limit {:.4g} s lifted to {:.4g} s",
+                   scene.mass_scaled_share, scaling.grains, 100.0 * scaling.mass_share, scaling.largest_factor, scaling.step_before,
+                   scaling.step_after);
+      built.reset();
+      built = std::make_unique<Solver>(model, options);
+    }
     Solver& solver = *built;
     if (scene.overlaps.keep && solver.contact_model()) {
       solver.contact_model()->keep_initial_overlaps(settled.remaining);
@@ -249,7 +261,14 @@ int main(int argc, char** argv) {
                           {"relaxation_passes", settled.passes},
                           {"moved_grains", settled.moved_grains},
                           {"largest_move", settled.largest_move},
-                          {"deepest_after", settled.deepest_after}}}};
+                          {"deepest_after", settled.deepest_after}}},
+                        {"mass_scaling",
+                         {{"share", scene.mass_scaled_share},
+                          {"grains", scaling.grains},
+                          {"largest_factor", scaling.largest_factor},
+                          {"mass_share", scaling.mass_share},
+                          {"step_before", scaling.step_before},
+                          {"step_after", scaling.step_after}}}};
     ResultsWriter writer(out.temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());

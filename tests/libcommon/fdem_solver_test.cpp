@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/fdem/mass_scaling.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/solver.hpp"
 #include "graintwin/io/h5file.hpp"
@@ -171,4 +172,39 @@ TEST(FdemSolver, RigidGrainStressIsTheLoveWeberAverageOfItsContactForces) {
   Eigen::Matrix3d rest = sigma;
   rest(2, 2) = 0;
   EXPECT_LT(rest.cwiseAbs().maxCoeff(), 1e-6 * F / 1e-6);
+}
+
+TEST(FdemSolver, MassScalingLiftsTheFastestGrainsToTheNextGrainsStep) {
+  // Three 1 mm boxes, a 0.5 mm one and a 0.25 mm one, rigid: the smaller a box, the lighter its
+  // contact nodes for their stiffness and the shorter its step.
+  Model m;
+  for (int k = 0; k < 3; ++k)
+    add_grain(m, box_mesh(Eigen::Vector3d::Constant(1e-3), 0.25e-3), Eigen::Vector3d(3e-3 * k, 0, 0), GrainKind::rigid, 0, k + 1);
+  add_grain(m, box_mesh(Eigen::Vector3d::Constant(0.5e-3), 0.125e-3), Eigen::Vector3d(9e-3, 0, 0), GrainKind::rigid, 0, 4);
+  add_grain(m, box_mesh(Eigen::Vector3d::Constant(0.25e-3), 0.0625e-3), Eigen::Vector3d(12e-3, 0, 0), GrainKind::rigid, 0, 5);
+  const Solver before(m, {});
+  const std::vector<double> steps = before.contact_model()->grain_time_steps();
+  ASSERT_LT(steps[4], steps[3]);
+  ASSERT_LT(steps[3], steps[0]);
+  EXPECT_EQ(before.time_step_limits().contact_stable, steps[4]);
+  Model unscaled = m;
+  EXPECT_EQ(scale_fastest_grains(unscaled, before, 0.0).grains, 0u);
+  EXPECT_THROW(scale_fastest_grains(unscaled, before, 0.3), UsageError);
+  // A tenth of five grains is none.
+  EXPECT_EQ(scale_fastest_grains(unscaled, before, 0.1).grains, 0u);
+  EXPECT_EQ(unscaled.materials.size(), m.materials.size());
+  // A fifth is the smallest box, lifted to the 0.5 mm box's step.
+  const MassScaling scaling = scale_fastest_grains(m, before, 0.2);
+  ASSERT_EQ(scaling.grains, 1u);
+  EXPECT_EQ(scaling.scaled[0], 4u);
+  EXPECT_NEAR(scaling.factors[0], (steps[3] / steps[4]) * (steps[3] / steps[4]), 1e-12);
+  double total = 0;
+  for (std::size_t g = 0; g < 5; ++g) total += before.body(g).mass;
+  EXPECT_NEAR(scaling.mass_share, before.body(4).mass / total, 1e-12);
+  ASSERT_EQ(m.materials.size(), unscaled.materials.size() + 1);
+  EXPECT_EQ(m.grains[4].material, m.materials.size() - 1);
+  EXPECT_NEAR(m.materials.back().density, m.materials[0].density * scaling.factors[0], 1e-9);
+  const Solver after(m, {});
+  EXPECT_NEAR(after.time_step_limits().contact_stable, steps[3], 1e-9 * steps[3]);
+  EXPECT_NEAR(after.body(4).mass, before.body(4).mass * scaling.factors[0], 1e-12 * after.body(4).mass);
 }

@@ -293,9 +293,15 @@ std::span<const RigidLoad> ContactModel::rigid_loads() const { return state_->lo
 std::vector<ContactRecord> ContactModel::contacts() const { return state_->records; }
 
 double ContactModel::stable_time_step() const {
+  const std::vector<double> steps = grain_time_steps();
+  return steps.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(steps.begin(), steps.end());
+}
+
+std::vector<double> ContactModel::grain_time_steps() const {
   const State& s = *state_;
-  double dt = std::numeric_limits<double>::infinity();
+  std::vector<double> steps(s.grains.size(), std::numeric_limits<double>::infinity());
   for (std::uint32_t g = 0; g < s.grains.size(); ++g) {
+    double& dt = steps[g];
     const Material& m = s.material_of(g);
     const double beta = m.damping_ratio;
     for (std::uint32_t node : s.surface(g)) {
@@ -309,7 +315,7 @@ double ContactModel::stable_time_step() const {
       dt = std::min(dt, kTimeStepSafety * 2.0 / omega * (std::sqrt(1 + beta * beta) - beta));
     }
   }
-  return dt;
+  return steps;
 }
 
 std::size_t ContactModel::rebuild_count() const { return state_->rebuilds; }

@@ -232,7 +232,7 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
     const Table r(*run, file + ": [run]",
                   {"duration", "time_step", "element_safety", "rigid_contact_nodes", "gravity", "damping", "contact",
                    "frame_interval", "series_interval", "checkpoint_interval", "overlap_tolerance", "relax_overlaps",
-                   "keep_initial_overlaps", "max_steps"});
+                   "keep_initial_overlaps", "mass_scaled_share", "max_steps"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
     s.element_safety = r.positive("element_safety", 0.8);
@@ -252,6 +252,10 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
                          s.overlaps.tolerance));
     s.overlaps.relax = r.flag("relax_overlaps", false);
     s.overlaps.keep = r.flag("keep_initial_overlaps", false);
+    s.mass_scaled_share = r.number("mass_scaled_share", 0);
+    if (!(s.mass_scaled_share >= 0 && s.mass_scaled_share <= 0.2))
+      r.fail(fmt::format("mass_scaled_share must lie in [0, 0.2] (the share of grains whose density may be scaled; got {:g})",
+                         s.mass_scaled_share));
     s.max_steps = r.number("max_steps", s.max_steps);
     // Step counts stay exact in a double and an int64 below 1e15.
     if (!(s.max_steps >= 1 && s.max_steps <= 1e15))

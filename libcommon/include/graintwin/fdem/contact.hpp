@@ -203,6 +203,8 @@ class ContactModel {
   std::vector<ContactRecord> contacts() const;
   /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).
   double stable_time_step() const;
+  /// The same limit grain by grain (over each grain's surface nodes; infinity for a grain without).
+  std::vector<double> grain_time_steps() const;
   /// Number of broad-phase builds so far.
   std::size_t rebuild_count() const;
   /// The skin in use, m (options.skin or the automatic value).

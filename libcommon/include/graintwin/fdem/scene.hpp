@@ -106,6 +106,9 @@ struct Scene {
   double checkpoint_interval = 0;         ///< s between checkpoints; 0 = at the end only
   /// Initial overlaps (fdem/initial_overlap.hpp): [run] overlap_tolerance and relax_overlaps.
   OverlapOptions overlaps;
+  /// [run] mass_scaled_share: the share of the grains, those with the smallest contact time steps,
+  /// whose density is scaled so the step is the rest's (scale_fastest_grains); 0 = none.
+  double mass_scaled_share = 0;
   /// Most steps a run may take, estimated before it starts (check_step_ceiling); [run] max_steps.
   double max_steps = 1e7;
   double total_duration() const;

@@ -149,6 +149,7 @@ class Solver {
   void set_boundary(Boundary* boundary);
   /// Contact between the grains, platens and boundaries (nullptr when disabled).
   ContactModel* contact_model() { return contact_.get(); }
+  const ContactModel* contact_model() const { return contact_.get(); }
 
   StepLimits time_step_limits() const;
   /// UsageError with both limits when dt is not below the stable step (or not positive).
