@@ -220,10 +220,15 @@ TEST(FdemScene, MaterialsAndRunKeysOutOfTheirRangeAreRefusedWithTheRange) {
   EXPECT_NE(error_of(run("overlap_tolerance = 0.9\n")).find("overlap_tolerance must lie in [0.001, 0.5]"), std::string::npos);
   EXPECT_NE(error_of(run("relax_overlaps = 1\n")).find("relax_overlaps must be true or false"), std::string::npos);
   EXPECT_NE(error_of(run("max_steps = 1e16\n")).find("max_steps must lie in [1, 1e+15] (got 1e+16)"), std::string::npos);
+  EXPECT_NE(error_of(run("keep_initial_overlaps = 1\n")).find("keep_initial_overlaps must be true or false"), std::string::npos);
+  EXPECT_NE(error_of(run("mass_scaled_share = 0.5\n")).find("mass_scaled_share must lie in [0, 0.2]"), std::string::npos);
+  EXPECT_NE(error_of(run("mass_scaled_share = nan\n")).find("mass_scaled_share must"), std::string::npos);
   const Scene defaults = read_scene(run(""));
   EXPECT_EQ(defaults.overlaps.tolerance, 0.1);
   EXPECT_FALSE(defaults.overlaps.relax);
   EXPECT_EQ(defaults.max_steps, 1e7);
+  EXPECT_FALSE(defaults.overlaps.keep);
+  EXPECT_EQ(defaults.mass_scaled_share, 0.0);
   const Scene set = read_scene(run("overlap_tolerance = 0.1\nrelax_overlaps = true\nmax_steps = 5e8\n"));
   EXPECT_EQ(set.overlaps.tolerance, 0.1);
   EXPECT_TRUE(set.overlaps.relax);
