@@ -4,12 +4,17 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "graintwin/segment/labels.hpp"
+#include "graintwin/segment/labels_file.hpp"
 #include "support/cli_contract.hpp"
+#include "support/phantoms.hpp"
 
 using namespace graintwin;
 using test::run_tool;
@@ -134,21 +139,99 @@ TEST(Ctsynth, SphereAndEllipsoidScenes) {
 // Angular grains (sharp-edged polyhedra with dents and roughness) are packed and rendered: the scan
 // and truth are written, the truth holds every grain of the series, each grain's voxels match its
 // exact volume, and the grains are clearly less spherical than smooth sand.
-TEST(Ctsynth, AngularScene) {
+// Angular grains, a stated share of them with a pocket: none is round, the truth says what a radial
+// description misses of each (nothing for the others), and the scans' label counts match the grains'
+// true volumes.
+TEST(Ctsynth, AngularSceneWithAShareOfNonStarGrains) {
   test::TempDir dir;
   write_scene(dir / "scene.toml");
-  const fs::path out = dir / "angular";
+  const fs::path out = dir / "pocketed";
   const auto r = run_tool("ctsynth", {(dir / "scene.toml").string(), out.string(), "--strains", "0", "--grain-shape",
-                                      "angular", "-q"});
+                                      "angular", "--non-star-share", "0.5"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  ASSERT_TRUE(fs::exists(out / "scan_000.h5"));
-  const nlohmann::json series = nlohmann::json::parse(std::ifstream(out / "series.json"));
+  EXPECT_NE(r.err.find("grains are not star-shaped about their centroid"), std::string::npos) << r.err;
   const io::H5File truth = io::open_kind(out / "truth_000.h5", "ground_truth");
+  const auto multi = truth.read<double>("/grains/multi_exit_fraction");
+  const auto hidden = truth.read<double>("/grains/hidden_void_fraction");
+  const auto depth = truth.read<double>("/grains/reentry_depth");
+  ASSERT_EQ(hidden.size(), multi.size());
   const auto sph = truth.read<double>("/grains/sphericity");
   ASSERT_GT(sph.size(), 30u);
-  EXPECT_EQ(sph.size(), series["grains"].get<std::size_t>());
   for (std::size_t i = 0; i < sph.size(); ++i) EXPECT_LT(sph[i], 0.95) << "grain " << i;
-  expect_label_counts_match_volumes(truth, sph.size());
+  std::size_t pocketed = 0;
+  for (std::size_t i = 0; i < multi.size(); ++i) {
+    if (multi[i] == 0.0) {
+      EXPECT_EQ(hidden[i], 0.0);
+      EXPECT_EQ(depth[i], 0.0);
+      continue;
+    }
+    ++pocketed;
+    EXPECT_GT(depth[i], 35e-6) << "grain " << i + 1;  // deeper than a voxel
+  }
+  EXPECT_EQ(pocketed, (multi.size() + 1) / 2);
+  const nlohmann::json series = nlohmann::json::parse(std::ifstream(out / "series.json"));
+  EXPECT_GE(series["non_star_grains"].get<std::size_t>(), pocketed / 2);
+  expect_label_counts_match_volumes(truth, multi.size());
+}
+
+// A shape library from a segmented scan: two whole grains (one hollow, one a ball) and one cut by
+// the field of view, which is left out. The series is made of copies of the two, at their size,
+// and the truth measures the hollow one's cavity.
+TEST(Ctsynth, LibraryGrainsFromASegmentedScan) {
+  test::TempDir dir;
+  const double voxel = 2e-5;
+  segment::LabelsFile c;
+  c.labels = test::label_hollow_grain_and_ball(80, {voxel, voxel, voxel});
+  for (std::size_t z = 14; z < 27; ++z)  // label 3: a grain the field of view cuts
+    for (std::size_t y = 14; y < 27; ++y)
+      for (std::size_t x = 72; x < 80; ++x)
+        if (std::hypot(z - 20.0, y - 20.0, x - 79.0) <= 6.0) c.labels(z, y, x) = 3;
+  c.grains = segment::grain_table(c.labels);
+  c.parameters_json = "{}";
+  segment::write_labels_file(dir / "labels.h5", c, {"phantom labels"});
+  const auto measured = run_tool("labels2shapes", {(dir / "labels.h5").string(), (dir / "shapes.h5").string(), "-q"});
+  ASSERT_EQ(measured.exit_code, 0) << measured.err;
+  write_scene(dir / "scene.toml");
+  const fs::path out = dir / "library";
+  const auto r = run_tool("ctsynth", {(dir / "scene.toml").string(), out.string(), "--strains", "0", "--grain-shape",
+                                      "library", "--library", (dir / "shapes.h5").string(), "--library-labels",
+                                      (dir / "labels.h5").string(), "--container", "box", "--box", "1.5mm,1.5mm,1.5mm",
+                                      "--solid-fraction", "0.35", "--voxel-size", "20um", "--band", "none"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("drawn from a library of 2 (1 left out)"), std::string::npos) << r.err;
+  const io::H5File truth = io::open_kind(out / "truth_000.h5", "ground_truth");
+  const auto volume = truth.read<double>("/grains/volume");
+  const auto hidden = truth.read<double>("/grains/hidden_void_fraction");
+  ASSERT_GE(volume.size(), 6u);
+  const double v_hollow = (std::pow(15.0, 3) - std::pow(5.5, 3)) * 4.0 / 3.0 * std::numbers::pi * std::pow(voxel, 3);
+  const double v_ball = std::pow(12.0, 3) * 4.0 / 3.0 * std::numbers::pi * std::pow(voxel, 3);
+  const double cavity_share = std::pow(5.5, 3) / (std::pow(15.0, 3) - std::pow(5.5, 3));
+  std::size_t hollow_grains = 0;
+  for (std::size_t i = 0; i < volume.size(); ++i) {
+    if (std::abs(volume[i] / v_hollow - 1.0) < 0.05) {
+      ++hollow_grains;
+      EXPECT_NEAR(hidden[i] / cavity_share, 1.0, 0.15) << "grain " << i + 1;
+    } else {
+      EXPECT_NEAR(volume[i] / v_ball, 1.0, 0.05) << "grain " << i + 1;
+      EXPECT_EQ(hidden[i], 0.0) << "grain " << i + 1;
+    }
+  }
+  EXPECT_GT(hollow_grains, 0u);
+  EXPECT_LT(hollow_grains, volume.size());
+  // The cavity is rendered: the truth labels hold each grain's voxels without it.
+  const auto labels = io::read_image_as<std::uint32_t>(truth, "/labels");
+  std::vector<double> count(volume.size() + 1, 0.0);
+  for (auto l : labels.values()) count[l] += 1.0;
+  for (std::size_t i = 0; i < volume.size(); ++i)
+    EXPECT_NEAR(count[i + 1] * std::pow(voxel, 3) / volume[i], 1.0, 0.05) << "grain " << i + 1;
+  // The labels the shapes were not measured from are refused, naming both files.
+  for (auto& l : c.labels.values()) l = l == 1 ? 0 : l;
+  c.grains = segment::grain_table(c.labels);
+  segment::write_labels_file(dir / "other.h5", c, {"without grain 1"});
+  test::expect_clean_failure("ctsynth", dir,
+                             {(dir / "scene.toml").string(), (dir / "x").string(), "--grain-shape", "library",
+                              "--library", (dir / "shapes.h5").string(), "--library-labels", (dir / "other.h5").string()},
+                             2, "has no grain with label 1 of");
 }
 
 TEST(Ctsynth, OverfullSceneFailsClearlyAndWritesNothing) {
@@ -209,6 +292,10 @@ TEST(Ctsynth, OptionsOutsideTheirRangeAreRefusedBeforeAnyWork) {
   refused({"--angular-facets", "3,8"}, {"--angular-facets", "[4, 64]"});
   refused({"--angular-dent-depth", "0.5"}, {"--angular-dent-depth", "[0, 0.3]"});
   refused({"--grain-shape", "crushed"}, {"--grain-shape", "angular"});
+  refused({"--non-star-share", "1.5"}, {"--non-star-share", "[0, 1]"});
+  refused({"--non-star-share", "0.2"}, {"--non-star-share applies to angular grains only"});
+  refused({"--grain-shape", "library"}, {"--grain-shape library needs --library SHAPES.h5 and --library-labels LABELS.h5"});
+  refused({"--library", "shapes.h5"}, {"--library and --library-labels go with --grain-shape library"});
   refused({"--grey-scale", "1e12"}, {"--grey-scale", "(0, 1e+06]"});
   refused({"--grey-scale", "1e6"}, {"--grey-scale 1e+06", "65535", "at most 80713"});
   refused({"--grey-grain", "0.05"}, {"--grey-grain 0.05 is not above --grey-void 0.1"});

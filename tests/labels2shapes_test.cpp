@@ -187,15 +187,7 @@ TEST(Labels2shapes, OptionsOutsideTheirRangeAndFittersBeyondTheMemoryAreRefused)
 TEST(Labels2shapes, HollowGrainIsFlaggedWithItsMeasuresAndTheThresholdsAreOptions) {
   test::TempDir dir;
   segment::LabelsFile c;
-  c.labels = Volume<std::uint32_t>({40, 40, 72}, {kVoxel, kVoxel, kVoxel});
-  const Eigen::Vector3d hollow(19.7, 20.2, 19.9), cavity = hollow + Eigen::Vector3d(7.5, 0, 0), solid(52.3, 19.8, 20.1);
-  for (std::size_t z = 0; z < 40; ++z)
-    for (std::size_t y = 0; y < 40; ++y)
-      for (std::size_t x = 0; x < 72; ++x) {
-        const Eigen::Vector3d p{double(x), double(y), double(z)};
-        if ((p - hollow).norm() <= 15 && (p - cavity).norm() > 5.5) c.labels(z, y, x) = 1;
-        if ((p - solid).norm() <= 12) c.labels(z, y, x) = 2;
-      }
+  c.labels = test::label_hollow_grain_and_ball(72, {kVoxel, kVoxel, kVoxel});
   c.grains = segment::grain_table(c.labels);
   c.parameters_json = "{}";
   segment::write_labels_file(dir / "labels.h5", c, {"phantom labels"});

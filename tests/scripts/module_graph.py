@@ -19,7 +19,7 @@ DEPENDS = {
     "cli": {"core", "io"},
     "shape": {"core", "io"},
     "segment": {"core", "io"},
-    "synth": {"core", "io", "shape"},
+    "synth": {"core", "io", "shape", "segment"},
     "contacts": {"core", "io", "segment"},
     "track": {"core", "io", "shape"},
     "fdem": {"core", "io"},

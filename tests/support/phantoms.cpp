@@ -41,6 +41,19 @@ Volume<std::uint32_t> label_balls(Shape3 shape, const std::vector<Ball>& balls, 
   return l;
 }
 
+Volume<std::uint32_t> label_hollow_grain_and_ball(std::size_t nx, Vec3 voxel) {
+  Volume<std::uint32_t> l({40, 40, nx}, voxel);
+  const Ball hollow{19.9, 20.2, 19.7, 15.0}, cavity{19.9, 20.2, 27.2, 5.5}, ball{20.1, 19.8, 52.3, 12.0};
+  const auto inside = [](const Ball& b, long z, long y, long x) { return std::hypot(z - b.z, y - b.y, x - b.x) <= b.r; };
+  for (long z = 0; z < 40; ++z)
+    for (long y = 0; y < 40; ++y)
+      for (long x = 0; x < static_cast<long>(nx); ++x) {
+        if (inside(hollow, z, y, x) && !inside(cavity, z, y, x)) l(z, y, x) = 1;
+        if (inside(ball, z, y, x)) l(z, y, x) = 2;
+      }
+  return l;
+}
+
 std::vector<Ball> jittered_lattice(int n, double r, double step, double first, double jitter, double radius_jitter,
                                    std::uint32_t seed) {
   std::mt19937 rng(seed);

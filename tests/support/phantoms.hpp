@@ -30,6 +30,12 @@ std::vector<Ball> jittered_lattice(int n, double r, double step, double first, d
 Volume<float> scan_balls(Shape3 shape, const std::vector<Ball>& balls, std::uint32_t seed, double noise = 0.03,
                          Vec3 voxel = {1e-5, 1e-5, 1e-5});
 
+/// A grain that is not star-shaped beside one that is, 40 x 40 x `nx` voxels (nx >= 72): label 1 a
+/// ball of radius 15 at (19.9, 20.2, 19.7) (z, y, x) with an enclosed spherical cavity of radius
+/// 5.5 whose centre is 7.5 voxels along +x (its share of the grain: 5.5^3 / (15^3 - 5.5^3)), and
+/// label 2 a ball of radius 12 at (20.1, 19.8, 52.3).
+Volume<std::uint32_t> label_hollow_grain_and_ball(std::size_t nx, Vec3 voxel = {1e-5, 1e-5, 1e-5});
+
 /// Number of distinct non-zero labels.
 std::size_t count_labels(const Volume<std::uint32_t>& labels);
 

@@ -2,6 +2,8 @@
 // roughness as radial factors, centred on their true centroid (construction in the header).
 #include "graintwin/synth/angular_grains.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -16,6 +18,7 @@ namespace graintwin::synth {
 namespace {
 
 constexpr double kCentroidTolerance = 1e-6;  // of the volume-equivalent radius
+constexpr double kPocketedCentroidTolerance = 1e-3;  // the cavity's moments come from grid samples
 constexpr int kMaxCentringSteps = 30;
 constexpr int kMaxSpikeCuts = 64;
 constexpr int kSpikeDirections = 8000;  // spacing about 0.04 rad: the spike test's direction set
@@ -86,6 +89,74 @@ void draw_planes(const AngularShapeParams& p, const Core& core, std::mt19937_64&
   }
 }
 
+// Volume and first moment of the part of the table's body inside the cavities (each cavity's
+// bounding cube sampled on a grid of kPocketSamples points per edge; the cavities of a grain do
+// not overlap).
+constexpr int kPocketSamples = 40;
+struct Moments {
+  double volume = 0.0;
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+};
+Moments pocket_moments(const shape::RadialTable& t, const std::vector<Pocket>& pockets) {
+  Moments m;
+  for (const Pocket& k : pockets) {
+    const double half = k.bound(), h = 2.0 * half / kPocketSamples, cell = h * h * h;
+    for (int a = 0; a < kPocketSamples; ++a)
+      for (int b = 0; b < kPocketSamples; ++b)
+        for (int c = 0; c < kPocketSamples; ++c) {
+          const Eigen::Vector3d p = k.centre + Eigen::Vector3d((a + 0.5) * h - half, (b + 0.5) * h - half, (c + 0.5) * h - half);
+          if (!k.contains(p) || p.norm() >= t.radius(p)) continue;
+          m.volume += cell;
+          m.first += cell * p;
+        }
+  }
+  return m;
+}
+
+// The grain's body: the table less its cavities.
+Moments body_moments(const shape::RadialTable& t, const std::vector<Pocket>& pockets) {
+  const Moments cut = pocket_moments(t, pockets);
+  return {t.volume() - cut.volume, t.volume() * t.centroid() - cut.first};
+}
+
+// Places one undercut below the surface of a centred table (step 6 of the header): at a random
+// direction where the grain is at least as wide as its volume-equivalent radius, tilted towards a
+// random tangent. Kept only if its top rim opens through the surface on one side and lies under
+// the surface on at least half of it (an overhang, not a shallow scoop), and it stays 0.3 r_eq off
+// the centre. False if none of kPocketTries draws qualifies.
+constexpr int kPocketTries = 100;
+constexpr int kRimPoints = 24;
+bool add_undercut(const AngularShapeParams& p, const shape::RadialTable& t, std::mt19937_64& rng, AngularGrain& g) {
+  std::uniform_real_distribution<double> spread(0.85, 1.15), tilt_spread(-5.0, 5.0);
+  const double r_eq = std::cbrt(3.0 * t.volume() / (4.0 * std::numbers::pi));
+  const auto inside = [&](const Eigen::Vector3d& x) { return x.norm() < t.radius(x); };
+  for (int k = 0; k < kPocketTries; ++k) {
+    const Eigen::Vector3d u = random_direction(rng);
+    Pocket c;
+    c.radius = p.undercut_radius * spread(rng) * r_eq;
+    c.half_height = 0.5 * p.undercut_height * spread(rng) * r_eq;
+    const double depth = p.undercut_depth * spread(rng) * r_eq;
+    const double tilt = (p.undercut_tilt_deg + tilt_spread(rng)) * std::numbers::pi / 180.0;
+    const Eigen::Vector3d side = random_direction(rng);
+    const double surface = t.radius(u);
+    const Eigen::Vector3d n = t.surface_normal(u);
+    const Eigen::Vector3d tangent = (side - side.dot(n) * n).normalized();
+    c.axis = std::cos(tilt) * n + std::sin(tilt) * tangent;
+    c.centre = surface * u - depth * n;
+    if (surface < r_eq || c.outside_level(Eigen::Vector3d::Zero()) < 0.3 * r_eq) continue;
+    const Eigen::Vector3d e1 = c.axis.unitOrthogonal(), e2 = c.axis.cross(e1);
+    int covered = 0;
+    for (int j = 0; j < kRimPoints; ++j) {
+      const double a = 2.0 * std::numbers::pi * j / kRimPoints;
+      covered += inside(c.centre + c.half_height * c.axis + c.radius * (std::cos(a) * e1 + std::sin(a) * e2));
+    }
+    if (covered == kRimPoints || 2 * covered < kRimPoints) continue;
+    g.pockets.push_back(c);
+    return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void validate(const AngularShapeParams& p) {
@@ -101,6 +172,14 @@ void validate(const AngularShapeParams& p) {
   require(p.dent_width > 0.0 && p.dent_width <= 1.0, "the dent width must be in (0, 1] rad");
   require(p.roughness >= 0.0 && p.roughness <= 0.05,
           "the roughness must be in [0, 0.05] of the radius (got " + std::to_string(p.roughness) + ")");
+  require(p.undercut_radius >= 0.2 && p.undercut_radius <= 1.0,
+          "the undercut radius must be in [0.2, 1] of the radius (got " + std::to_string(p.undercut_radius) + ")");
+  require(p.undercut_height >= 0.1 && p.undercut_height <= 0.6,
+          "the undercut height must be in [0.1, 0.6] of the radius (got " + std::to_string(p.undercut_height) + ")");
+  require(p.undercut_depth >= 0.1 && p.undercut_depth <= 0.8,
+          "the undercut depth must be in [0.1, 0.8] of the radius (got " + std::to_string(p.undercut_depth) + ")");
+  require(p.undercut_tilt_deg >= 5.0 && p.undercut_tilt_deg <= 60.0,
+          "the undercut tilt must be in [5, 60] degrees (got " + std::to_string(p.undercut_tilt_deg) + ")");
   require(p.roughness_from_degree >= 2 && p.roughness_degree >= p.roughness_from_degree && p.roughness_degree <= 64,
           "the roughness degrees must satisfy 2 <= from <= max <= 64 (got " + std::to_string(p.roughness_from_degree) +
               ", " + std::to_string(p.roughness_degree) + ")");
@@ -156,11 +235,17 @@ void AngularGrain::move_origin(const Eigen::Vector3d& shift) {
     if (!(offsets[k] > 0.0))
       throw DataError("angular grain: moving the origin by the centroid offset left it outside the polyhedron");
   }
+  for (Pocket& k : pockets) {
+    k.centre -= shift;
+    if (k.contains(Eigen::Vector3d::Zero()))
+      throw DataError("angular grain: moving the origin by the centroid offset put it in the cavity");
+  }
 }
 
 void AngularGrain::scale(double s) {
   if (!(s > 0.0 && std::isfinite(s))) throw UsageError("AngularGrain::scale needs a finite factor > 0");
   for (double& h : offsets) h *= s;
+  for (Pocket& k : pockets) k.centre *= s, k.radius *= s, k.half_height *= s;
 }
 
 std::vector<double> AngularGrain::modulation_at_nodes(int n) const {
@@ -181,7 +266,7 @@ shape::RadialTable AngularGrain::table(int n, const std::vector<double>* modulat
 }
 
 AngularGrain random_angular_grain(const AngularShapeParams& p, std::mt19937_64& rng, int n,
-                                  shape::RadialTable* table) {
+                                  shape::RadialTable* table, bool pocketed) {
   validate(p);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -215,25 +300,31 @@ AngularGrain random_angular_grain(const AngularShapeParams& p, std::mt19937_64& 
     }
     const std::vector<double> modulation = g.modulation_at_nodes(n);
     if (std::any_of(modulation.begin(), modulation.end(), [](double m) { return !(m > 0.0); })) continue;
-    // The planes move until the centroid of the whole body is the origin; the modulation, a
-    // function of the direction about the origin, stays. Each step removes most of the offset.
+    // The planes (and the cavity) move until the centroid of the whole body is the origin; the
+    // modulation, a function of the direction about the origin, stays. Each step removes most of
+    // the offset. An undercut is placed once the body without it is centred.
     shape::RadialTable t;
     bool centred = false;
     try {
       for (int step = 0; step < kMaxCentringSteps && !centred; ++step) {
         t = g.table(n, &modulation);
-        const double r_eq = std::cbrt(3.0 * t.volume() / (4.0 * std::numbers::pi));
-        if (t.centroid().norm() <= kCentroidTolerance * r_eq) {
-          centred = true;
+        const Moments body = body_moments(t, g.pockets);
+        const Eigen::Vector3d centroid = body.first / body.volume;
+        const double r_eq = std::cbrt(3.0 * body.volume / (4.0 * std::numbers::pi));
+        const double tolerance = g.pockets.empty() ? kCentroidTolerance : kPocketedCentroidTolerance;
+        if (centroid.norm() > tolerance * r_eq) {
+          g.move_origin(centroid);
+        } else if (pocketed && g.pockets.empty()) {
+          if (!add_undercut(p, t, rng, g)) break;
         } else {
-          g.move_origin(t.centroid());
+          centred = true;
         }
       }
     } catch (const DataError&) {
       continue;  // an unbounded direction the spike test missed, or the origin left the body: redraw
     }
     if (!centred) continue;
-    const double s = 1.0 / std::cbrt(3.0 * t.volume() / (4.0 * std::numbers::pi));
+    const double s = 1.0 / std::cbrt(3.0 * body_moments(t, g.pockets).volume / (4.0 * std::numbers::pi));
     g.scale(s);
     if (table) *table = t.scaled(s);
     return g;

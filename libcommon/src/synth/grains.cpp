@@ -1,12 +1,16 @@
 #include "graintwin/synth/grains.hpp"
 
 #include <Eigen/QR>
+#include <algorithm>
 #include <atomic>
-#include <memory>
 #include <cmath>
+#include <memory>
+#include <numbers>
+#include <numeric>
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/sh_fitter.hpp"
 
@@ -17,12 +21,37 @@ GrainShape parse_grain_shape(const std::string& name) {
   if (name == "ellipsoid") return GrainShape::ellipsoid;
   if (name == "sand") return GrainShape::sand;
   if (name == "angular") return GrainShape::angular;
-  throw UsageError("--grain-shape '" + name + "' is not one of sphere, ellipsoid, sand, angular");
+  if (name == "library") return GrainShape::library;
+  throw UsageError("--grain-shape '" + name + "' is not one of sphere, ellipsoid, sand, angular, library");
 }
 
 std::vector<const shape::RadialTable*> GrainSet::table_pointers() const {
   std::vector<const shape::RadialTable*> out;
   for (const auto& t : tables) out.push_back(&t);
+  return out;
+}
+
+std::vector<const GrainSolid*> GrainSet::solid_pointers() const {
+  std::vector<const GrainSolid*> out(tables.size(), nullptr);
+  for (std::size_t i = 0; i < solids.size(); ++i) out[i] = solids[i].get();
+  return out;
+}
+
+SolidGrainRecord solid_grain_record(const GrainSolid& solid, shape::RadialTable hull, const shape::ShFitter& fitter,
+                                    double resolution) {
+  SolidGrainRecord out;
+  const double r_hull = std::cbrt(3.0 * hull.volume() / (4.0 * std::numbers::pi));
+  out.stats = solid_stats(solid, std::min(r_hull / 30.0, 2.0 * resolution));
+  const double r_eq = 0.5 * out.stats.equivalent_diameter;
+  const double step = std::min(r_eq / 100.0, resolution);
+  const auto& dirs = fitter.directions();
+  Eigen::VectorXd radii(static_cast<Eigen::Index>(dirs.size()));
+  for (std::size_t k = 0; k < dirs.size(); ++k) radii[static_cast<Eigen::Index>(k)] = ray_exits(solid, dirs[k], step).last;
+  out.coeffs = fitter.fit(radii);
+  const Eigen::VectorXd residual = fitter.design() * out.coeffs - radii;
+  out.sh_fit_rms = std::sqrt(residual.squaredNorm() / static_cast<double>(residual.size())) / r_eq;
+  out.non_star = non_star_measures(solid, out.stats.volume, step);
+  out.table = std::move(hull);
   return out;
 }
 
@@ -33,22 +62,6 @@ int table_nodes(double radius_vox) {
   return std::clamp(static_cast<int>(std::ceil(std::sqrt(27.0 * radius_vox / 0.02))), 32, 160);
 }
 
-// Runs make(i) for every grain in parallel; the first exception is rethrown after the loop (an
-// exception must not leave an OpenMP region).
-template <class F>
-void for_each_grain(std::size_t n, F&& make) {
-  std::exception_ptr failure;
-#pragma omp parallel for schedule(dynamic)
-  for (std::size_t i = 0; i < n; ++i) {
-    try {
-      make(i);
-    } catch (...) {
-#pragma omp critical(grain_failure)
-      if (!failure) failure = std::current_exception();
-    }
-  }
-  if (failure) std::rethrow_exception(failure);
-}
 }  // namespace
 
 double grain_bytes(double diameter, double voxel_size, int degree) {
@@ -60,6 +73,11 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
                      const std::function<void(double)>& progress) {
   if (p.aspect_ratio < 1.0) throw UsageError("aspect-ratio must be at least 1");
   if (p.shape == GrainShape::angular) validate(p.angular);
+  if (p.shape == GrainShape::library) throw UsageError("library grains are made by make_library_grains, not make_grains");
+  if (!(p.non_star_share >= 0.0 && p.non_star_share <= 1.0))
+    throw UsageError("the share of grains that are not star-shaped must be in [0, 1]");
+  if (p.non_star_share > 0.0 && p.shape != GrainShape::angular)
+    throw UsageError("only angular grains can be drawn not star-shaped (give --grain-shape angular)");
   const int degree = p.sand.degree;
   const std::size_t n = diameters.size();
   GrainSet set;
@@ -83,8 +101,28 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
     fitter = std::make_unique<const shape::ShFitter>(degree);
     set.sh_fit_rms.resize(n);
   }
+  // The grains drawn with a pocket: round(share n) of them, by a shuffle of their own stream, so
+  // that the others are the same grains as without pockets.
+  std::vector<bool> pocketed(n, false);
+  if (p.non_star_share > 0.0) {
+    std::vector<std::size_t> order(n);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::mt19937_64 pick(p.seed * 0xD1B54A32D192ED03ull + 17);
+    std::shuffle(order.begin(), order.end(), pick);
+    const auto count = static_cast<std::size_t>(std::llround(p.non_star_share * static_cast<double>(n)));
+    for (std::size_t k = 0; k < count; ++k) pocketed[order[k]] = true;
+    set.solids.resize(n);
+  }
+  set.non_star.resize(n);
   std::atomic<std::size_t> done{0};
-  for_each_grain(n, [&](std::size_t i) {
+  auto report_done = [&] {
+    const std::size_t d = ++done;
+    if (progress) {
+#pragma omp critical(grain_progress)
+      progress(static_cast<double>(d) / static_cast<double>(n));
+    }
+  };
+  parallel_for_each_index(n, [&](std::size_t i) {
     const double r = 0.5 * diameters[i];
     const int nodes = table_nodes(r / p.voxel_size);
     Eigen::VectorXd c;
@@ -95,9 +133,23 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
       t = shape::radial_table_from_sh(c, degree, nodes);
     } else if (p.shape == GrainShape::angular) {
       std::mt19937_64 rng(p.seed * 0x9E3779B97F4A7C15ull + i);
-      AngularGrain g = random_angular_grain(p.angular, rng, nodes, &t);
+      AngularGrain g = random_angular_grain(p.angular, rng, nodes, &t, pocketed[i]);
       g.scale(r);
       t = t.scaled(r);
+      if (!g.pockets.empty()) {
+        // The body without its pocket is the hull: convex around the pocket, it packs like the
+        // star-shaped grains (a hull with a well down the pocket's mouth jams the packer).
+        auto solid = std::make_shared<const PocketedGrain>(t, g.pockets);
+        SolidGrainRecord record = solid_grain_record(*solid, std::move(t), *fitter, p.voxel_size / 4.0);
+        set.coeffs_body.row(static_cast<Eigen::Index>(i)) = record.coeffs.transpose();
+        set.sh_fit_rms[i] = record.sh_fit_rms;
+        set.stats[i] = record.stats;
+        set.non_star[i] = record.non_star;
+        set.tables[i] = std::move(record.table);
+        set.solids[i] = std::move(solid);
+        report_done();
+        return;
+      }
       const auto& dirs = fitter->directions();
       Eigen::VectorXd radii(static_cast<Eigen::Index>(dirs.size()));
       for (std::size_t k = 0; k < dirs.size(); ++k) radii[static_cast<Eigen::Index>(k)] = g.radius(dirs[k]);
@@ -114,11 +166,7 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
     set.coeffs_body.row(static_cast<Eigen::Index>(i)) = c.transpose();
     set.stats[i] = shape::shape_stats(t);
     set.tables[i] = std::move(t);
-    const std::size_t d = ++done;
-    if (progress) {
-#pragma omp critical(grain_progress)
-      progress(static_cast<double>(d) / static_cast<double>(n));
-    }
+    report_done();
   });
   return set;
 }
@@ -129,7 +177,7 @@ std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree,
                      std::to_string(set.sh_degree) + ", the grains' SH degree");
   std::vector<shape::RadialTable> out(set.tables.size());
   const Eigen::Index kept = shape::sh_count(degree);
-  for_each_grain(out.size(), [&](std::size_t i) {
+  parallel_for_each_index(out.size(), [&](std::size_t i) {
     const Eigen::VectorXd c = set.coeffs_body.row(static_cast<Eigen::Index>(i)).head(kept).transpose();
     out[i] = shape::radial_table_from_sh(c, degree, table_nodes(0.5 * set.diameters[i] / voxel_size));
   });

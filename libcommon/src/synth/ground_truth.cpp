@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "graintwin/core/error.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
@@ -10,11 +11,29 @@
 
 namespace graintwin::synth {
 
+namespace {
+// Whether the solid (null: its hull is the grain) holds a point within `depth` of world point
+// `point` along unit `inward`.
+bool solid_near(const GrainSolid* solid, const PackedGrain& pose, const Eigen::Vector3d& point,
+                const Eigen::Vector3d& inward, double depth) {
+  if (!solid) return true;
+  constexpr int kSamples = 16;
+  const Eigen::Matrix3d world_to_body = pose.orientation.normalized().toRotationMatrix().transpose();
+  for (int k = 0; k <= kSamples; ++k)
+    if (solid->contains(world_to_body * (point + (depth * k / kSamples) * inward - pose.position))) return true;
+  return false;
+}
+}  // namespace
+
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
                                        const std::vector<PackedGrain>& poses, double search_gap, double tolerance,
-                                       bool separating) {
+                                       bool separating, const std::vector<const GrainSolid*>& solids) {
+  if (!solids.empty() && solids.size() != shapes.size())
+    throw UsageError("true_contacts: give one solid (or null) per grain, or none");
   const std::vector<GrainContact> found = find_contacts(shapes, poses, search_gap);
   std::vector<TrueContact> out(found.size());
+  std::vector<std::uint8_t> real(found.size(), 1);
+  const double depth = std::max(search_gap, 2.0 * tolerance);
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < found.size(); ++k) {
     const GrainContact& c = found[k];
@@ -31,7 +50,14 @@ std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTabl
     t.point = pc.point;
     t.normal = pc.normal;
     t.touching = std::abs(t.overlap) <= tolerance;
+    if (!solids.empty())
+      real[k] = solid_near(solids[c.a], poses[c.a], t.point, -t.normal, depth) &&
+                solid_near(solids[c.b], poses[c.b], t.point, t.normal, depth);
   }
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < out.size(); ++k)
+    if (real[k]) out[kept++] = out[k];
+  out.resize(kept);
   return out;
 }
 
@@ -87,6 +113,15 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
   f.write("/sh/coeffs", cw.data(), {n, ncoef}, with_units("m"));
   f.write("/sh/coeffs_body", cb.data(), {n, ncoef}, with_units("m"));
   f.write("/sh/invariants", inv.data(), {n, static_cast<hsize_t>(inv.cols())}, with_units("m"));
+  if (!t.non_star.empty()) {
+    const auto& ns = t.non_star;
+    f.write("/grains/multi_exit_fraction",
+            rows(n, 1, [&](std::size_t i, int) { return ns[i].multi_exit_fraction; }), with_units("1"));
+    f.write("/grains/hidden_void_fraction",
+            rows(n, 1, [&](std::size_t i, int) { return ns[i].hidden_void_fraction; }), with_units("1"));
+    f.write("/grains/reentry_depth", rows(n, 1, [&](std::size_t i, int) { return ns[i].reentry_depth; }),
+            with_units("m"));
+  }
   f.set_attr("/sh/coeffs", "degree", static_cast<long long>(t.sh_degree));
   f.set_attr("/sh/coeffs", "basis",
              std::string("real orthonormal, index n*n+n+m, no Condon-Shortley phase (graintwin/shape/sh_basis.hpp)"));

@@ -110,7 +110,7 @@ double secant_fraction(const shape::RadialTable& t, const Eigen::Vector3d& q, co
 struct GrainPrep {
   Eigen::Matrix3d world_to_body;
   Eigen::Vector3d position;
-  std::vector<Eigen::Vector3d> body_offsets;  // point-sample offsets in the body frame (supersample > 0)
+  std::vector<Eigen::Vector3d> body_offsets;  // point-sample offsets in the body frame (supersample > 0 or a solid)
   SecantFrame secant;                         // analytic partial volume (supersample 0)
   double threshold = 0.0;                     // |radial distance| beyond which a voxel is whole
   double reach = 0.0;                         // voxel centres farther from the grain centre are empty
@@ -175,7 +175,8 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
   const double half_diagonal =
       0.5 * std::sqrt(voxel_size[0] * voxel_size[0] + voxel_size[1] * voxel_size[1] + voxel_size[2] * voxel_size[2]);
   const bool analytic = params.supersample == 0;
-  const auto offsets = analytic ? std::vector<Eigen::Vector3d>{} : subsample_offsets(params.supersample, voxel_size);
+  // Solids are point-sampled even in analytic mode: a pocket's rim has no single secant plane.
+  const auto offsets = subsample_offsets(analytic ? 4 : params.supersample, voxel_size);
   const Eigen::Vector3d edges(voxel_size[2], voxel_size[1], voxel_size[0]);
   const double gauss = 0.5 / std::sqrt(3.0);
 
@@ -186,8 +187,10 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
     GrainPrep& p = prep[g];
     p.world_to_body = pg.orientation.normalized().toRotationMatrix().transpose();
     p.position = pg.position;
-    p.body_offsets.reserve(offsets.size());
-    for (const auto& o : offsets) p.body_offsets.push_back(p.world_to_body * o);
+    if (!analytic || pg.solid) {
+      p.body_offsets.reserve(offsets.size());
+      for (const auto& o : offsets) p.body_offsets.push_back(p.world_to_body * o);
+    }
     if (analytic) {
       SecantFrame& f = p.secant;
       f.body_to_world = p.world_to_body.transpose();
@@ -219,7 +222,7 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
   for (std::size_t g = 0; g < grains.size(); ++g)
     for (long z = prep[g].z0; z <= prep[g].z1; ++z) per_slice[z].push_back(static_cast<std::uint32_t>(g));
 
-  const double inv_samples = analytic ? 0.0 : 1.0 / static_cast<double>(offsets.size());
+  const double inv_samples = 1.0 / static_cast<double>(offsets.size());
   std::size_t slices_done = 0;
 #pragma omp parallel
   {
@@ -246,7 +249,16 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
                                       (Eigen::Vector3d(origin[2] + static_cast<double>(x) * voxel_size[2], wy, wz) - p.position);
             const double dist = q.norm();
             double s, f = 1.0;  // s: radial depth of the centre inside the grain
-            if (dist < p.core) {
+            const GrainSolid* solid = grains[g].solid;
+            if (solid && solid->may_differ_from_hull(q, half_diagonal)) {
+              s = dist > 0.0 ? t.radius(q) - dist : t.radius(Eigen::Vector3d::UnitZ());
+              if (s < -p.threshold) continue;
+              int inside = 0;
+              for (const auto& o : p.body_offsets) inside += solid->contains(q + o);
+              f = inside * inv_samples;
+              // The hull's depth ranks the voxel against other grains, where the solid holds its centre.
+              s = solid->contains(q) ? std::max(s, 1e-12) : -1.0;
+            } else if (dist < p.core) {
               s = t.min_radius() - dist;  // a lower bound, enough to rank it against other grains
             } else {
               s = dist > 0.0 ? t.radius(q) - dist : t.radius(Eigen::Vector3d::UnitZ());

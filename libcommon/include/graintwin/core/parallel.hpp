@@ -4,6 +4,7 @@
 // memory and merge time per thread for no speed-up, and Eigen's parallel products, which wait by
 // spinning, slow down many times over.
 #include <cstddef>
+#include <exception>
 
 namespace graintwin {
 
@@ -25,5 +26,22 @@ class EigenThreadCap {
  private:
   int saved_ = 0;  ///< 0: Eigen followed OpenMP's thread count
 };
+
+/// Runs work(i) for i in 0..n-1 in parallel (OpenMP, dynamic schedule); the first exception thrown
+/// is rethrown after the loop, since an exception must not leave an OpenMP region.
+template <class Work>
+void parallel_for_each_index(std::size_t n, Work&& work) {
+  std::exception_ptr failure;
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t i = 0; i < n; ++i) {
+    try {
+      work(i);
+    } catch (...) {
+#pragma omp critical(parallel_for_each_failure)
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
 
 }  // namespace graintwin

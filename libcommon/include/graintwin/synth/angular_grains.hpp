@@ -15,8 +15,15 @@
 //  5. the planes are shifted until the centroid of the whole body (dents and roughness included)
 //     is at the origin, then everything is scaled to the drawn volume-equivalent radius.
 // A convex polyhedron containing its centroid is star-shaped about it, and the dents and
-// roughness are multiplicative radial factors, so r is exact and single-valued: every grain of
-// this family is star-shaped about its centroid (none is non-star). Multiplicative factors keep
+// roughness are multiplicative radial factors, so r is exact and single-valued: these grains are
+// star-shaped about their centroid. A grain drawn with an undercut (step 6) is not:
+//  6. a flat cylindrical cavity (radius undercut_radius, height undercut_height, both x r_eq) is
+//     removed with its centre undercut_depth x r_eq below a surface point, its axis tilted from the
+//     surface normal there by undercut_tilt, so that its raised side opens through the surface and
+//     the rest lies under a roof of grain. Rays through the roof leave the grain, cross the cavity
+//     and re-enter; r then describes the grain without its cavity (solid_grains.hpp:
+//     PocketedGrain), and the centring of step 5 includes the cavity.
+// Multiplicative factors keep
 // the polyhedron's edges as sharp kinks, and the table is sampled from r itself (never from a
 // truncated SH sum), so the rendered scan has sharp edges.
 #include <Eigen/Core>
@@ -24,6 +31,7 @@
 #include <vector>
 
 #include "graintwin/shape/radial_table.hpp"
+#include "graintwin/synth/solid_grains.hpp"
 
 namespace graintwin::synth {
 
@@ -42,6 +50,15 @@ struct AngularShapeParams {
   double roughness = 0.01;         ///< RMS of rho (relative radius), in [0, 0.05]
   int roughness_from_degree = 8;   ///< lowest SH degree of the roughness, >= 2
   int roughness_degree = 32;       ///< highest SH degree of the roughness, >= roughness_from_degree, <= 64
+  /// Grains drawn with an undercut (random_angular_grain's `pocketed`), over the grain's
+  /// volume-equivalent radius and each grain 0.85-1.15 x these: the cavity's radius, in [0.2, 1] ...
+  double undercut_radius = 0.6;
+  /// ... its height, in [0.1, 0.6] ...
+  double undercut_height = 0.35;
+  /// ... the depth of its centre below the surface, in [0.1, 0.8] ...
+  double undercut_depth = 0.35;
+  /// ... and the tilt of its axis from the surface normal (degrees, +-5 per grain), in [5, 60].
+  double undercut_tilt_deg = 35.0;
 };
 
 /// UsageError naming the field and its allowed range if a parameter is out of range.
@@ -57,6 +74,7 @@ struct AngularGrain {
     double width = 0.0;    ///< angular radius (rad)
   };
   std::vector<Dent> dents;
+  std::vector<Pocket> pockets;  ///< cavities removed (m, body frame); empty for a star-shaped grain
   int roughness_degree = 0;
   Eigen::VectorXd roughness;  ///< SH coefficients of rho (sh_basis.hpp convention), degree roughness_degree; empty: none
 
@@ -73,8 +91,8 @@ struct AngularGrain {
   /// one sees (drawn planes that lie wholly outside the polyhedron do not count).
   int visible_facets(const std::vector<Eigen::Vector3d>& directions) const;
 
-  /// The grain translated by -shift (its planes move; dents and roughness stay functions of the
-  /// direction about the new origin) and scaled by `scale` (> 0) about the new origin.
+  /// The grain translated by -shift (its planes and pockets move; dents and roughness stay functions
+  /// of the direction about the new origin) and scaled by `scale` (> 0) about the new origin.
   void move_origin(const Eigen::Vector3d& shift);
   void scale(double s);
 
@@ -88,9 +106,12 @@ struct AngularGrain {
 
 /// A random angular grain (AngularShapeParams), its centroid at the origin (the centroid of its
 /// table at n nodes per edge, to 1e-6 of its volume-equivalent radius) and its volume-equivalent
-/// radius 1 m (of that table); `table` receives the table at n nodes. Deterministic for a given
-/// rng state. Throws UsageError for invalid parameters.
+/// radius 1 m (of that table); `table` receives the table at n nodes. With `pocketed` the grain
+/// has one undercut (step 6) and is not star-shaped: its centroid and volume are those of the table
+/// less the cavity (to about 1e-3 of the radius and of the volume, from the cavity sampled on a
+/// grid), and the table is its body without the cavity. Deterministic for a given rng state. Throws UsageError for
+/// invalid parameters.
 AngularGrain random_angular_grain(const AngularShapeParams& p, std::mt19937_64& rng, int n,
-                                  shape::RadialTable* table = nullptr);
+                                  shape::RadialTable* table = nullptr, bool pocketed = false);
 
 }  // namespace graintwin::synth

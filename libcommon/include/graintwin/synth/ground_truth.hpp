@@ -12,6 +12,7 @@
 #include "graintwin/core/volume.hpp"
 #include "graintwin/shape/radial_table.hpp"
 #include "graintwin/synth/packing.hpp"
+#include "graintwin/synth/solid_grains.hpp"
 
 namespace graintwin::synth {
 
@@ -35,9 +36,14 @@ struct TrueContact {
 /// of a 2.4 mm cylinder), the kernel's being the local bump's and the separating one that of the
 /// local hulls, and earlier accuracy figures were measured against the kernel's. Parallel and
 /// deterministic (sorted by (low, high)).
+/// Grains that are not star-shaped (`solids`, null or one per grain, null where the table is the
+/// grain) are searched through their hulls; a contact on a hull is kept only where the solid is
+/// there: within max(search_gap, 2 tolerance) inward of the contact point along the normal, so a
+/// neighbour that touches the lid the hull puts over a pocket or a cavity is not in contact.
 std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTable*>& shapes,
                                        const std::vector<PackedGrain>& poses, double search_gap,
-                                       double tolerance, bool separating = false);
+                                       double tolerance, bool separating = false,
+                                       const std::vector<const GrainSolid*>& solids = {});
 
 /// Everything written to one truth_NNN.h5.
 struct GroundTruth {
@@ -58,6 +64,8 @@ struct GroundTruth {
   Eigen::MatrixXd sh_coeffs_body;            ///< N x (L+1)^2, body frame
   Eigen::MatrixXd sh_invariants;             ///< N x (L+1)
   std::vector<TrueContact> contacts;
+  /// Per grain: what a radial description misses of it (zeros for star-shaped grains).
+  std::vector<NonStarMeasures> non_star;
 };
 
 void write_ground_truth(const std::filesystem::path& path, const GroundTruth& truth,

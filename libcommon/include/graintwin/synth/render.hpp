@@ -11,15 +11,20 @@
 
 #include "graintwin/core/volume.hpp"
 #include "graintwin/shape/radial_table.hpp"
+#include "graintwin/synth/solid_grains.hpp"
 
 namespace graintwin::synth {
 
 /// A grain at its pose: body origin (= centroid) at `position` (m, x y z), body -> world rotation.
+/// A grain that is not star-shaped has a `solid`; `shape` is then a star-shaped hull containing it,
+/// and voxels where the solid may differ from the hull are point-sampled on the solid
+/// (RenderParams::supersample^3 points, or 4^3 with the analytic default).
 struct PlacedGrain {
   const shape::RadialTable* shape = nullptr;
   Eigen::Vector3d position{0.0, 0.0, 0.0};
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   std::uint32_t label = 0;  ///< > 0
+  const GrainSolid* solid = nullptr;
 };
 
 struct RenderParams {

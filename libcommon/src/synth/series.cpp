@@ -1,0 +1,322 @@
+// A synthetic CT scan series: grains, packing, loading states, scans and ground truth.
+#include "graintwin/synth/series.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <random>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/resources.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/shape/sh_basis.hpp"
+#include "graintwin/synth/ground_truth.hpp"
+#include "graintwin/synth/shape_library.hpp"
+
+namespace graintwin::synth {
+
+namespace {
+
+std::string scan_name(const char* stem, std::size_t k) { return fmt::format("{}_{:03d}.h5", stem, k); }
+
+// Image box (m, x y z) that holds the sample in its most bulged state, with the membrane and margin.
+struct ImageBox {
+  Vec3 lo, hi;
+};
+ImageBox image_box(const SeriesParams& p) {
+  const double eps_max = *std::max_element(p.strains.begin(), p.strains.end());
+  if (p.container.kind == Container::Kind::cylinder) {
+    const double r_out = p.container.radius * (1.0 + 1.5 * std::max(0.0, p.loading.bulge) * eps_max) +
+                         p.membrane_thickness + p.margin;
+    return {{-r_out, -r_out, -p.margin}, {r_out, r_out, p.container.height + p.margin}};
+  }
+  const Eigen::Vector3d& b = p.container.box_size;
+  return {{-p.margin, -p.margin, -p.margin}, {b.x() + p.margin, b.y() + p.margin, b.z() + p.margin}};
+}
+
+// Volume (m^3) of the loaded sample at strain eps: the bulged cylinder integrated over its height.
+double sample_volume(const SeriesParams& p, const LoadingParams& lp, double eps) {
+  const double height = lp.height * (1.0 - eps);
+  if (p.container.kind == Container::Kind::box) return p.container.box_size.x() * p.container.box_size.y() * height;
+  constexpr int kSlices = 2000;
+  double v = 0.0;
+  for (int s = 0; s < kSlices; ++s) {
+    const double r = sample_radius_at(lp, (s + 0.5) / kSlices * height, eps);
+    v += std::numbers::pi * r * r * height / kSlices;
+  }
+  return v;
+}
+
+// The labels2shapes criteria of an unreliable radial fit, applied to the exact measures.
+bool misses_much(const NonStarMeasures& m, double voxel) {
+  return m.hidden_void_fraction > 0.01 || m.reentry_depth > voxel;
+}
+
+GrainSet make_grain_set(const SeriesParams& p, const ShapeLibrary* library, std::mt19937_64& rng, double& d50,
+                        const std::function<void(double)>& progress) {
+  const double target = p.solid_fraction * p.container.volume();
+  if (library) {
+    const GrainSet set = make_library_grains(*library, draw_library_grains(*library, target, rng),
+                                             p.grains.sand.degree, p.voxel_size, progress);
+    d50 = volume_median_diameter(set.diameters);
+    return set;
+  }
+  const std::vector<double> diameters = sample_diameters(p.psd, target, rng);
+  d50 = volume_median_diameter(diameters);
+  GrainSetParams gp = p.grains;
+  gp.voxel_size = p.voxel_size;
+  gp.seed = p.seed;
+  return make_grains(gp, diameters, progress);
+}
+
+void log_grains(const SeriesParams& p, const GrainSet& grains, const ShapeLibrary* library, double d50, double d_ref) {
+  spdlog::info("{} grains{}, d50 {:.3f} mm by volume, {:.1f} voxels per d50", grains.tables.size(),
+               library ? fmt::format(" drawn from a library of {} ({} left out)", library->grains.size(), library->left_out)
+                       : "",
+               d50 * 1e3, d_ref / p.voxel_size);
+  if (!grains.sh_fit_rms.empty()) {
+    const auto [lo, hi] = std::minmax_element(grains.sh_fit_rms.begin(), grains.sh_fit_rms.end());
+    double mean = 0.0;
+    for (double f : grains.sh_fit_rms) mean += f / static_cast<double>(grains.sh_fit_rms.size());
+    spdlog::info("the degree-{} SH fit misses the exact surface by {:.2f} % of the radius RMS on average "
+                 "({:.2f}-{:.2f} %); the scans and contacts use the exact surface",
+                 grains.sh_degree, 100.0 * mean, 100.0 * *lo, 100.0 * *hi);
+  }
+  if (!grains.solids.empty()) {
+    const auto much = std::count_if(grains.non_star.begin(), grains.non_star.end(),
+                                    [&](const NonStarMeasures& m) { return misses_much(m, p.voxel_size); });
+    const auto some = std::count_if(grains.non_star.begin(), grains.non_star.end(),
+                                    [](const NonStarMeasures& m) { return m.multi_exit_fraction > 0.0; });
+    spdlog::info("{} grains are not star-shaped about their centroid; for {} a radial description misses more than 1 % "
+                 "of the volume or reaches more than a voxel off the surface",
+                 some, much);
+  }
+}
+
+// The per-scan scanner: axis and field radius of the cupping and rings, seed of the noise.
+ScannerParams scanner_for_scan(const SeriesParams& p, const LoadingParams& lp, const ImageBox& box, std::size_t k) {
+  ScannerParams sp = p.scanner;
+  sp.axis_x = lp.centre_x;
+  sp.axis_y = lp.centre_y;
+  sp.field_radius = p.container.kind == Container::Kind::cylinder
+                        ? box.hi[0]
+                        : 0.5 * std::hypot(box.hi[0] - box.lo[0], box.hi[1] - box.lo[1]);
+  sp.seed = p.seed * 1000003ull + k;
+  return sp;
+}
+
+}  // namespace
+
+SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& dir,
+                          const std::vector<std::string>& history,
+                          const std::function<std::function<void(double)>(const std::string&)>& progress) {
+  if (p.strains.empty()) throw UsageError("--strains needs at least one value (0 for an unloaded scan)");
+  const bool cyl = p.container.kind == Container::Kind::cylinder;
+  check_grey_levels(p.scanner, p.membrane_thickness > 0.0);
+  const bool from_library = p.grains.shape == GrainShape::library;
+  std::unique_ptr<ShapeLibrary> library;
+  if (from_library) library = std::make_unique<ShapeLibrary>(read_shape_library(p.library_shapes, p.library_labels));
+
+  // --- image geometry: fixed for the series, large enough for the most bulged state ---
+  const ImageBox box = image_box(p);
+  const double voxel = p.voxel_size;
+  const Vec3 voxels{std::ceil((box.hi[2] - box.lo[2]) / voxel), std::ceil((box.hi[1] - box.lo[1]) / voxel),
+                    std::ceil((box.hi[0] - box.lo[0]) / voxel)};  // z y x, as reals until they are known to fit
+  // What the series holds at once: the grains' tables (and one smoothed copy per packing stage)
+  // and one scan being rendered.
+  const double target = p.solid_fraction * p.container.volume();
+  double mean_grain_volume = 0.0, typical_d = p.psd.d50;
+  if (library) {
+    for (const auto& g : library->grains) mean_grain_volume += g.volume / static_cast<double>(library->grains.size());
+    typical_d = std::cbrt(6.0 * mean_grain_volume / std::numbers::pi);
+  }
+  const double grains_expected = library ? target / mean_grain_volume : expected_grain_count(p.psd, target);
+  const double scan_bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel;
+  const double grain_table_bytes = grains_expected * grain_bytes(typical_d, voxel, p.grains.sand.degree) *
+                                   static_cast<double>(1 + p.pack_degrees.size());
+  // The advice names first what dominates: millions of tiny grains are fixed by the PSD, not the voxels.
+  check_memory(scan_bytes + grain_table_bytes, "ctsynth",
+               fmt::format("scans of {:.3g} x {:.3g} x {:.3g} voxels (z, y, x) and about {:.3g} grains", voxels[0],
+                           voxels[1], voxels[2], grains_expected),
+               grain_table_bytes > scan_bytes
+                   ? "give larger grains (--d-min, --d50, --d-max), a smaller sample (--diameter, --height or --box) or larger voxels (--voxel-size)"
+                   : "make the sample smaller (--diameter, --height or --box), the voxels larger (--voxel-size) or the grains larger (--d-min, --d50, --d-max)");
+  const Shape3 shape{static_cast<std::size_t>(voxels[0]), static_cast<std::size_t>(voxels[1]),
+                     static_cast<std::size_t>(voxels[2])};
+  if (p.scanner.blur_sigma_vox > 0.0)
+    check_kernel_fits(std::ceil(3.0 * p.scanner.blur_sigma_vox), shape,
+                      fmt::format("--blur {:g} (a Gaussian cut at 3 sigma)", p.scanner.blur_sigma_vox),
+                      "give a smaller --blur or a larger sample");
+
+  // --- grains ---
+  std::mt19937_64 rng(p.seed);
+  double d50 = 0.0;
+  const GrainSet grains = make_grain_set(p, library.get(), rng, d50, progress("grain shapes"));
+  throw_if_interrupted();
+  // Lengths in units of d50 (wall shells, the band width) take the PSD's d50, or the library's drawn one.
+  const double d_ref = library ? d50 : p.psd.d50;
+  log_grains(p, grains, library.get(), d50, d_ref);
+  const auto tables = grains.table_pointers();
+  const auto solids = grains.solid_pointers();
+  double grain_volume = 0.0;
+  for (const auto& st : grains.stats) grain_volume += st.volume;
+  spdlog::info("the grains' exact volume fills {:.4f} of the {}", grain_volume / p.container.volume(),
+               cyl ? "cylinder" : "box");
+
+  // --- packing (state 0) ---
+  PackingParams pp = p.packing;
+  pp.seed = p.seed;
+  PackingReport report;
+  std::vector<std::vector<shape::RadialTable>> smooth(p.pack_degrees.size());
+  std::vector<std::vector<const shape::RadialTable*>> stages;
+  for (std::size_t k = 0; k < p.pack_degrees.size(); ++k) {
+    smooth[k] = smoothed_tables(grains, p.pack_degrees[k], voxel);
+    stages.emplace_back();
+    for (const auto& t : smooth[k]) stages.back().push_back(&t);
+  }
+  stages.push_back(tables);
+  const std::vector<PackedGrain> packed = pack_in_stages(stages, p.container, pp, &report, progress("packing"));
+  smooth.clear();
+  const std::vector<double> shell_edges{0.0, 0.25 * d_ref, 0.5 * d_ref, d_ref, HUGE_VAL};
+  const std::vector<double> shells = solid_fraction_by_wall_distance(tables, packed, p.container, shell_edges);
+  spdlog::info("packed: solid fraction {:.4f} (by distance from the walls: {:.3f} within d50/4, {:.3f} d50/4-d50/2, "
+               "{:.3f} d50/2-d50, {:.3f} beyond d50), max overlap {:.3g} um (tolerance {:.3g} um), {} touching "
+               "pairs, {} stages, {} sweeps, {:.1f} s",
+               report.solid_fraction, shells[0], shells[1], shells[2], shells[3], report.max_overlap * 1e6,
+               report.tolerance * 1e6, report.touching_pairs, stages.size(), report.sweeps, report.seconds);
+  throw_if_interrupted();
+
+  // --- loading states ---
+  LoadingParams lp = p.loading;
+  lp.centre_x = cyl ? 0.0 : 0.5 * p.container.box_size.x();
+  lp.centre_y = cyl ? 0.0 : 0.5 * p.container.box_size.y();
+  lp.height = cyl ? p.container.height : p.container.box_size.z();
+  lp.radius = cyl ? p.container.radius : 0.5 * std::min(p.container.box_size.x(), p.container.box_size.y());
+  if (lp.band_width == 0.0) lp.band_width = 10.0 * d_ref;
+  lp.seed = p.seed;
+  if (!cyl && (lp.band != ShearBand::none || lp.bulge != 0.0) && p.strains.size() > 1)
+    spdlog::info("box container: loading uses the box centre as the sample axis");
+  const auto states = loading_states(lp, packed, p.strains);
+
+  const Vec3 vs{voxel, voxel, voxel};
+  const Vec3 origin{box.lo[2] + 0.5 * voxel, box.lo[1] + 0.5 * voxel, box.lo[0] + 0.5 * voxel};
+  spdlog::info("scans: {} x {} x {} voxels (z,y,x) at {:.4g} um, {} states", shape[0], shape[1], shape[2],
+               voxel * 1e6, p.strains.size());
+  const double search_gap = p.contact_search > 0.0 ? p.contact_search : 2.0 * voxel;
+  const bool separating = p.grains.shape == GrainShape::angular || from_library;
+
+  const ShRotator rotator(grains.sh_degree);
+  nlohmann::json series;
+  series["scans"] = nlohmann::json::array();
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    const double eps = p.strains[k];
+    std::vector<PackedGrain> poses = states[k];
+    const double height_k = lp.height * (1.0 - eps);
+    PackingReport relax_report = report;
+    if (k > 0 || eps != 0.0) {
+      Container walls = p.container;
+      if (cyl) {
+        walls.height = height_k;
+        walls.radius = lp.radius * (1.0 + 1.5 * lp.bulge * eps);
+      } else {
+        walls.box_size.z() = height_k;
+      }
+      relax_report = relax_grains(tables, poses, walls, pp);
+      spdlog::info("state {} (strain {:.4g}): overlaps relaxed in {} sweeps, max overlap {:.3g} um", k, eps,
+                   relax_report.sweeps, relax_report.max_overlap * 1e6);
+    }
+    // Render.
+    std::vector<PlacedGrain> placed(poses.size());
+    for (std::size_t i = 0; i < poses.size(); ++i)
+      placed[i] = {tables[i], poses[i].position, poses[i].orientation, static_cast<std::uint32_t>(i + 1), solids[i]};
+    GrainImages images = render_grains(placed, shape, vs, origin, p.render, progress("render scan " + std::to_string(k)));
+    throw_if_interrupted();
+    Volume<float> membrane;
+    if (p.membrane_thickness > 0.0) {
+      Shell shell;
+      shell.inner_radius = [&](double z) { return sample_radius_at(lp, z, eps); };
+      shell.thickness = p.membrane_thickness;
+      shell.z0 = 0.0;
+      shell.z1 = height_k;
+      membrane = render_shell(shell, shape, vs, origin, p.render);
+    }
+    const Volume<std::uint16_t> scan = simulate_scan(images.fraction, p.membrane_thickness > 0.0 ? &membrane : nullptr,
+                                                     scanner_for_scan(p, lp, box, k));
+    io::write_volume_file(dir / scan_name("scan", k), scan, history, "1");
+
+    // Ground truth.
+    GroundTruth truth;
+    truth.scan_index = static_cast<int>(k);
+    truth.axial_strain = eps;
+    truth.sample_height = height_k;
+    truth.sample_radius = lp.radius;
+    const double volume_k = sample_volume(p, lp, eps);
+    truth.solid_fraction = grain_volume / volume_k;
+    truth.void_ratio = volume_k / grain_volume - 1.0;
+    truth.contact_tolerance = relax_report.tolerance;
+    truth.labels = std::move(images.labels);
+    truth.poses = poses;
+    truth.sh_degree = grains.sh_degree;
+    truth.sh_coeffs_body = grains.coeffs_body;
+    truth.sh_coeffs.resize(grains.coeffs_body.rows(), grains.coeffs_body.cols());
+    truth.sh_invariants.resize(grains.coeffs_body.rows(), grains.sh_degree + 1);
+#pragma omp parallel for schedule(dynamic)
+    for (Eigen::Index i = 0; i < grains.coeffs_body.rows(); ++i) {
+      const Eigen::VectorXd body = grains.coeffs_body.row(i).transpose();
+      truth.sh_coeffs.row(i) =
+          rotator.rotate(body, poses[static_cast<std::size_t>(i)].orientation.toRotationMatrix()).transpose();
+      truth.sh_invariants.row(i) = shape::sh_invariants(body, grains.sh_degree).transpose();
+    }
+    for (const auto& st : grains.stats) {
+      truth.volume.push_back(st.volume);
+      truth.equivalent_diameter.push_back(st.equivalent_diameter);
+      truth.sphericity.push_back(st.sphericity);
+      truth.aspect_ratio.push_back(st.aspect_ratio);
+    }
+    if (!grains.solids.empty()) truth.non_star = grains.non_star;
+    truth.contacts = true_contacts(tables, poses, search_gap, relax_report.tolerance, separating,
+                                   grains.solids.empty() ? std::vector<const GrainSolid*>{} : solids);
+    const auto touching =
+        std::count_if(truth.contacts.begin(), truth.contacts.end(), [](const TrueContact& c) { return c.touching; });
+    write_ground_truth(dir / scan_name("truth", k), truth, history);
+    spdlog::info("scan {}: strain {:.4g}, solid fraction {:.4f} (void ratio {:.4f}), {} touching contacts, {} near", k,
+                 eps, truth.solid_fraction, truth.void_ratio, touching, truth.contacts.size() - touching);
+    series["scans"].push_back({{"scan", scan_name("scan", k)},
+                               {"truth", scan_name("truth", k)},
+                               {"axial_strain", eps},
+                               {"sample_height_m", height_k},
+                               {"solid_fraction", truth.solid_fraction},
+                               {"void_ratio", truth.void_ratio},
+                               {"grains", poses.size()},
+                               {"touching_contacts", touching},
+                               {"near_contacts", truth.contacts.size() - touching},
+                               {"max_overlap_m", relax_report.max_overlap}});
+    throw_if_interrupted();
+  }
+  SeriesSummary summary;
+  summary.grains = grains.tables.size();
+  summary.non_star_grains = static_cast<std::size_t>(std::count_if(
+      grains.non_star.begin(), grains.non_star.end(), [&](const NonStarMeasures& m) { return misses_much(m, voxel); }));
+  summary.packed_solid_fraction = report.solid_fraction;
+  series["packing"] = {{"solid_fraction", report.solid_fraction},
+                       {"shell_edges_m", std::vector<double>(shell_edges.begin(), shell_edges.end() - 1)},
+                       {"shell_solid_fractions", shells},
+                       {"max_overlap_m", report.max_overlap},
+                       {"sweeps", report.sweeps},
+                       {"seconds", report.seconds}};
+  series["grains"] = summary.grains;
+  if (!grains.solids.empty()) series["non_star_grains"] = summary.non_star_grains;
+  series["voxels_per_d50"] = d_ref / voxel;
+  series["shape_zyx"] = shape;
+  series["history"] = history;
+  std::ofstream(dir / "series.json") << series.dump(2) << "\n";
+  return summary;
+}
+
+}  // namespace graintwin::synth
