@@ -26,79 +26,21 @@
 #include "graintwin/io/schema.hpp"
 #include "support/cli_contract.hpp"
 #include "support/cube_sample.hpp"
+#include "support/scene_text.hpp"
 #include "support/simulation_results.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
+using test::kTwoBoxScene;
+using test::replaced;
 using test::run_tool;
-
-namespace {
-
-/// Two grains without contact: a tet10 box spinning at 2000 rad/s, a rigid box thrown upward under
-/// gravity; a platen moving down in the second stage. Two stages of 20 us each.
-const char* kScene = R"(
-[run]
-gravity = [0, 0, -9.81]
-contact = false
-frame_interval = 1e-5
-series_interval = 2e-6
-
-[[materials]]
-name = "glass"
-density = 2500
-young = 60e9
-poisson = 0.2
-
-[[grains]]
-size = [1e-3, 1e-3, 0.5e-3]
-position = [0, 0, 1e-3]
-element_size = 0.5e-3
-kind = "tet10"
-material = "glass"
-angular_velocity = [0, 0, 2000]
-
-[[grains]]
-size = [1e-3, 2e-3, 1e-3]
-position = [3e-3, 0, 0]
-element_size = 1e-3
-kind = "rigid"
-label = 42
-velocity = [0, 0, 1.5]
-
-[[platens]]
-name = "top"
-point = [0, 0, 5e-3]
-normal = [0, 0, -1]
-
-[[stages]]
-name = "still"
-duration = 2e-5
-
-[[stages]]
-name = "press"
-duration = 2e-5
-platens = { top = [0, 0, -0.5] }
-)";
-
-std::filesystem::path write_scene(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  const auto p = dir / name;
-  std::ofstream(p) << text;
-  return p;
-}
-
-std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  return text.replace(at, from.size(), to);
-}
-
-}  // namespace
+using test::write_text;
 
 TEST(Fdemrun, StandardCli) { test::expect_standard_cli("fdemrun"); }
 
 TEST(Fdemrun, SceneRunsToItsExactMotion) {
   test::TempDir dir;
-  const auto scene = write_scene(dir, "scene.toml", kScene);
+  const auto scene = write_text(dir, "scene.toml", kTwoBoxScene);
   const auto out = dir / "results.h5";
   const auto r = run_tool("fdemrun", {scene.string(), out.string(), "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -139,7 +81,7 @@ TEST(Fdemrun, ModelFileAndSphereFallWithVtkFrames) {
   fdem::add_grain(grains, fdem::box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d::Zero(), fdem::GrainKind::tet4, 0, 5);
   grains.platens = {fdem::Platen{"bottom", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitZ(), 0}};
   fdem::write_model_file(dir / "grains.h5", grains, {"test"});
-  const auto scene = write_scene(dir, "scene.toml", R"(
+  const auto scene = write_text(dir, "scene.toml", R"(
 [run]
 duration = 2e-5
 gravity = [0, 0, -9.81]
@@ -211,7 +153,7 @@ void expect_same_last_frame(const std::filesystem::path& a, const std::filesyste
 
 TEST(Fdemrun, RestartFromCheckpointReproducesTheRunBitForBit) {
   test::TempDir dir;
-  const auto scene = write_scene(dir, "scene.toml", kScene);
+  const auto scene = write_text(dir, "scene.toml", kTwoBoxScene);
   const auto whole = dir / "whole.h5", first = dir / "first.h5", second = dir / "second.h5", ckpt = dir / "ckpt.h5";
   ASSERT_EQ(run_tool("fdemrun", {scene.string(), whole.string(), "-q"}).exit_code, 0);
   const auto a = run_tool("fdemrun", {scene.string(), first.string(), "-q", "--stop-step", "37", "--checkpoint", ckpt.string()});
@@ -228,26 +170,26 @@ TEST(Fdemrun, RestartFromCheckpointReproducesTheRunBitForBit) {
 
 TEST(Fdemrun, BadInputsFailCleanly) {
   test::TempDir dir;
-  const auto good = write_scene(dir, "good.toml", kScene);
+  const auto good = write_text(dir, "good.toml", kTwoBoxScene);
   const auto out = (dir / "out.h5").string();
   test::expect_clean_failure("fdemrun", dir, {(dir / "missing.toml").string(), out}, 2, "missing.toml");
-  const auto typo = write_scene(dir, "typo.toml", replaced(kScene, "element_size = 1e-3", "element_sise = 1e-3"));
+  const auto typo = write_text(dir, "typo.toml", replaced(kTwoBoxScene, "element_size = 1e-3", "element_sise = 1e-3"));
   test::expect_clean_failure("fdemrun", dir, {typo.string(), out}, 2, "key 'element_sise' is unknown; did you mean 'element_size'?");
-  const auto sphere = write_scene(dir, "sphere.toml", replaced(kScene, "kind = \"rigid\"", "kind = \"rigid\"\nshape = \"sphere\""));
+  const auto sphere = write_text(dir, "sphere.toml", replaced(kTwoBoxScene, "kind = \"rigid\"", "kind = \"rigid\"\nshape = \"sphere\""));
   test::expect_clean_failure("fdemrun", dir, {sphere.string(), out}, 2, "size does not apply to a sphere");
-  const auto no_model = write_scene(dir, "no_model.toml", replaced(kScene, "[run]", "[model]\nfile = \"gone.h5\"\n[run]"));
+  const auto no_model = write_text(dir, "no_model.toml", replaced(kTwoBoxScene, "[run]", "[model]\nfile = \"gone.h5\"\n[run]"));
   test::expect_clean_failure("fdemrun", dir, {no_model.string(), out}, 2, "gone.h5 does not exist");
-  const auto fast = write_scene(dir, "fast.toml", replaced(kScene, "contact = false", "contact = false\ntime_step = 1e-6"));
+  const auto fast = write_text(dir, "fast.toml", replaced(kTwoBoxScene, "contact = false", "contact = false\ntime_step = 1e-6"));
   test::expect_clean_failure("fdemrun", dir, {fast.string(), out}, 2, "above the stable limit");
-  const auto syntax = write_scene(dir, "syntax.toml", "[run\nduration = 1");
+  const auto syntax = write_text(dir, "syntax.toml", "[run\nduration = 1");
   test::expect_clean_failure("fdemrun", dir, {syntax.string(), out}, 2, "syntax.toml line 1");
-  const auto material = write_scene(dir, "material.toml", replaced(kScene, "material = \"glass\"", "material = \"steel\""));
+  const auto material = write_text(dir, "material.toml", replaced(kTwoBoxScene, "material = \"glass\"", "material = \"steel\""));
   test::expect_clean_failure("fdemrun", dir, {material.string(), out}, 2, "material 'steel' is not among the [[materials]]");
   test::expect_clean_failure("fdemrun", dir, {good.string(), (dir / "out.txt").string()}, 2, "must end in .h5");
   // A checkpoint of another scene is refused before anything is written.
   const auto ckpt = dir / "ckpt.h5";
   ASSERT_EQ(run_tool("fdemrun", {good.string(), out, "-q", "--stop-step", "3", "--checkpoint", ckpt.string()}).exit_code, 0);
-  const auto other = write_scene(dir, "other.toml", replaced(kScene, "angular_velocity = [0, 0, 2000]", "angular_velocity = [0, 0, 1000]"));
+  const auto other = write_text(dir, "other.toml", replaced(kTwoBoxScene, "angular_velocity = [0, 0, 2000]", "angular_velocity = [0, 0, 1000]"));
   test::expect_clean_failure("fdemrun", dir, {other.string(), (dir / "o.h5").string(), "--restart", ckpt.string()}, 2,
                              "written for another scene");
   // A --stop-step at or before the checkpoint's step is refused rather than run one step too far.
@@ -316,28 +258,28 @@ TEST(Fdemrun, GrainsStartedInsideEachOtherOrAPlatenAreRefused) {
   // Run as they were, the box in the platen flew off at 549 m/s and the two boxes never parted.
   test::TempDir dir;
   const auto out = (dir / "out.h5").string();
-  const auto both = write_scene(dir, "both.toml", kOverlapScene);
+  const auto both = write_text(dir, "both.toml", kOverlapScene);
   test::expect_clean_failure("fdemrun", dir, {both.string(), out}, 2,
                              "both.toml: grains label 2 and label 3 overlap by 0.5 mm at the start, beyond the tolerance "
                              "of 0.124 mm ([run] overlap_tolerance = 0.1 x the smaller grain's equivalent diameter, "
                              "1.24 mm) (2 overlaps in all are beyond theirs); move them apart, or set [run] "
                              "relax_overlaps = true to push overlapping grains apart before the run");
-  const auto platen = write_scene(dir, "platen.toml", replaced(kOverlapScene, "position = [3.5e-3, 0, 0.6e-3]", "position = [5e-3, 0, 0.6e-3]"));
+  const auto platen = write_text(dir, "platen.toml", replaced(kOverlapScene, "position = [3.5e-3, 0, 0.6e-3]", "position = [5e-3, 0, 0.6e-3]"));
   test::expect_clean_failure("fdemrun", dir, {platen.string(), out}, 2,
                              "platen.toml: grain label 1 reaches 0.3 mm behind platen 'bottom' at the start, beyond the "
                              "tolerance of 0.124 mm ([run] overlap_tolerance = 0.1 x the grain's equivalent diameter, "
                              "1.24 mm); move them apart");
   // A wider tolerance accepts the pair (half a box: 0.5 mm), as contact off does.
-  const auto wide = write_scene(dir, "wide.toml", replaced(replaced(kOverlapScene, "position = [0, 0, 0.2e-3]", "position = [0, 0, 0.5e-3]"),
+  const auto wide = write_text(dir, "wide.toml", replaced(replaced(kOverlapScene, "position = [0, 0, 0.2e-3]", "position = [0, 0, 0.5e-3]"),
                                                           "frame_interval", "overlap_tolerance = 0.45\nframe_interval"));
   EXPECT_EQ(run_tool("fdemrun", {wide.string(), out, "-q"}).exit_code, 0);
-  const auto off = write_scene(dir, "off.toml", replaced(kOverlapScene, "frame_interval", "contact = false\nframe_interval"));
+  const auto off = write_text(dir, "off.toml", replaced(kOverlapScene, "frame_interval", "contact = false\nframe_interval"));
   EXPECT_EQ(run_tool("fdemrun", {off.string(), out, "-q", "--force"}).exit_code, 0);
 }
 
 TEST(Fdemrun, RelaxedOverlapsPartTheBoxesAndLiftTheGrainOutOfThePlatenAtSaneSpeeds) {
   test::TempDir dir;
-  const auto scene = write_scene(dir, "relax.toml", replaced(kOverlapScene, "frame_interval", "relax_overlaps = true\nframe_interval"));
+  const auto scene = write_text(dir, "relax.toml", replaced(kOverlapScene, "frame_interval", "relax_overlaps = true\nframe_interval"));
   const auto out = dir / "out.h5";
   const auto r = run_tool("fdemrun", {scene.string(), out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -367,8 +309,8 @@ TEST(Fdemrun, KeptInitialOverlapsStartTheBoxesAtRestWhereThePenaltyFiresThemApar
       replaced(replaced(replaced(kOverlapScene, "position = [0, 0, 0.2e-3]", "position = [0, 0, 0.5e-3]"), "position = [3.5e-3, 0, 0.6e-3]",
                         "position = [3.92e-3, 0, 0.6e-3]"),
                "frame_interval", "overlap_tolerance = 0.45\nframe_interval");
-  const auto fired = write_scene(dir, "fired.toml", wide);
-  const auto kept = write_scene(dir, "kept.toml", replaced(wide, "frame_interval", "keep_initial_overlaps = true\nframe_interval"));
+  const auto fired = write_text(dir, "fired.toml", wide);
+  const auto kept = write_text(dir, "kept.toml", replaced(wide, "frame_interval", "keep_initial_overlaps = true\nframe_interval"));
   const auto fastest = [&](const std::filesystem::path& scene, const std::string& name) {
     const auto out = dir / name;
     const auto r = run_tool("fdemrun", {scene.string(), out.string()});
@@ -392,7 +334,7 @@ TEST(Fdemrun, ARunBeyondTheStepCeilingIsRefusedWithTheNumbers) {
   const auto out = (dir / "out.h5").string();
   // A penalty far too stiff shrinks the contact's time step until the 40 us of the scene take
   // hundreds of millions of steps: refused before the first, with what sets the step.
-  const auto stiff = write_scene(dir, "stiff.toml", replaced(replaced(kScene, "contact = false\n", ""), "poisson = 0.2",
+  const auto stiff = write_text(dir, "stiff.toml", replaced(replaced(kTwoBoxScene, "contact = false\n", ""), "poisson = 0.2",
                                                              "poisson = 0.2\nnormal_penalty = 1e22\ntangential_penalty = 1e22"));
   const auto r = run_tool("fdemrun", {stiff.string(), out});
   EXPECT_EQ(r.exit_code, 2) << r.err;
@@ -401,10 +343,10 @@ TEST(Fdemrun, ARunBeyondTheStepCeilingIsRefusedWithTheNumbers) {
     EXPECT_NE(r.err.find(words), std::string::npos) << words << "\n" << r.err;
   EXPECT_FALSE(std::filesystem::exists(out));
   // The ceiling is the scene's: a low one refuses the plain scene, set by its elements' limit.
-  const auto low = write_scene(dir, "low.toml", replaced(kScene, "contact = false", "contact = false\nmax_steps = 100"));
+  const auto low = write_text(dir, "low.toml", replaced(kTwoBoxScene, "contact = false", "contact = false\nmax_steps = 100"));
   test::expect_clean_failure("fdemrun", dir, {low.string(), out}, 2, "above the ceiling of 100 steps; the time step");
   test::expect_clean_failure("fdemrun", dir, {low.string(), out}, 2, "is the element limit");
-  const auto none = write_scene(dir, "none.toml", replaced(kScene, "contact = false", "contact = false\nmax_steps = 0"));
+  const auto none = write_text(dir, "none.toml", replaced(kTwoBoxScene, "contact = false", "contact = false\nmax_steps = 0"));
   test::expect_clean_failure("fdemrun", dir, {none.string(), out}, 2, "max_steps must lie in [1, 1e+15] (got 0)");
 }
 
@@ -416,7 +358,7 @@ TEST(Fdemrun, AModelFileMaterialOutOfRangeIsRefusedNamingTheFile) {
   fdem::add_grain(grains, fdem::box_mesh({1e-3, 1e-3, 1e-3}, 0.5e-3), Eigen::Vector3d::Zero(), fdem::GrainKind::tet4, 0, 5);
   const auto model = dir / "grains.h5";
   fdem::write_model_file(model, grains, {"test"});
-  const auto scene = write_scene(dir, "scene.toml", "[run]\nduration = 1e-6\n[model]\nfile = \"grains.h5\"\n");
+  const auto scene = write_text(dir, "scene.toml", "[run]\nduration = 1e-6\n[model]\nfile = \"grains.h5\"\n");
   const auto out = (dir / "out.h5").string();
   test::replace_dataset(model, "/materials/young", std::vector<double>{0.0}, {1});
   test::expect_clean_failure("fdemrun", dir, {scene.string(), out}, 1,
@@ -424,7 +366,7 @@ TEST(Fdemrun, AModelFileMaterialOutOfRangeIsRefusedNamingTheFile) {
   test::replace_dataset(model, "/materials/young", std::vector<double>{92.1e9}, {1});
   test::replace_dataset(model, "/materials/density", std::vector<double>{-2650.0}, {1});
   test::expect_clean_failure("fdemrun", dir, {scene.string(), out}, 1, model.string() + ": material 'ottawa_sand': density");
-  const auto in_scene = write_scene(dir, "young.toml", "[run]\nduration = 1e-6\n[[materials]]\nyoung = 0\n[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\n");
+  const auto in_scene = write_text(dir, "young.toml", "[run]\nduration = 1e-6\n[[materials]]\nyoung = 0\n[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\n");
   test::expect_clean_failure("fdemrun", dir, {in_scene.string(), out}, 2,
                              "young.toml: [[materials]] 1: young must lie in [1000, 1e+13] Pa (got 0 Pa)");
 }
@@ -436,7 +378,7 @@ namespace {
 std::filesystem::path triaxial_scene(const test::TempDir& dir, const std::string& boundary) {
   const fdem::Model cubes = test::cube_sample(1e-3);
   fdem::write_model_file(dir / "cubes.h5", cubes, {"test"});
-  return write_scene(dir, boundary + ".toml", R"(
+  return write_text(dir, boundary + ".toml", R"(
 [run]
 damping = 2000
 [model]
@@ -524,7 +466,7 @@ TEST(Fdemrun, BadTriaxialScenesFailBeforeAnyStep) {
   text << std::ifstream(scene).rdbuf();
   const auto out = (dir / "out.h5").string();
   const auto bad = [&](const std::string& name, const std::string& from, const std::string& to, const std::string& says) {
-    const auto path = write_scene(dir, name, replaced(text.str(), from, to));
+    const auto path = write_text(dir, name, replaced(text.str(), from, to));
     test::expect_clean_failure("fdemrun", dir, {path.string(), out}, 2, says);
   };
   bad("latex.toml", "ball_radius", "membrane_poisson = 0.45\nball_radius", "above 1/3");
@@ -535,7 +477,7 @@ TEST(Fdemrun, BadTriaxialScenesFailBeforeAnyStep) {
   bad("both.toml", "strain_rate = 5", "strain_rate = 5\nshear_inertial_number = 1e-3", "keep one");
   bad("ramp.toml", "shear_ramp_strain = 1e-3", "shear_ramp_strain = 0.01", "below target_axial_strain");
   // A triaxial run restarts only from a triaxial checkpoint of the same scene.
-  const auto plain = write_scene(dir, "plain.toml", kScene), plain_ckpt = dir / "plain_ckpt.h5";
+  const auto plain = write_text(dir, "plain.toml", kTwoBoxScene), plain_ckpt = dir / "plain_ckpt.h5";
   ASSERT_EQ(run_tool("fdemrun", {plain.string(), (dir / "plain.h5").string(), "-q", "--stop-step", "3", "--checkpoint",
                                  plain_ckpt.string()})
                 .exit_code,
@@ -613,7 +555,7 @@ TEST(Fdemrun, TriaxialRunSplitInEveryPhaseIsTheWholeRunBitForBit) {
 // 2^64 - 1 steps).
 TEST(Fdemrun, StopStepOutsideItsRangeIsRefused) {
   test::TempDir dir;
-  const auto good = write_scene(dir, "good.toml", kScene);
+  const auto good = write_text(dir, "good.toml", kTwoBoxScene);
   const auto out = (dir / "out.h5").string();
   test::expect_clean_failure("fdemrun", dir, {good.string(), out, "--stop-step", "-1"}, 2,
                              "--stop-step: must be a whole number in [0, 1e+15] steps, not -1");

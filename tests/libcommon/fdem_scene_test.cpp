@@ -16,17 +16,13 @@
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "support/run_tool.hpp"
+#include "support/scene_text.hpp"
 
 using namespace graintwin;
 using namespace graintwin::fdem;
+using test::write_text;
 
 namespace {
-
-std::filesystem::path write_text(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  const auto p = dir / name;
-  std::ofstream(p) << text;
-  return p;
-}
 
 std::string error_of(const std::filesystem::path& scene) {
   try {

@@ -24,9 +24,11 @@
 #include "graintwin/mesh/tet_mesh.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/sh_surface.hpp"
+#include "support/sh_grain.hpp"
 
 using namespace graintwin;
 using Eigen::Vector3d;
+using test::sh_grain;
 
 namespace {
 
@@ -195,24 +197,6 @@ TEST(Model, GrainsJoinAsContiguousBlocksWithOutwardSurfaces) {
   }
   EXPECT_THROW(mesh::append_grain(model, a, 1, fdem::GrainKind::tet10), UsageError);
 }
-
-namespace {
-
-/// A grain record whose SH coefficients (degree 4) describe r(d) = c00 Y00 + c20 Y20.
-shape::GrainShape sh_grain(double r0, double c20, const Vector3d& centroid) {
-  shape::GrainShape g;
-  g.label = 3;
-  g.centroid = centroid;
-  g.coeffs = Eigen::VectorXd::Zero(25);
-  g.coeffs[0] = r0 * std::sqrt(4.0 * M_PI);
-  g.coeffs[6] = c20;  // index n*n + n + m for n = 2, m = 0
-  g.equivalent_diameter = 2.0 * r0;
-  g.surface_area = 4.0 * M_PI * r0 * r0;
-  g.semi_axes = Vector3d(r0, r0, r0);
-  return g;
-}
-
-}  // namespace
 
 TEST(Sizing, ContactRuleGivesTheTargetSurfaceNodesAndOverridesWin) {
   const double d = 1e-3, area = M_PI * d * d, sphere = 12.0 / (d * d);  // (integral of H dA) / V = 3 / R^2

@@ -136,6 +136,37 @@ inline constexpr const char* sample_z_range = "z_range";            ///< float64
 inline constexpr const char* membrane_thickness = "membrane_thickness";  ///< m
 }  // namespace graintwin::schema::fdem_model
 
+// The per-grain figures shapes2mesh writes into its kind=fdem_model file (one row per grain of the
+// model, G rows), and the run's parameters.
+namespace graintwin::schema::fdem_model::mesh {
+inline constexpr const char* label = "/mesh/label";                    ///< uint32 (G), in the model
+inline constexpr const char* source_label = "/mesh/source_label";      ///< uint32 (G), in the shapes file
+inline constexpr const char* surface_origin = "/mesh/surface_origin";  ///< uint8 (G), codes in its attribute
+inline constexpr const char* path = "/mesh/path";                      ///< uint8 (G), codes in its attribute
+inline constexpr const char* codes = "codes";                          ///< attribute: what each code means
+inline constexpr const char* overran_budget = "/mesh/overran_budget";  ///< uint8 (G)
+inline constexpr const char* kind = "/mesh/kind";                      ///< uint8 (G), as /grains/kind
+inline constexpr const char* element_size = "/mesh/element_size";      ///< (G) m
+inline constexpr const char* elements = "/mesh/elements";              ///< uint64 (G)
+inline constexpr const char* nodes = "/mesh/nodes";                    ///< uint64 (G)
+inline constexpr const char* surface_nodes = "/mesh/surface_nodes";    ///< uint64 (G)
+inline constexpr const char* min_gamma = "/mesh/min_gamma";            ///< (G)
+inline constexpr const char* mean_gamma = "/mesh/mean_gamma";          ///< (G)
+inline constexpr const char* min_jacobian_ratio = "/mesh/min_jacobian_ratio";          ///< (G)
+inline constexpr const char* inverted_after_curving = "/mesh/inverted_after_curving";  ///< uint64 (G)
+inline constexpr const char* optimized = "/mesh/optimized";            ///< uint8 (G)
+inline constexpr const char* inverted = "/mesh/inverted";              ///< uint64 (G)
+inline constexpr const char* remeshed = "/mesh/remeshed";              ///< uint8 (G)
+inline constexpr const char* volume = "/mesh/volume";                  ///< (G) m^3
+inline constexpr const char* surface_volume = "/mesh/surface_volume";  ///< (G) m^3
+inline constexpr const char* volume_error = "/mesh/volume_error";      ///< (G), volume / surface_volume - 1
+inline constexpr const char* cut_share = "/mesh/cut_share";            ///< (G)
+inline constexpr const char* gmsh_seconds = "/mesh/gmsh_seconds";      ///< (G) s
+inline constexpr const char* seconds = "/mesh/seconds";                ///< (G) s
+inline constexpr const char* note = "/mesh/note";                      ///< string (G)
+inline constexpr const char* parameters = "/mesh/parameters";          ///< string (1), JSON
+}  // namespace graintwin::schema::fdem_model::mesh
+
 // kind=micro (tracks2micro), layout in docs/formats.md. N grains (tracks), T states, K increments.
 namespace graintwin::schema::micro {
 inline constexpr const char* grain_label = "/grains/label";            ///< uint32 (N x T), label in each state, 0 = absent
