@@ -182,10 +182,12 @@ shape::RadialTable last_exit_table(const GrainSolid& solid, int n, double step) 
 #pragma omp parallel for schedule(dynamic, 64)
   for (std::size_t i = 0; i < dirs.size(); ++i) exits[i] = march(solid, dirs[i], step).last;
   // Dilation over each face's padded (n + 2)^2 grid, whose ghost ring holds the neighbouring faces'
-  // directions (the ghost ring itself keeps its own values), at the nodes where the solid may
-  // differ from its hull within the dilation's reach: elsewhere the table stays the exact body.
+  // directions (the ghost ring itself keeps its own values), at the nodes where a neighbour's exit
+  // lies more than 4 steps farther (a jump, not a slope) and the solid may differ from its hull
+  // within the dilation's reach: elsewhere the table stays the exits themselves.
   const std::size_t stride = static_cast<std::size_t>(n) + 2, face = stride * stride;
   const double cells = 1.5 * 2.0 / (n - 1);  // the 3 x 3 neighbourhood's angular half-width, roughly
+  const double jump = 4.0 * step;
   std::vector<double> radii = exits;
   for (std::size_t f = 0; f < 6; ++f)
     for (std::size_t j = 1; j + 1 < stride; ++j)
@@ -194,7 +196,7 @@ shape::RadialTable last_exit_table(const GrainSolid& solid, int n, double step) 
         double r = 0.0;
         for (std::size_t dj = j - 1; dj <= j + 1; ++dj)
           for (std::size_t di = i - 1; di <= i + 1; ++di) r = std::max(r, exits[f * face + dj * stride + di]);
-        if (r > exits[node] && solid.may_differ_from_hull(exits[node] * dirs[node], r * cells)) radii[node] = r;
+        if (r - exits[node] > jump && solid.may_differ_from_hull(exits[node] * dirs[node], r * cells)) radii[node] = r;
       }
   return shape::RadialTable::from_node_radii(n, std::move(radii));
 }

@@ -106,10 +106,10 @@ RayExits ray_exits(const GrainSolid& solid, const Eigen::Vector3d& unit, double 
 NonStarMeasures non_star_measures(const GrainSolid& solid, double volume, double step, int directions = 4096);
 
 /// The solid's star hull about its origin as a table with n nodes per cube-face edge: the last exit
-/// along each node direction, then, at the nodes where the solid may differ from its hull, the
-/// largest of it and its 8 neighbours', so that where the last exit jumps (the radial wall over a
-/// pocket or cavity) the bilinear table stays outside the solid. Features narrower than a table
-/// cell may still poke out of it.
+/// along each node direction, then, where a neighbour's exit lies more than 4 steps farther (a jump:
+/// the radial wall over a pocket or cavity) and the solid may differ from its hull, the largest of
+/// it and its 8 neighbours', so that the bilinear table stays outside the solid there. Features
+/// narrower than a table cell may still poke out of it.
 shape::RadialTable last_exit_table(const GrainSolid& solid, int n, double step);
 
 /// Volume, area and inertia of the solid from its level sampled on a grid of spacing h (m): area
