@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/track/point_grid.hpp"
+#include "graintwin/core/point_grid.hpp"
 
 namespace graintwin::micro {
 
@@ -54,7 +54,7 @@ std::vector<LocalDeformation> local_deformation(const std::vector<Eigen::Vector3
   std::vector<Eigen::Vector3d> indexed(n);
   for (std::size_t i = 0; i < n; ++i)
     indexed[i] = before[i].allFinite() && after[i].allFinite() ? before[i] : Eigen::Vector3d::Constant(nan);
-  const track::PointGrid grid(indexed, o.radius);
+  const PointGrid grid(indexed, o.radius);
   std::vector<LocalDeformation> out(n);
   const double inv_d2 = 1.0 / (o.d50 * o.d50);
 #pragma omp parallel

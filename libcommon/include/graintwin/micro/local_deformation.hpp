@@ -52,7 +52,7 @@ double deviatoric_strain(const Eigen::Matrix<double, 6, 1>& strain);
 /// Every grain's local deformation. `before`, `after`: positions (m) of the same N grains in the
 /// two states; a non-finite position marks a grain missing from that state (it is neither computed
 /// nor anyone's neighbour). Neighbours are taken within options.radius in the first state with
-/// a uniform grid (track::PointGrid). Parallel over grains (OpenMP).
+/// a uniform grid (core/point_grid). Parallel over grains (OpenMP).
 std::vector<LocalDeformation> local_deformation(const std::vector<Eigen::Vector3d>& before,
                                                 const std::vector<Eigen::Vector3d>& after,
                                                 const DeformationOptions& options);
