@@ -11,7 +11,7 @@ GRAINTWIN_FUZZ_TARGET(results) {
                                   [](const std::filesystem::path& p) {
                                     namespace micro = graintwin::micro;
                                     graintwin::fdem::read_results_series(p);
-                                    graintwin::report::read_triaxial_series(p);
+                                    graintwin::fdem::read_triaxial_series(p);
                                     const micro::SimulationGrains grains = micro::read_simulation_grains(p);
                                     std::vector<double> times;
                                     micro::simulation_states(p, grains, &times);

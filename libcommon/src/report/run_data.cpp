@@ -20,7 +20,9 @@
 #include "graintwin/micro/local_deformation.hpp"
 #include "graintwin/micro/simulation.hpp"
 #include "graintwin/report/charts.hpp"
+#include "graintwin/segment/labels_file.hpp"
 #include "graintwin/shape/shapes_file.hpp"
+#include "graintwin/track/tracks_file.hpp"
 
 namespace graintwin::report {
 
@@ -61,10 +63,8 @@ std::vector<fs::path> per_scan(const std::vector<fs::path>& given, const std::ve
 ScanData read_scan(const RunFiles& files, std::size_t s) {
   ScanData d;
   d.name = files.scan_names[s];
-  d.void_ratio = std::nan("");
+  d.void_ratio = segment::read_void_ratio(files.labels[s]);
   d.coordination_mean = std::nan("");
-  const io::H5File labels = io::H5File::open(files.labels[s]);
-  if (labels.exists(schema::labels::sample_void_ratio)) d.void_ratio = labels.read_scalar<double>(schema::labels::sample_void_ratio);
   if (!files.shapes[s].empty()) {
     const shape::ShapesFile sh = shape::read_shapes_file(files.shapes[s]);
     d.psd = sh.psd;
@@ -213,29 +213,6 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
   return history;
 }
 
-TriaxialSeries read_triaxial_series(const fs::path& results) {
-  namespace sr = schema::fdem_results;
-  const io::H5File f = io::H5File::open(results);
-  TriaxialSeries s;
-  for (const char* name : {sr::series_axial_strain, sr::series_volumetric_strain, sr::series_stress_ratio})
-    if (!f.exists(name)) s.missing.push_back(name);
-  if (!s.missing.empty()) return s;
-  const auto axial = f.read<double>(sr::series_axial_strain);
-  const auto volumetric = f.read<double>(sr::series_volumetric_strain);
-  const auto ratio = f.read<double>(sr::series_stress_ratio);
-  if (volumetric.size() != axial.size() || ratio.size() != axial.size())
-    throw DataError(results.string() + ": the series' strains and stress ratio differ in length; rerun fdemrun");
-  // The strains are NaN before shearing starts (fdemrun measures them from there): the curves are
-  // the shearing rows.
-  for (std::size_t i = 0; i < axial.size(); ++i)
-    if (std::isfinite(axial[i])) {
-      s.axial_strain.push_back(axial[i]);
-      s.volumetric_strain.push_back(volumetric[i]);
-      s.stress_ratio.push_back(ratio[i]);
-    }
-  return s;
-}
-
 std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, const std::vector<std::size_t>& frames,
                                                       int theta_bins, int phi_bins) {
   const micro::SimulationGrains grains = micro::read_simulation_grains(results);
@@ -290,15 +267,12 @@ ExperimentData read_experiment(const RunFiles& files) {
     for (const ScanData& s : e.scans)
       e.void_ratio_volumetric_strain.push_back(std::log((1.0 + e.scans[0].void_ratio) / (1.0 + s.void_ratio)));
   if (!files.tracks.empty()) {
-    const io::H5File t = io::H5File::open(files.tracks);
-    std::vector<hsize_t> dims;
-    const auto centroid = t.read<double>(schema::tracks::centroid, &dims);
-    if (dims.size() != 3 || dims[2] != 3) throw DataError(files.tracks.string() + ": /tracks/centroid is not N x T x 3; rewrite it with shapes2tracks");
-    if (dims[1] != scans)
-      throw UsageError(files.tracks.string() + " follows " + std::to_string(dims[1]) + " scans but the run has " + std::to_string(scans) +
-                       "; rerun the track stage or name the scans' files explicitly");
-    e.tracks = dims[0];
-    const TrackedStrains tracked = tracked_strains(centroid, dims[0], dims[1]);
+    const track::TrackedCentroids tracked_centroids = track::read_tracked_centroids(files.tracks);
+    if (tracked_centroids.scans != scans)
+      throw UsageError(files.tracks.string() + " follows " + std::to_string(tracked_centroids.scans) + " scans but the run has " +
+                       std::to_string(scans) + "; rerun the track stage or name the scans' files explicitly");
+    e.tracks = tracked_centroids.tracks;
+    const TrackedStrains tracked = tracked_strains(tracked_centroids.centroid, tracked_centroids.tracks, scans);
     e.tracked_axial_strain = tracked.axial, e.tracked_volumetric_strain = tracked.volumetric;
   }
   if (!files.scan_strains.empty()) {
@@ -328,7 +302,7 @@ SimulationData read_simulation(const RunFiles& files, std::size_t frames_shown, 
     s.grains = grains.label.size();
     s.psd = grains.psd;
     s.frames = fdem::results_frame_count(files.simulation);
-    s.series = read_triaxial_series(files.simulation);
+    s.series = fdem::read_triaxial_series(files.simulation);
     s.rose_frames = pick_evenly(s.frames, frames_shown);
     s.branch_roses = simulation_branch_roses(files.simulation, s.rose_frames, theta_bins, 36);
   }

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/fdem/results_file.hpp"
 #include "graintwin/micro/distributions.hpp"
 #include "graintwin/micro/forces.hpp"
 #include "graintwin/micro/forces_file.hpp"
@@ -81,15 +82,6 @@ using ForcesFrame = micro::ForcesFrameTables;
 using ForcesWindow = micro::ForcesWindowTables;
 using ForcesData = micro::ForcesTables;
 
-/// The triaxial time series of a kind=fdem_results file: log axial and volumetric strains and the
-/// stress ratio sigma_1 / sigma_3 (fdemrun's triaxial test). `missing` names the columns
-/// the file lacks (then the vectors are empty).
-struct TriaxialSeries {
-  std::vector<double> axial_strain, volumetric_strain, stress_ratio;
-  std::vector<std::string> missing;
-};
-TriaxialSeries read_triaxial_series(const fs::path& results);
-
 /// Branch-vector roses (centroid to centroid of grain-grain contacts) of the frames `frames` of a
 /// results file, with `theta_bins` x `phi_bins` bins; counts only.
 std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, const std::vector<std::size_t>& frames,
@@ -123,7 +115,7 @@ TrackedStrains tracked_strains(const std::vector<double>& centroid, std::size_t 
 struct SimulationData {
   bool present = false;  ///< a results file exists
   std::size_t grains = 0, frames = 0;
-  TriaxialSeries series;
+  fdem::TriaxialSeries series;
   shape::SizeDistribution psd;  ///< of the simulated grains (volume-equivalent diameters)
   std::optional<MicroData> micro;
   std::optional<ForcesData> forces;
