@@ -492,26 +492,6 @@ TEST(ReportCharts, LogAxesDropWhatTheyCannotShow) {
   EXPECT_EQ(c.series.size(), 1u);
 }
 
-TEST(ReportData, TrackedStrainsOfAnAffineMapAreExact) {
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
-  const std::size_t n = 40, t = 3;
-  std::vector<double> c(n * t * 3);
-  const auto stretch = [](std::size_t s) { return Eigen::Vector3d(1.0 + 0.01 * double(s), 1.0, 1.0 - 0.03 * double(s)); };
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
-    for (std::size_t s = 0; s < t; ++s) {
-      const Eigen::Vector3d q = stretch(s).asDiagonal() * p + Eigen::Vector3d(1e-4 * double(s), 0, 0);
-      for (int k = 0; k < 3; ++k) c[3 * (i * t + s) + k] = (i == 7 && s == 2) ? std::nan("") : q[k];
-    }
-  }
-  const auto eps = report::tracked_strains(c, n, t);
-  for (std::size_t s = 0; s < t; ++s) {
-    EXPECT_NEAR(eps.axial[s], -std::log(stretch(s).z()), 1e-12);
-    EXPECT_NEAR(eps.volumetric[s], -std::log(stretch(s).prod()), 1e-12);
-  }
-}
-
 TEST(ReportPage, BenchChartsAreFoundWithTheirStage) {
   test::TempDir d;
   for (const char* name : {"ct2labels_accuracy.png", "ctsynth_supersample.png", "ctsynth_supersample.csv", "shapes2mesh_preview.png",

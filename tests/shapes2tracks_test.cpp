@@ -101,6 +101,11 @@ TEST(Shapes2tracks, TracksTheBundledSeriesWithTrueIdentitiesAndRotations) {
   EXPECT_EQ(t.matched, (std::vector<std::uint64_t>{0, 310, 310}));
   EXPECT_EQ(t.lost, (std::vector<std::uint64_t>{0, 0, 0}));
   EXPECT_EQ(t.started, (std::vector<std::uint64_t>{310, 0, 0}));
+  // The positions alone, as the report reads them (no track is lost, so no NaN).
+  const track::TrackedCentroids centroids = track::read_tracked_centroids(dir / "tracks.h5");
+  EXPECT_EQ(centroids.tracks, t.tracks);
+  EXPECT_EQ(centroids.scans, t.scans);
+  EXPECT_EQ(centroids.centroid, t.centroid);
   // Each scan's d50 as the matcher measured it from that scan's shapes file.
   ASSERT_EQ(t.scan_d50.size(), 3u);
   for (std::size_t s = 0; s < 3; ++s)

@@ -1,9 +1,8 @@
 // Fuzz target: kind=fdem_results files (fdem/results_file.cpp) as tracks2micro, fdem2forces and
-// report read them (micro/simulation.cpp, report/run_data.cpp), structure-aware (h5_mutator.hpp).
+// report read them (micro/simulation.cpp), structure-aware (h5_mutator.hpp).
 #include "fuzz_support.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/micro/simulation.hpp"
-#include "graintwin/report/run_data.hpp"
 #include "h5_mutator.hpp"
 
 GRAINTWIN_FUZZ_TARGET(results) {
@@ -11,7 +10,7 @@ GRAINTWIN_FUZZ_TARGET(results) {
                                   [](const std::filesystem::path& p) {
                                     namespace micro = graintwin::micro;
                                     graintwin::fdem::read_results_series(p);
-                                    graintwin::report::read_triaxial_series(p);
+                                    graintwin::fdem::read_triaxial_series(p);
                                     const micro::SimulationGrains grains = micro::read_simulation_grains(p);
                                     std::vector<double> times;
                                     micro::simulation_states(p, grains, &times);
@@ -21,6 +20,6 @@ GRAINTWIN_FUZZ_TARGET(results) {
                                       micro::frame_contacts(frame, grains, p, k);
                                       micro::frame_centroids(frame, grains, p, k);
                                     }
-                                    graintwin::report::simulation_branch_roses(p, {0, frames - 1}, 6, 12);
+                                    micro::simulation_branch_roses(p, {0, frames - 1}, 6, 12);
                                   });
 }

@@ -4,6 +4,9 @@
 #include "h5_mutator.hpp"
 
 GRAINTWIN_FUZZ_TARGET(tracks) {
-  graintwin::fuzz::fuzz_h5_reader("read_tracks_file", graintwin::fuzz::base_file("tracks.h5"), data, size,
-                                  [](const std::filesystem::path& p) { graintwin::track::read_tracks_file(p); });
+  graintwin::fuzz::fuzz_h5_reader("tracks readers", graintwin::fuzz::base_file("tracks.h5"), data, size,
+                                  [](const std::filesystem::path& p) {
+                                    graintwin::track::read_tracked_centroids(p);
+                                    graintwin::track::read_tracks_file(p);
+                                  });
 }

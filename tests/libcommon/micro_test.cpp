@@ -105,6 +105,26 @@ TEST(LocalDeformation, OneDisplacedGrainGivesTheAnalyticD2min) {
   EXPECT_LT(r[index_of(n, 4, 4, 4)].d2min, 1e-24);
 }
 
+TEST(LocalDeformation, TrackedStrainsOfAnAffineMapAreExact) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  const std::size_t n = 40, t = 3;
+  std::vector<double> c(n * t * 3);
+  const auto stretch = [](std::size_t s) { return Eigen::Vector3d(1.0 + 0.01 * double(s), 1.0, 1.0 - 0.03 * double(s)); };
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    for (std::size_t s = 0; s < t; ++s) {
+      const Eigen::Vector3d q = stretch(s).asDiagonal() * p + Eigen::Vector3d(1e-4 * double(s), 0, 0);
+      for (int k = 0; k < 3; ++k) c[3 * (i * t + s) + k] = (i == 7 && s == 2) ? std::nan("") : q[k];
+    }
+  }
+  const auto eps = tracked_strains(c, n, t);
+  for (std::size_t s = 0; s < t; ++s) {
+    EXPECT_NEAR(eps.axial[s], -std::log(stretch(s).z()), 1e-12);
+    EXPECT_NEAR(eps.volumetric[s], -std::log(stretch(s).prod()), 1e-12);
+  }
+}
+
 TEST(LocalDeformation, DegenerateNeighbourhoodsAreFlaggedNotGarbage) {
   const double a = 0.5e-3;
   // A flat layer: every neighbourhood is coplanar, so Y is singular.
@@ -409,6 +429,21 @@ TEST(Simulation, FrameContactsLeavePlatensOutAndProjectTheForce) {
   EXPECT_NEAR(times[2], 2.0 * double(run.steps_per_frame) * run.dt, 1e-15);
   EXPECT_LT((s.position[7 * s.states] - test::lattice_site(run, 7)).norm(), 1e-15);
   EXPECT_EQ(s.coordination[1], std::vector<std::uint32_t>(8, 0));
+}
+
+TEST(Simulation, BranchRosesAreOfTheGrainGrainContactsCentroidToCentroid) {
+  test::TempDir dir;
+  test::LatticeRun run;
+  run.side = 2;
+  test::write_lattice_results(dir / "r.h5", run);
+  // Grain 0 touches its neighbours along x (1), across the xy diagonal (3), along z (4) and across
+  // the xz diagonal (5); grain 2 touches a platen, which no branch vector joins.
+  test::set_frame_contacts(dir / "r.h5", 1, {{0, 1}, {0, 3}, {0, 4}, {0, 5}, {2, 0, 1}});
+  const auto roses = simulation_branch_roses(dir / "r.h5", {0, 1}, 3, 1);
+  ASSERT_EQ(roses.size(), 2u);
+  EXPECT_EQ(roses[0].counts, std::vector<std::uint64_t>(3, 0));  // the lattice's frames have no contact
+  // Polar bands of 30 degrees from z: z, then the xz diagonal at 45, then x and xy at 90.
+  EXPECT_EQ(roses[1].counts, (std::vector<std::uint64_t>{1, 1, 2}));
 }
 
 TEST(Simulation, BadGrainTablesAndNoFramesAreDataErrors) {

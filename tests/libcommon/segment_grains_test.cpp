@@ -216,6 +216,7 @@ TEST(LabelsFile, RoundTripsEveryField) {
     EXPECT_EQ(back.grains[i].touches_edge, c.grains[i].touches_edge);
   }
   EXPECT_DOUBLE_EQ(back.sample.void_ratio.e, c.sample.void_ratio.e);
+  EXPECT_DOUBLE_EQ(read_void_ratio(dir / "l.h5"), c.sample.void_ratio.e);  // without the label image
   EXPECT_DOUBLE_EQ(back.sample.region.radius, c.sample.region.radius);
   EXPECT_DOUBLE_EQ(back.sample.region.z_min, -1.5e-3);
   EXPECT_TRUE(std::isinf(back.sample.region.z_max));  // an unbounded extent survives the NaN encoding

@@ -68,6 +68,13 @@ TEST(VoidRatio, KnownCylinderOfSpheres) {
   EXPECT_NEAR((h.solid_m3 + h.void_m3) / (v.solid_m3 + v.void_m3), 0.5, 1e-9);
 }
 
+TEST(VoidRatio, VolumetricStrainKeepsTheSolidVolume) {
+  // Solid 1 m^3 with 0.8 m^3 of voids compacted to 0.6: V goes from 1.8 to 1.6 m^3.
+  EXPECT_NEAR(void_ratio_volumetric_strain(0.8, 0.6), std::log(1.8 / 1.6), 1e-15);
+  EXPECT_EQ(void_ratio_volumetric_strain(0.7, 0.7), 0.0);
+  EXPECT_LT(void_ratio_volumetric_strain(0.6, 0.8), 0.0);  // dilation is negative
+}
+
 TEST(FitCylinder, FindsTheSampleAndIgnoresASolidMembrane) {
   const Shape3 shape{40, 72, 72};
   auto m = paint(shape, fill_cylinder(shape, 4.5, 6000, 2));

@@ -1,4 +1,4 @@
-// track/: the spatial index, the sparse assignment, the displacement field, the paper's Algorithm 1,
+// track/: the sparse assignment, the displacement field, the paper's Algorithm 1,
 // the improved matcher, the chaining of matches into tracks with lost and found grains, and rotations.
 #include <gtest/gtest.h>
 
@@ -15,7 +15,6 @@
 #include "graintwin/track/assignment.hpp"
 #include "graintwin/track/displacement_field.hpp"
 #include "graintwin/track/match.hpp"
-#include "graintwin/track/point_grid.hpp"
 #include "graintwin/track/rotation.hpp"
 #include "graintwin/track/synthetic.hpp"
 #include "graintwin/track/tracks.hpp"
@@ -75,29 +74,6 @@ ScanGrains hand_scan(const std::vector<Eigen::Vector3d>& pos, const std::vector<
 }
 
 }  // namespace
-
-TEST(PointGrid, FindsExactlyThePointsWithinTheRadius) {
-  std::mt19937_64 rng(3);
-  auto pts = random_points(2000, 10.0, rng);
-  pts.push_back({1e6, 0, 0});  // a far outlier must not blow the grid up
-  pts.push_back({std::nan(""), 0, 0});
-  const PointGrid grid(pts, 0.7);
-  for (int q = 0; q < 200; ++q) {
-    const Eigen::Vector3d x = random_points(1, 12.0, rng)[0] - Eigen::Vector3d::Constant(1.0);
-    const double r = 0.1 + 3.0 * q / 200.0;
-    std::vector<std::size_t> brute;
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      if ((pts[i] - x).norm() <= r) brute.push_back(i);
-    ASSERT_EQ(grid.within(x, r), brute) << q;
-    std::size_t nearest = pts.size();
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      if (pts[i].allFinite() && (pts[i] - x).norm() <= r && (nearest == pts.size() || (pts[i] - x).norm() < (pts[nearest] - x).norm()))
-        nearest = i;
-    EXPECT_EQ(grid.nearest(x, r, pts.size()), nearest == pts.size() ? grid.size() : nearest);
-  }
-  EXPECT_EQ(grid.within({1e6, 0, 0}, 1.0), std::vector<std::size_t>{2000});
-  EXPECT_THROW(PointGrid(pts, 0.0), UsageError);
-}
 
 TEST(Assignment, MatchesBruteForceOnRandomSparseProblems) {
   std::mt19937_64 rng(11);

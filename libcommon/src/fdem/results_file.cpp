@@ -202,6 +202,27 @@ ResultsSeries read_results_series(const std::filesystem::path& path) {
   return s;
 }
 
+TriaxialSeries read_triaxial_series(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
+  TriaxialSeries s;
+  for (const char* name : {sr::series_axial_strain, sr::series_volumetric_strain, sr::series_stress_ratio})
+    if (!f.exists(name)) s.missing.push_back(name);
+  if (!s.missing.empty()) return s;
+  const auto axial = f.read<double>(sr::series_axial_strain);
+  const auto volumetric = f.read<double>(sr::series_volumetric_strain);
+  const auto ratio = f.read<double>(sr::series_stress_ratio);
+  if (volumetric.size() != axial.size() || ratio.size() != axial.size())
+    throw DataError(path.string() + ": the series' strains and stress ratio differ in length; rerun fdemrun");
+  // fdemrun measures the strains from the start of shearing: the rows before it are NaN.
+  for (std::size_t i = 0; i < axial.size(); ++i)
+    if (std::isfinite(axial[i])) {
+      s.axial_strain.push_back(axial[i]);
+      s.volumetric_strain.push_back(volumetric[i]);
+      s.stress_ratio.push_back(ratio[i]);
+    }
+  return s;
+}
+
 std::size_t results_frame_count(const std::filesystem::path& path) {
   const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
   return f.list(sr::frames).size();

@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/track/point_grid.hpp"
+#include "graintwin/core/point_grid.hpp"
 
 namespace graintwin::micro {
 
@@ -37,7 +37,7 @@ std::vector<std::pair<std::size_t, std::size_t>> contact_links(const std::vector
   double r_max = 0.0;
   for (std::size_t m : members) pts.push_back(positions[m]), r_max = std::max(r_max, radii[m]);
   if (!(r_max > 0.0)) return links;
-  const track::PointGrid grid(pts, 2.0 * link_factor * r_max);
+  const PointGrid grid(pts, 2.0 * link_factor * r_max);
   for (std::size_t a = 0; a < members.size(); ++a) {
     const std::size_t i = members[a];
     grid.for_each_within(pts[a], link_factor * (radii[i] + r_max), [&](std::size_t b, double d2) {

@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/track/point_grid.hpp"
+#include "graintwin/core/point_grid.hpp"
 
 namespace graintwin::micro {
 
@@ -54,7 +54,7 @@ std::vector<LocalDeformation> local_deformation(const std::vector<Eigen::Vector3
   std::vector<Eigen::Vector3d> indexed(n);
   for (std::size_t i = 0; i < n; ++i)
     indexed[i] = before[i].allFinite() && after[i].allFinite() ? before[i] : Eigen::Vector3d::Constant(nan);
-  const track::PointGrid grid(indexed, o.radius);
+  const PointGrid grid(indexed, o.radius);
   std::vector<LocalDeformation> out(n);
   const double inv_d2 = 1.0 / (o.d50 * o.d50);
 #pragma omp parallel
@@ -93,6 +93,33 @@ std::vector<LocalDeformation> local_deformation(const std::vector<Eigen::Vector3
     }
   }
   return out;
+}
+
+TrackedStrains tracked_strains(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans) {
+  if (centroid.size() != tracks * scans * 3) throw UsageError("tracked_strains: the centroid table is not N x T x 3");
+  TrackedStrains eps{std::vector<double>(scans, std::nan("")), std::vector<double>(scans, std::nan(""))};
+  const auto at = [&](std::size_t i, std::size_t t) {
+    const double* p = centroid.data() + 3 * (i * scans + t);
+    return Eigen::Vector3d(p[0], p[1], p[2]);
+  };
+  for (std::size_t t = 0; t < scans; ++t) {
+    std::vector<Eigen::Vector3d> before, after;
+    Eigen::Vector3d mean_before = Eigen::Vector3d::Zero(), mean_after = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < tracks; ++i)
+      if (at(i, 0).allFinite() && at(i, t).allFinite()) {
+        before.push_back(at(i, 0)), after.push_back(at(i, t));
+        mean_before += before.back(), mean_after += after.back();
+      }
+    if (before.size() < 4) continue;
+    mean_before /= double(before.size()), mean_after /= double(after.size());
+    for (std::size_t k = 0; k < before.size(); ++k) before[k] -= mean_before, after[k] -= mean_after;
+    Eigen::Matrix3d lambda;
+    double residual = 0.0;
+    if (!affine_fit(before, after, 1e-9, lambda, residual)) continue;
+    if (lambda(2, 2) > 0.0) eps.axial[t] = -std::log(lambda(2, 2));
+    if (lambda.determinant() > 0.0) eps.volumetric[t] = -std::log(lambda.determinant());
+  }
+  return eps;
 }
 
 }  // namespace graintwin::micro

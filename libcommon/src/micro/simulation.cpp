@@ -92,4 +92,22 @@ SeriesStates simulation_states(const std::filesystem::path& path, const Simulati
   return s;
 }
 
+std::vector<contacts::Rose> simulation_branch_roses(const std::filesystem::path& path, const std::vector<std::size_t>& frames,
+                                                    int theta_bins, int phi_bins) {
+  const SimulationGrains grains = read_simulation_grains(path);
+  std::vector<contacts::Rose> roses;
+  for (std::size_t k : frames) {
+    const fdem::ResultsFrame frame = fdem::read_results_frame(path, k);
+    const FrameContacts fc = frame_contacts(frame, grains, path, k);
+    const std::vector<Eigen::Vector3d> centroid = frame_centroids(frame, grains, path, k);
+    std::vector<Vec3> branch;
+    for (const auto& [a, b] : fc.pair) {
+      const Eigen::Vector3d d = centroid[b] - centroid[a];
+      branch.push_back({d.x(), d.y(), d.z()});
+    }
+    roses.push_back(contacts::rose(branch, theta_bins, phi_bins));
+  }
+  return roses;
+}
+
 }  // namespace graintwin::micro

@@ -8,8 +8,8 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/parallel.hpp"
+#include "graintwin/core/point_grid.hpp"
 #include "graintwin/micro/clusters.hpp"
-#include "graintwin/track/point_grid.hpp"
 
 namespace graintwin::micro {
 
@@ -90,7 +90,7 @@ PairCorrelation pair_correlation(const std::vector<Eigen::Vector3d>& points, con
   g.g.assign(bins, 0.0);
   if (in.size() < 2 || !(volume > 0.0)) return g;
   const auto dirs = fibonacci_directions(directions);
-  const track::PointGrid grid(in, r_max);
+  const PointGrid grid(in, r_max);
   // Each block of points fills its own row of bins, and the rows are summed in block order: the
   // sums, and so g(r), are the same bit for bit whatever the threads and their schedule.
   constexpr std::size_t kBlock = 64;

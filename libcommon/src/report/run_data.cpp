@@ -13,14 +13,17 @@
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
-#include "graintwin/micro/micro_file.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/local_deformation.hpp"
+#include "graintwin/micro/micro_file.hpp"
 #include "graintwin/micro/simulation.hpp"
 #include "graintwin/report/charts.hpp"
+#include "graintwin/segment/labels_file.hpp"
+#include "graintwin/segment/sample_region.hpp"
 #include "graintwin/shape/shapes_file.hpp"
+#include "graintwin/track/tracks_file.hpp"
 
 namespace graintwin::report {
 
@@ -58,13 +61,14 @@ std::vector<fs::path> per_scan(const std::vector<fs::path>& given, const std::ve
   return out;
 }
 
+/// A rose as the charts take it: its counts, no mean force.
+micro::ForceRose counts_only(const contacts::Rose& r) { return {r.theta_edges, r.phi_edges, r.counts, {}}; }
+
 ScanData read_scan(const RunFiles& files, std::size_t s) {
   ScanData d;
   d.name = files.scan_names[s];
-  d.void_ratio = std::nan("");
+  d.void_ratio = segment::read_void_ratio(files.labels[s]);
   d.coordination_mean = std::nan("");
-  const io::H5File labels = io::H5File::open(files.labels[s]);
-  if (labels.exists(schema::labels::sample_void_ratio)) d.void_ratio = labels.read_scalar<double>(schema::labels::sample_void_ratio);
   if (!files.shapes[s].empty()) {
     const shape::ShapesFile sh = shape::read_shapes_file(files.shapes[s]);
     d.psd = sh.psd;
@@ -75,7 +79,6 @@ ScanData read_scan(const RunFiles& files, std::size_t s) {
     d.contacts = c.contacts.size();
     d.coordination = c.coordination.histogram;
     d.coordination_mean = c.coordination.mean;
-    const auto counts_only = [](const contacts::Rose& r) { return micro::ForceRose{r.theta_edges, r.phi_edges, r.counts, {}}; };
     d.rose_normal = counts_only(c.rose_normal);
     d.rose_branch = counts_only(c.rose_branch);
   }
@@ -213,92 +216,20 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
   return history;
 }
 
-TriaxialSeries read_triaxial_series(const fs::path& results) {
-  namespace sr = schema::fdem_results;
-  const io::H5File f = io::H5File::open(results);
-  TriaxialSeries s;
-  for (const char* name : {sr::series_axial_strain, sr::series_volumetric_strain, sr::series_stress_ratio})
-    if (!f.exists(name)) s.missing.push_back(name);
-  if (!s.missing.empty()) return s;
-  const auto axial = f.read<double>(sr::series_axial_strain);
-  const auto volumetric = f.read<double>(sr::series_volumetric_strain);
-  const auto ratio = f.read<double>(sr::series_stress_ratio);
-  if (volumetric.size() != axial.size() || ratio.size() != axial.size())
-    throw DataError(results.string() + ": the series' strains and stress ratio differ in length; rerun fdemrun");
-  // The strains are NaN before shearing starts (fdemrun measures them from there): the curves are
-  // the shearing rows.
-  for (std::size_t i = 0; i < axial.size(); ++i)
-    if (std::isfinite(axial[i])) {
-      s.axial_strain.push_back(axial[i]);
-      s.volumetric_strain.push_back(volumetric[i]);
-      s.stress_ratio.push_back(ratio[i]);
-    }
-  return s;
-}
-
-std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, const std::vector<std::size_t>& frames,
-                                                      int theta_bins, int phi_bins) {
-  const micro::SimulationGrains grains = micro::read_simulation_grains(results);
-  std::vector<micro::ForceRose> roses;
-  for (std::size_t k : frames) {
-    const fdem::ResultsFrame fr = fdem::read_results_frame(results, k);
-    const micro::FrameContacts fc = micro::frame_contacts(fr, grains, results, k);
-    const std::vector<Eigen::Vector3d> c = micro::frame_centroids(fr, grains, results, k);
-    std::vector<Vec3> branch;
-    for (const auto& [a, b] : fc.pair) {
-      const Eigen::Vector3d d = c[b] - c[a];
-      branch.push_back({d.x(), d.y(), d.z()});
-    }
-    const contacts::Rose r = contacts::rose(branch, theta_bins, phi_bins);
-    roses.push_back({r.theta_edges, r.phi_edges, r.counts, {}});
-  }
-  return roses;
-}
-
-TrackedStrains tracked_strains(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans) {
-  if (centroid.size() != tracks * scans * 3) throw UsageError("tracked_strains: the centroid table is not N x T x 3");
-  TrackedStrains eps{std::vector<double>(scans, std::nan("")), std::vector<double>(scans, std::nan(""))};
-  const auto at = [&](std::size_t i, std::size_t t) {
-    const double* p = centroid.data() + 3 * (i * scans + t);
-    return Eigen::Vector3d(p[0], p[1], p[2]);
-  };
-  for (std::size_t t = 0; t < scans; ++t) {
-    std::vector<Eigen::Vector3d> before, after;
-    Eigen::Vector3d mean_before = Eigen::Vector3d::Zero(), mean_after = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < tracks; ++i)
-      if (at(i, 0).allFinite() && at(i, t).allFinite()) {
-        before.push_back(at(i, 0)), after.push_back(at(i, t));
-        mean_before += before.back(), mean_after += after.back();
-      }
-    if (before.size() < 4) continue;
-    mean_before /= double(before.size()), mean_after /= double(after.size());
-    for (std::size_t k = 0; k < before.size(); ++k) before[k] -= mean_before, after[k] -= mean_after;
-    Eigen::Matrix3d lambda;
-    double residual = 0.0;
-    if (!micro::affine_fit(before, after, 1e-9, lambda, residual)) continue;
-    if (lambda(2, 2) > 0.0) eps.axial[t] = -std::log(lambda(2, 2));
-    if (lambda.determinant() > 0.0) eps.volumetric[t] = -std::log(lambda.determinant());
-  }
-  return eps;
-}
-
 ExperimentData read_experiment(const RunFiles& files) {
   ExperimentData e;
   for (std::size_t s = 0; s < files.labels.size(); ++s) e.scans.push_back(read_scan(files, s));
   const std::size_t scans = e.scans.size();
   if (std::isfinite(e.scans[0].void_ratio))
     for (const ScanData& s : e.scans)
-      e.void_ratio_volumetric_strain.push_back(std::log((1.0 + e.scans[0].void_ratio) / (1.0 + s.void_ratio)));
+      e.void_ratio_volumetric_strain.push_back(segment::void_ratio_volumetric_strain(e.scans[0].void_ratio, s.void_ratio));
   if (!files.tracks.empty()) {
-    const io::H5File t = io::H5File::open(files.tracks);
-    std::vector<hsize_t> dims;
-    const auto centroid = t.read<double>(schema::tracks::centroid, &dims);
-    if (dims.size() != 3 || dims[2] != 3) throw DataError(files.tracks.string() + ": /tracks/centroid is not N x T x 3; rewrite it with shapes2tracks");
-    if (dims[1] != scans)
-      throw UsageError(files.tracks.string() + " follows " + std::to_string(dims[1]) + " scans but the run has " + std::to_string(scans) +
-                       "; rerun the track stage or name the scans' files explicitly");
-    e.tracks = dims[0];
-    const TrackedStrains tracked = tracked_strains(centroid, dims[0], dims[1]);
+    const track::TrackedCentroids tracked_centroids = track::read_tracked_centroids(files.tracks);
+    if (tracked_centroids.scans != scans)
+      throw UsageError(files.tracks.string() + " follows " + std::to_string(tracked_centroids.scans) + " scans but the run has " +
+                       std::to_string(scans) + "; rerun the track stage or name the scans' files explicitly");
+    e.tracks = tracked_centroids.tracks;
+    const micro::TrackedStrains tracked = micro::tracked_strains(tracked_centroids.centroid, tracked_centroids.tracks, scans);
     e.tracked_axial_strain = tracked.axial, e.tracked_volumetric_strain = tracked.volumetric;
   }
   if (!files.scan_strains.empty()) {
@@ -328,9 +259,10 @@ SimulationData read_simulation(const RunFiles& files, std::size_t frames_shown, 
     s.grains = grains.label.size();
     s.psd = grains.psd;
     s.frames = fdem::results_frame_count(files.simulation);
-    s.series = read_triaxial_series(files.simulation);
+    s.series = fdem::read_triaxial_series(files.simulation);
     s.rose_frames = pick_evenly(s.frames, frames_shown);
-    s.branch_roses = simulation_branch_roses(files.simulation, s.rose_frames, theta_bins, 36);
+    for (const contacts::Rose& r : micro::simulation_branch_roses(files.simulation, s.rose_frames, theta_bins, 36))
+      s.branch_roses.push_back(counts_only(r));
   }
   if (!files.simulation_micro.empty()) s.micro = micro::read_micro_tables(files.simulation_micro);
   if (!files.forces.empty()) s.forces = micro::read_forces_tables(files.forces);

@@ -48,7 +48,7 @@ void write_labels_file(const std::filesystem::path& path, const LabelsFile& c, c
   f.set_attr("/sample", "cylinder_centre_xy", std::vector<double>{r.centre_x, r.centre_y});
   f.set_attr("/sample", "cylinder_radius", finite_or_nan(r.radius));
   f.set_attr("/sample", "cylinder_z_range", std::vector<double>{finite_or_nan(r.z_min), finite_or_nan(r.z_max)});
-  f.write("/sample/void_ratio", std::vector<double>{c.sample.void_ratio.e}, units("1"));
+  f.write(schema::labels::sample_void_ratio, std::vector<double>{c.sample.void_ratio.e}, units("1"));
   f.write("/sample/solid_volume", std::vector<double>{c.sample.void_ratio.solid_m3}, units("m^3"));
   f.write("/sample/void_volume", std::vector<double>{c.sample.void_ratio.void_m3}, units("m^3"));
   f.write_strings("/segmentation/parameters", {c.parameters_json});
@@ -95,11 +95,17 @@ LabelsFile read_labels_file(const std::filesystem::path& path) {
   if (centre.size() == 2) r.centre_x = centre[0], r.centre_y = centre[1];
   if (radius.size() == 1) r.radius = nan_to(radius[0], inf);
   if (zr.size() == 2) r.z_min = nan_to(zr[0], -inf), r.z_max = nan_to(zr[1], inf);
-  c.sample.void_ratio.e = f.read_scalar<double>("/sample/void_ratio");
+  c.sample.void_ratio.e = f.read_scalar<double>(schema::labels::sample_void_ratio);
   c.sample.void_ratio.solid_m3 = f.read_scalar<double>("/sample/solid_volume");
   c.sample.void_ratio.void_m3 = f.read_scalar<double>("/sample/void_volume");
   c.parameters_json = f.read_string("/segmentation/parameters");
   return c;
+}
+
+double read_void_ratio(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::labels, "pass the output of ct2labels");
+  if (!f.exists(schema::labels::sample_void_ratio)) return std::numeric_limits<double>::quiet_NaN();
+  return f.read_scalar<double>(schema::labels::sample_void_ratio);
 }
 
 }  // namespace graintwin::segment

@@ -156,4 +156,6 @@ template Cylinder fit_sample_cylinder(const Volume<std::uint8_t>&, const Volume<
 template Cylinder fit_sample_cylinder(const Volume<std::uint8_t>&, const Volume<std::uint16_t>&, GreyBand);
 template Cylinder fit_sample_cylinder(const Volume<std::uint8_t>&, const Volume<float>&, GreyBand);
 
+double void_ratio_volumetric_strain(double e0, double e) { return std::log((1.0 + e0) / (1.0 + e)); }
+
 }  // namespace graintwin::segment

@@ -6,10 +6,10 @@
 #include <numeric>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/point_grid.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "graintwin/track/assignment.hpp"
 #include "graintwin/track/displacement_field.hpp"
-#include "graintwin/track/point_grid.hpp"
 
 namespace graintwin::track {
 namespace {

@@ -146,6 +146,17 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
   return r;
 }
 
+TrackedCentroids read_tracked_centroids(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::tracks, "pass the output of shapes2tracks");
+  TrackedCentroids c;
+  std::vector<hsize_t> dims;
+  c.centroid = f.read<double>(st::centroid, &dims);
+  if (dims.size() != 3 || dims[2] != 3)
+    throw DataError(path.string() + ": " + st::centroid + " is not N x T x 3; rewrite it with shapes2tracks");
+  c.tracks = dims[0], c.scans = dims[1];
+  return c;
+}
+
 void write_tracks_vtp(const std::filesystem::path& path, const TracksFile& c) {
   const Tracks& tr = c.tracks;
   const Kinematics& k = c.kinematics;

@@ -86,6 +86,15 @@ struct ResultsSeries {
 };
 /// UsageError naming the file when it is not a results file; DataError when a table is missing.
 ResultsSeries read_results_series(const std::filesystem::path& path);
+/// The curves of a triaxial test (a scene with [triaxial]): log axial and volumetric strains and
+/// the stress ratio sigma_1 / sigma_3 over the shearing rows of the series (the strains are NaN
+/// before shearing starts). `missing` names the columns the file lacks (then the curves are empty).
+struct TriaxialSeries {
+  std::vector<double> axial_strain, volumetric_strain, stress_ratio;
+  std::vector<std::string> missing;
+};
+/// UsageError naming the file when it is not a results file; DataError when the columns differ in length.
+TriaxialSeries read_triaxial_series(const std::filesystem::path& path);
 std::size_t results_frame_count(const std::filesystem::path& path);
 ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t frame);
 

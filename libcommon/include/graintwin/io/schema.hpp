@@ -293,14 +293,16 @@ inline constexpr const char* rose_count = "count";                   ///< uint64
 inline constexpr const char* rose_mean_force = "mean_force";         ///< (n_theta x n_phi) N, NaN in empty bins
 }  // namespace graintwin::schema::forces
 
-// kind=labels (ct2labels): the sample measurement the report reads (segment/labels_file.cpp writes it).
+// kind=labels (ct2labels): the sample measurement the report reads (segment/labels_file.cpp writes
+// and reads it).
 namespace graintwin::schema::labels {
 inline constexpr const char* sample_void_ratio = "/sample/void_ratio";  ///< (1) e = V_void / V_solid
 }  // namespace graintwin::schema::labels
 
 // The triaxial measurements of fdemrun's time series (a scene with [triaxial]; docs/fdem_triaxial.md),
-// read by report; one value per series row, stresses and strains compression positive. Strains are
-// from the start of shearing (H0, V0) and NaN before it; the inertial number is NaN before it too.
+// read by fdem::read_triaxial_series for the report; one value per series row, stresses and strains
+// compression positive. Strains are from the start of shearing (H0, V0) and NaN before it; the
+// inertial number is NaN before it too.
 namespace graintwin::schema::fdem_results {
 inline constexpr const char* series_axial_strain = "/series/axial_strain";            ///< (R) eps_1 = ln(H0 / H)
 inline constexpr const char* series_volumetric_strain = "/series/volumetric_strain";  ///< (R) eps_v = ln(V0 / V), eq. 27

@@ -21,7 +21,7 @@ namespace graintwin::micro {
 std::vector<std::size_t> top_fraction(const std::vector<double>& score, double fraction);
 
 /// Linked pairs (i < j) among `members` (indices into positions/radii) by the contact-distance
-/// criterion above; uses a uniform grid (track::PointGrid).
+/// criterion above; uses a uniform grid (core/point_grid).
 std::vector<std::pair<std::size_t, std::size_t>> contact_links(const std::vector<Eigen::Vector3d>& positions,
                                                                const std::vector<double>& radii,
                                                                const std::vector<std::size_t>& members,

@@ -2,7 +2,8 @@
 // Non-affine motion and local strain of each grain between two states (docs/methods.md, Falk and
 // Langer 1998): the best affine map Lambda of the grain's neighbourhood, the residual D2min, the
 // local strain eps^L = I - (Lambda + Lambda^T)/2 (compression positive, the corrected form) and its
-// deviatoric invariant eps_q = sqrt(2/3 e_dev : e_dev).
+// deviatoric invariant eps_q = sqrt(2/3 e_dev : e_dev); and the same affine map over a whole
+// sample's tracked grains, as its axial and volumetric strain.
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
@@ -52,9 +53,19 @@ double deviatoric_strain(const Eigen::Matrix<double, 6, 1>& strain);
 /// Every grain's local deformation. `before`, `after`: positions (m) of the same N grains in the
 /// two states; a non-finite position marks a grain missing from that state (it is neither computed
 /// nor anyone's neighbour). Neighbours are taken within options.radius in the first state with
-/// a uniform grid (track::PointGrid). Parallel over grains (OpenMP).
+/// a uniform grid (core/point_grid). Parallel over grains (OpenMP).
 std::vector<LocalDeformation> local_deformation(const std::vector<Eigen::Vector3d>& before,
                                                 const std::vector<Eigen::Vector3d>& after,
                                                 const DeformationOptions& options);
+
+/// The sample's log strains from its tracked grains: the least-squares affine map Lambda (affine_fit)
+/// of the positions `centroid` (N tracks x T scans x 3, track-major, m, NaN = missing) about their
+/// mean, from scan 0 to each scan, over the grains present in both: eps_1 = -ln Lambda_zz and
+/// eps_v = -ln det Lambda (compression positive); NaN where fewer than 4 grains are present in both
+/// or they span no volume. UsageError when `centroid` is not N x T x 3.
+struct TrackedStrains {
+  std::vector<double> axial, volumetric;
+};
+TrackedStrains tracked_strains(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans);
 
 }  // namespace graintwin::micro

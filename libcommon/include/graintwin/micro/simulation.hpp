@@ -2,13 +2,15 @@
 // Simulation frames (kind=fdem_results, written by fdemrun) as micro-mechanics states: every grain
 // of the simulation is present in every frame, volumes come from /grains/volume, coordination
 // numbers from each frame's grain-grain contacts (exact, unlike the CT side's distance criterion);
-// and each frame's grain-grain contacts with their normal forces, for fdem2forces.
+// and each frame's grain-grain contacts with their normal forces, for fdem2forces; the roses of
+// their branch vectors, for the report.
 #include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
 #include <unordered_map>
 #include <vector>
 
+#include "graintwin/contacts/fabric.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/micro/analysis.hpp"
 
@@ -47,5 +49,10 @@ std::vector<Eigen::Vector3d> frame_centroids(const fdem::ResultsFrame& frame, co
 /// grain-grain contacts. `times` (may be null) gets each frame's time (s). DataError when the
 /// file has no frames.
 SeriesStates simulation_states(const std::filesystem::path& path, const SimulationGrains& grains, std::vector<double>* times);
+
+/// Roses of the branch vectors (centroid to centroid of the grain-grain contacts) of the frames
+/// `frames` of `path`, with `theta_bins` x `phi_bins` bins (contacts::rose).
+std::vector<contacts::Rose> simulation_branch_roses(const std::filesystem::path& path, const std::vector<std::size_t>& frames,
+                                                    int theta_bins, int phi_bins);
 
 }  // namespace graintwin::micro

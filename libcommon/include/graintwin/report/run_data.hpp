@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/fdem/results_file.hpp"
 #include "graintwin/micro/distributions.hpp"
 #include "graintwin/micro/forces.hpp"
 #include "graintwin/micro/forces_file.hpp"
@@ -81,27 +82,13 @@ using ForcesFrame = micro::ForcesFrameTables;
 using ForcesWindow = micro::ForcesWindowTables;
 using ForcesData = micro::ForcesTables;
 
-/// The triaxial time series of a kind=fdem_results file: log axial and volumetric strains and the
-/// stress ratio sigma_1 / sigma_3 (fdemrun's triaxial test). `missing` names the columns
-/// the file lacks (then the vectors are empty).
-struct TriaxialSeries {
-  std::vector<double> axial_strain, volumetric_strain, stress_ratio;
-  std::vector<std::string> missing;
-};
-TriaxialSeries read_triaxial_series(const fs::path& results);
-
-/// Branch-vector roses (centroid to centroid of grain-grain contacts) of the frames `frames` of a
-/// results file, with `theta_bins` x `phi_bins` bins; counts only.
-std::vector<micro::ForceRose> simulation_branch_roses(const fs::path& results, const std::vector<std::size_t>& frames,
-                                                      int theta_bins, int phi_bins);
-
 /// Everything of the experiment side.
 struct ExperimentData {
   std::vector<ScanData> scans;
   std::optional<MicroData> micro;
   std::size_t tracks = 0;  ///< tracks in the tracks file (0 without one)
-  /// Per scan, from the affine map of the tracked centroids from scan 0 (tracked_strains; empty
-  /// without tracks).
+  /// Per scan, from the affine map of the tracked centroids from scan 0 (micro::tracked_strains;
+  /// empty without tracks).
   std::vector<double> tracked_axial_strain, tracked_volumetric_strain;
   /// Per scan eps_v = ln((1 + e_0) / (1 + e)) from the labels' void ratios (constant solid volume).
   std::vector<double> void_ratio_volumetric_strain;
@@ -109,21 +96,12 @@ struct ExperimentData {
 };
 ExperimentData read_experiment(const RunFiles& files);
 
-/// Log strains of the least-squares affine map Lambda of the positions (N x T x 3, row-major, NaN =
-/// missing) about their mean, from scan 0 to each scan: eps_1 = -ln Lambda_zz and
-/// eps_v = -ln det Lambda (compression positive); NaN where fewer than 4 grains are present in both
-/// or they span no volume.
-struct TrackedStrains {
-  std::vector<double> axial, volumetric;
-};
-TrackedStrains tracked_strains(const std::vector<double>& centroid, std::size_t tracks, std::size_t scans);
-
 /// The simulation side; the branch roses of up to `frames_shown` frames (pick_evenly) with
 /// `theta_bins` polar bands.
 struct SimulationData {
   bool present = false;  ///< a results file exists
   std::size_t grains = 0, frames = 0;
-  TriaxialSeries series;
+  fdem::TriaxialSeries series;
   shape::SizeDistribution psd;  ///< of the simulated grains (volume-equivalent diameters)
   std::optional<MicroData> micro;
   std::optional<ForcesData> forces;

@@ -34,4 +34,9 @@ void write_labels_file(const std::filesystem::path& path, const LabelsFile& cont
 /// naming the file when a grain has no row or a row disagrees with its voxels.
 LabelsFile read_labels_file(const std::filesystem::path& path);
 
+/// The void ratio a labels file measured in its sample region (/sample/void_ratio), without
+/// reading the label image: for readers that need only the sample's measurement (the report).
+/// NaN when the file holds none; UsageError naming the file if it is not a labels file.
+double read_void_ratio(const std::filesystem::path& path);
+
 }  // namespace graintwin::segment

@@ -81,4 +81,8 @@ struct VoidRatio {
 /// Throws DataError if the region holds no solid voxel. Parallel over z, exact integer counts.
 VoidRatio void_ratio(const Volume<std::uint8_t>& solid, const Cylinder& region);
 
+/// The log volumetric strain eps_v = ln(V0 / V) = ln((1 + e0) / (1 + e)) of a sample whose void
+/// ratio went from e0 to e at constant solid volume (compression positive).
+double void_ratio_volumetric_strain(double e0, double e);
+
 }  // namespace graintwin::segment

@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "graintwin/track/point_grid.hpp"
+#include "graintwin/core/point_grid.hpp"
 
 namespace graintwin::track {
 

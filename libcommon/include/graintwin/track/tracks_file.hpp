@@ -39,6 +39,15 @@ struct TracksTable {
 /// UsageError naming the file if it is not a tracks file; DataError if its tables disagree.
 TracksTable read_tracks_file(const std::filesystem::path& path);
 
+/// The tracked centroids alone (/tracks/centroid, N x T x 3 flat and track-major, m, NaN where a
+/// track misses a scan), for readers that need only the positions (the report's strains).
+struct TrackedCentroids {
+  std::size_t tracks = 0, scans = 0;
+  std::vector<double> centroid;
+};
+/// UsageError naming the file if it is not a tracks file; DataError if the table is not N x T x 3.
+TrackedCentroids read_tracked_centroids(const std::filesystem::path& path);
+
 /// Grain points for ParaView: one point per track at its first position; point arrays `track`,
 /// `first_scan`, and per scan t >= 1 `displacement_t` (from the first scan), `increment_t` (from
 /// the previous scan), `confidence_t` and `tracked_t` (1 present, 0 missing); vectors are zero

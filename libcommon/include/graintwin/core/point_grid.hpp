@@ -1,12 +1,13 @@
 #pragma once
 // A uniform cell grid over a fixed set of points, for "every point within r of q" queries in time
-// proportional to the points near q (the matchers' candidate windows and neighbourhoods; never an
-// all-pairs loop). Points are stored cell by cell (CSR layout), so a query reads contiguous memory.
+// proportional to the points near q (the matchers' candidate windows, the micro-mechanics'
+// neighbourhoods, clusters and g(r); never an all-pairs loop). Points are stored cell by cell
+// (CSR layout), so a query reads contiguous memory.
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
 
-namespace graintwin::track {
+namespace graintwin {
 
 class PointGrid {
  public:
@@ -59,4 +60,4 @@ class PointGrid {
   std::vector<std::uint32_t> order_;  ///< point indices, cell by cell
 };
 
-}  // namespace graintwin::track
+}  // namespace graintwin

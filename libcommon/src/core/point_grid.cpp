@@ -1,4 +1,4 @@
-#include "graintwin/track/point_grid.hpp"
+#include "graintwin/core/point_grid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "graintwin/core/error.hpp"
 
-namespace graintwin::track {
+namespace graintwin {
 
 PointGrid::PointGrid(const std::vector<Eigen::Vector3d>& points, double cell) : points_(points), cell_(cell) {
   if (!(cell > 0.0) || !std::isfinite(cell)) throw UsageError("PointGrid: the cell size must be positive and finite");
@@ -62,4 +62,4 @@ std::size_t PointGrid::nearest(const Eigen::Vector3d& q, double r_max, std::size
   return best;
 }
 
-}  // namespace graintwin::track
+}  // namespace graintwin
