@@ -1,4 +1,4 @@
-// ct2labels_accuracy_bench (issue 4, item 4): ct2labels with default settings against ctsynth ground
+// ct2labels_accuracy_bench: ct2labels with default settings against ctsynth ground
 // truth, for sand-shaped grains at 8, 12, 16 and 24 voxels per d50 and 2, 5 and 10 % noise: share
 // of true grains matched one-to-one (IoU >= 0.8), over- and under-segmented grains, void-ratio
 // error, time per run; the Gaussian's sigma swept over the whole grid (how the default was chosen);

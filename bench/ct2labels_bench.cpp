@@ -1,4 +1,4 @@
-// ct2labels_bench (issue 4, items 5 and 6): speed and memory of the ct2labels chain against
+// ct2labels_bench: speed and memory of the ct2labels chain against
 // scikit-image + scipy and ITK 5.2 (both from Debian), side by side in one run on the same 256^3
 // ctsynth scans with the same marker policy; and the 1000^3 scale run.
 //   build/bin/ct2labels_bench [--work DIR] [--reps N] [--sand-only]
@@ -410,7 +410,7 @@ int scale_main(const fs::path& work) {
                        p.at("grains").get<std::size_t>(), grains_in_tile, p.at("h_vox").get<double>());
   bench::Report report(
       "ct2labels_scale", "ct2labels: a 1000^3 uint16 volume",
-      "Issue 4, item 6: a 1000^3 uint16 volume segments within 24 GB. The volume is 4 x 4 x 4 mirrored copies of the "
+      "Target: a 1000^3 uint16 volume segments within 24 GB. The volume is 4 x 4 x 4 mirrored copies of the "
       "256^3 sand scan of the speed benchmark, cropped to 1000^3 (16 voxels per d50, 5 % noise), written as a "
       "kind=volume .h5; `ct2labels` runs on it with default settings except `--region volume` "
       "(the tiles hold many cylinders). Time = wall time of the process including reading the scan and writing the "

@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
                       "on a jittered cubic lattice with random orientations (the surface density of a dense "
                       "packing; packing time is reported by ctsynth itself), rendered with analytic partial "
                       "volumes (secant planes, the default) and, for comparison, with the former 4 x 4 x 4 point "
-                      "samples of boundary voxels. Target (issue 3): a 256^3 scan with about 2 000 grains renders "
+                      "samples of boundary voxels. Target: a 256^3 scan with about 2 000 grains renders "
                       "in under 10 s on one core. The reference row is the single-core render; the other stages "
                       "are listed for scale. The machine is shared with other jobs: the note gives the process "
                       "CPU time of the one-core runs, which their wall time exceeds by the time slices lost to "

@@ -1,4 +1,4 @@
-// fdem_contact_bench: issue 9 items 3 and 8 for the contact part.
+// fdem_contact_bench: the contact part of fdemrun, broad and narrow phase.
 // Grains with 242 surface nodes (a 6 x 6 x 7-cell structured box mesh mapped onto a ball of radius
 // 0.5 mm, randomly rotated) on a cubic lattice 1 % closer than a diameter, so every grain
 // touches its six neighbours; from 125 to about 10 000 grains. Per grain count, on one thread

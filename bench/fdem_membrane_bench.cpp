@@ -1,4 +1,4 @@
-// fdem_membrane_bench (issue 10 item 4): the bonded-ball membrane against its exact answers over
+// fdem_membrane_bench: the bonded-ball membrane against its exact answers over
 // the ratio membrane radius / ball radius 10-120: uniaxial tension against FL/(EA) and an open
 // tube under internal pressure against thin-shell theory (hoop strain p R / (E t)), with the cost
 // (balls, relaxation steps, seconds). Chart: relative error against the ratio.
@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
       "radius = 6 mm / ratio; `fdem::relax_membrane` (dynamic relaxation with critical mass damping, until the kinetic "
       "energy is 1e-8 of its peak). Tension: a tube two radii high pulled by end forces worth 0.1 % strain, "
       "strain measured between the rings at a quarter and three quarters of the height, against FL/(EA) with "
-      "A = 2 pi R t (issue 10: within 5 % above ratio 35). Pressure: an open tube 1.5 radii high under 100 Pa inside (hoop strain 0.16 %), "
+      "A = 2 pi R t (target: within 5 % above ratio 35). Pressure: an open tube 1.5 radii high under 100 Pa inside (hoop strain 0.16 %), "
       "hoop strain of the middle ring against p R / (E t). Time: one thread, the whole relaxation.");
   std::ofstream csv(kSource + "/docs/img/fdem_membrane_accuracy.csv");
   csv << "series,label,x,y\n";

@@ -339,7 +339,7 @@ def main():
         path = os.path.join(a.work, n + ".cpu")
         cpu[n] = float(open(path).read()) if os.path.exists(path) else math.nan
     machine = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.machine())
-    text = ("## fdemrun triaxial test (issue 10): fidelity and boundary\n\n"
+    text = ("## fdemrun triaxial test: fidelity and boundary\n\n"
             "The FDEM twin of sand_small (310 grains from the first scan, shapes2mesh), rigid grains unless said, "
             "`pipelines/scenes/triaxial.toml` with one knob changed per run: consolidation to 300 kPa in the servo wall "
             "(servo inertial number 1e-2), the membrane's forming procedure, shearing to eps_1 = 6 % with both platens. "

@@ -1,4 +1,4 @@
-// fdemrun_bench (issue 9 item 8): solver throughput on a settled packing of 500 grains.
+// fdemrun_bench: solver throughput on a settled packing of 500 grains.
 // Grains: gmsh spheres of five sizes (radius 0.40-0.60 mm; element size 0.22 R for tet4, about 350
 // surface nodes, 0.44 R for tet10, about 400 with mid-edge nodes, 0.26 R for rigid, about 270: the
 // issue states its rigid target for about 250 surface nodes per grain).

@@ -1,4 +1,4 @@
-// fdemrun_verify_bench (issue 9 item 6, the longer contact checks), elastic spheres meshed fine only
+// fdemrun_verify_bench (the longer contact checks), elastic spheres meshed fine only
 // at the touching pole (fdem::SizeGrading), stable time step, one thread, no contact damping:
 //  1. Hertz: glass sphere R = 1 mm (E = 48 GPa, nu = 0.2, rho = 2500) at 1 m/s onto a rigid wall;
 //     contact time, peak force and approach against Hertz over the element size at the pole (in

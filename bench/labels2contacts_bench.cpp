@@ -269,7 +269,7 @@ int main(int argc, char** argv) {
                                 "EDT h-maxima watershed; {} pairs per size, one core. Mean angular error (p90 in the "
                                 "note) of the PCA normal (midpoints of the contact-voxel pairs), the vector-area "
                                 "normal and the refined normal; the time column is the refinement per contact. "
-                                "Targets (issue 5): refined mean <= 4 degrees at 8 and <= 1.5 at 20 voxels per "
+                                "Targets: refined mean <= 4 degrees at 8 and <= 1.5 at 20 voxels per "
                                 "diameter, <= 5 ms per contact. spam rows: the anchors' measurement of spam's ITK "
                                 "(watershed + PCA) and RW (random walker + PCA) modes.\n\n"
                                 "![normal error against voxels per diameter](img/labels2contacts_normals.png)",
@@ -332,8 +332,8 @@ int main(int argc, char** argv) {
   const std::string label = fmt::format("{}^3, {} grains, {} contacts", side, grains.size(), found.size());
   bench::Report speed("labels2contacts_speed", "labels2contacts: speed",
                       "All contacts (detection, PCA normals, areas, branch vectors) of a label volume of spheres "
-                      "on a jittered cubic lattice, neighbours overlapping and split at the bisecting plane. Target "
-                      "(issue 5): 512^3 with about 20 000 grains in under 5 s on one core. Refinement rows: the "
+                      "on a jittered cubic lattice, neighbours overlapping and split at the bisecting plane. Target"
+                      ": 512^3 with about 20 000 grains in under 5 s on one core. Refinement rows: the "
                       "grey-level fit per contact at 8 and 20 voxels per diameter (one core), target <= 5 ms. "
                       "One-core rows are CPU times of the thread (the machine is shared; wall time there also "
                       "counts waits for a core), the all-core row is wall time.");

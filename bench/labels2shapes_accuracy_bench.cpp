@@ -1,4 +1,4 @@
-// labels2shapes_accuracy_bench (issue 6, item 4): SH shapes measured from ctsynth scans against the
+// labels2shapes_accuracy_bench: SH shapes measured from ctsynth scans against the
 // exact SH surfaces of the ground truth, for the fidelity knobs: SH degree (5 to 30) and voxels per
 // d50 (8, 12, 16, 24), with the labels from ct2labels (what users get) and from the truth (the fit's
 // own error); then the per-grain tolerance at degree 15. Errors per grain, medians over grains:

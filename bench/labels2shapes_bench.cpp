@@ -1,4 +1,4 @@
-// labels2shapes_bench: issue 6 item 3. (1) SH fitting of 16 000 grains at degree 15 through the
+// labels2shapes_bench: (1) SH fitting of 16 000 grains at degree 15 through the
 // shared pseudo-inverse against a per-grain least-squares solve (design matrix + Householder QR per
 // grain, what the CT-FDEM paper did), one core, and the same against the degree; (2) the whole
 // per-grain measurement (field, isosurface, rays, fit) of about 16 000 grains on one core and on

@@ -1,4 +1,4 @@
-// shapes2tracks_bench: issue 7 items 4 and 5.
+// shapes2tracks_bench: the matcher at paper scale.
 // (1) Accuracy: a ctsynth series of about 2 400 sand grains at axial strains 0, 1, 2, 5 and 10 %
 //     with a shear band; scan 0 is matched to each later scan (strain steps of 1, 2, 5 and 10 %)
 //     by the improved default, the paper's Algorithm 1, nearest centroid and volume-only matching,
@@ -396,7 +396,7 @@ int main(int argc, char** argv) {
         std::cout << impl << " " << k << " " << c->name << ": " << outcome_note(out) << std::endl;
       }
   for (const auto& [step, share] : std::vector<std::pair<double, double>>{{1, 0.2}, {2, 0.2}, {10, 1.0}})
-    csv << fmt::format("target (issue 7),,{},{}\n", step, share);
+    csv << fmt::format("target,,{},{}\n", step, share);
   csv.close();
 
   // Rotations of the grains the improved mode matched correctly (ct2labels), against the truth.
@@ -455,7 +455,7 @@ int main(int argc, char** argv) {
                   "slip 0.8 x the strain in d50, nonaffine noise 0.02 d50, 1 % volume and shape noise), matched by "
                   "`match_grains` with the backward check, one thread; best of 3 wall times; the note gives the CPU time "
                   "of the thread (the machine is shared: load average {:.1f} when the timing started) and the share "
-                  "matched correctly. Target (issue 7): under 1 s.",
+                  "matched correctly. Target: under 1 s.",
                   n_speed, load_before));
   for (double strain : {0.02, 0.10}) {
     SyntheticMotion mo;
