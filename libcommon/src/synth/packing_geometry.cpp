@@ -9,6 +9,20 @@
 
 namespace graintwin::synth::detail {
 
+Eigen::Vector3i grid_dims(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double min_cell,
+                          std::size_t items) {
+  double cell = min_cell;
+  Eigen::Vector3i dims;
+  for (;;) {
+    for (int k = 0; k < 3; ++k) {
+      dims[k] = std::max(1, static_cast<int>(std::min((hi[k] - lo[k]) / cell, 1e6)));
+    }
+    if (static_cast<double>(dims.x()) * dims.y() * dims.z() <= 8.0 * items + 64.0) return dims;
+    cell *= 1.26;
+  }
+}
+
+
 namespace {
 
 // First step (rad) of a warm-started search.

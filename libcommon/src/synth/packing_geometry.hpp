@@ -16,6 +16,11 @@
 
 namespace graintwin::synth::detail {
 
+/// Cells per axis of a grid over [lo, hi] whose cells are at least min_cell wide (so that
+/// neighbours within min_cell are in adjacent cells), widened if needed to keep the number of
+/// cells below about 8 per item (a sparse scene must not allocate a huge grid).
+Eigen::Vector3i grid_dims(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double min_cell, std::size_t items);
+
 /// Sample lattices: Fibonacci (golden-spiral) directions with each direction's neighbours within
 /// 1.6 spacings (CSR). The coarse one (400 directions, spacing 0.18 rad) serves smooth shapes
 /// (spheres, ellipsoids); the fine one (1600, 0.09 rad) rough ones, whose bumps (a degree-15 SH
