@@ -30,7 +30,7 @@
 #include <cstdlib>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/solver.hpp"
 #include "graintwin/fdem/triaxial.hpp"
 #include "graintwin/shape/radial_table.hpp"

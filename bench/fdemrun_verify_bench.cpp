@@ -24,7 +24,7 @@
 #include <iostream>
 #include <string>
 
-#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/impact.hpp"
 #include "harness.hpp"
 
@@ -38,7 +38,7 @@ const Material kHertzGlass{"glass", 2500, 48e9, 0.2, 0.0, 0.0, 0.0, 0.0};
 const Material kChungGlass{"glass", 2800, 48e9, 0.2, 0.0, 0.0, 0.0, 0.0};
 const Material kAluminium{"aluminium_alloy", 2699, 70e9, 0.33, 0.4, 0.0, 0.0, 0.0};
 
-ImpactOutcome impact(const ImpactSetup& setup) { return run_impact(setup, append_graded_ellipsoid_grain); }
+ImpactOutcome impact(const ImpactSetup& setup) { return run_impact(setup, mesh::append_graded_ellipsoid_grain); }
 
 /// The Hertz contact radius a = sqrt(R* delta_max) of a setup (exact mass), m.
 double contact_radius(const ImpactSetup& s) {

@@ -14,7 +14,7 @@
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
-#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/frames_vtk.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/fdem/scene.hpp"
@@ -251,7 +251,7 @@ int main(int argc, char** argv) {
     if (scene.model) io::declare_input(scene.model->path);
     const std::string scene_text = file_bytes(o.scene);
     const std::string model_bytes = scene.model ? file_bytes(scene.model->path) : std::string();  // a restart needs the same model file too
-    Model model = build_model(scene, append_ellipsoid_grain);
+    Model model = build_model(scene, mesh::append_ellipsoid_grain);
     log_size_penalties(scene, model);
     const RunStart start = start_run(scene, model, o.scene.string());
     log_start(scene, start);

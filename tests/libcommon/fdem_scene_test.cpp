@@ -11,7 +11,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/element.hpp"
-#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/scene.hpp"
@@ -62,7 +62,7 @@ position = [0, 5e-3, 0]
 )");
   const Scene scene = read_scene(path);
   EXPECT_THROW(build_model(scene), UsageError);  // no mesher: refused, not skipped
-  const Model m = build_model(scene, append_ellipsoid_grain);
+  const Model m = build_model(scene, mesh::append_ellipsoid_grain);
   ASSERT_EQ(m.grains.size(), 3u);
   EXPECT_EQ(m.grains[0].kind, GrainKind::tet10);
   EXPECT_EQ(m.nodes_of(m.grains[0].element_begin), 10u);
@@ -297,7 +297,7 @@ TEST(FdemScene, AGradedSphereIsFineOnlyNearItsRefinePoint) {
                                "refine_at = [[0, 0, -1e-3]]\nfine_element_size = 4e-5\nsize_growth = 0.3\n");
   const Scene scene = read_scene(path);
   ASSERT_TRUE(scene.grains[0].grading.has_value());
-  const Model m = build_model(scene, append_ellipsoid_grain);
+  const Model m = build_model(scene, mesh::append_ellipsoid_grain);
   // Mean edge of the surface triangles near the pole against those at the equator.
   double near = 0, far = 0;
   int n_near = 0, n_far = 0;

@@ -7,7 +7,7 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/impact.hpp"
 #include "graintwin/fdem/solver.hpp"
 
@@ -40,7 +40,7 @@ TEST(FdemVerifyHertz, GradedSphereIsFineAtItsPoleOnly) {
   const Eigen::Vector3d pole(0, 0, -R);
   const SizeGrading grading{{pole}, fine, 0.3, coarse};
   Model m;
-  append_graded_ellipsoid_grain(m, sphere, grading);
+  mesh::append_graded_ellipsoid_grain(m, sphere, grading);
   double near_sum = 0, far_sum = 0;
   int near_count = 0, far_count = 0;
   double pole_distance = 1;
@@ -63,7 +63,7 @@ TEST(FdemVerifyHertz, GradedSphereIsFineAtItsPoleOnly) {
   EXPECT_GT(far_sum / far_count, 0.5 * coarse);
   EXPECT_LT(pole_distance, 1e-3 * fine) << "the pole that touches first must be a mesh node";
   EXPECT_LT(m.element_count(), 30000u);  // a uniform mesh at the fine size would have ~1.5e6
-  EXPECT_THROW(append_graded_ellipsoid_grain(m, sphere, SizeGrading{{pole}, 0, 0.3, coarse}), UsageError);
+  EXPECT_THROW(mesh::append_graded_ellipsoid_grain(m, sphere, SizeGrading{{pole}, 0, 0.3, coarse}), UsageError);
 }
 
 // The building blocks of the impact checks against exact answers: Hertz's formulas reproduce
@@ -90,7 +90,7 @@ TEST(FdemVerifyHertz, HertzFiguresAndSlidingSolution) {
   sphere.size = Eigen::Vector3d::Constant(1e-3);
   sphere.element_size = 0.5e-3;
   sphere.label = 1;
-  append_ellipsoid_grain(m, sphere);
+  mesh::append_ellipsoid_grain(m, sphere);
   SolverOptions o;
   o.contact.enabled = false;
   Solver s(m, o);
@@ -112,7 +112,7 @@ TEST(FdemVerifyHertz, ChungOoiTestOneWithTenNodeElements) {
   s.fine = 1.17e-3;
   s.growth = 0.2;
   s.coarse = s.radius / 4;
-  const ImpactOutcome r = run_impact(s, append_graded_ellipsoid_grain);
+  const ImpactOutcome r = run_impact(s, mesh::append_graded_ellipsoid_grain);
   RecordProperty("elements", std::to_string(r.elements));
   RecordProperty("overlap_over_hertz", std::to_string(r.max_approach / r.hertz.max_approach));
   RecordProperty("peak_force_over_hertz", std::to_string(r.peak_force / r.hertz.peak_force));
@@ -121,5 +121,5 @@ TEST(FdemVerifyHertz, ChungOoiTestOneWithTenNodeElements) {
   EXPECT_NEAR(r.peak_force / r.hertz.peak_force, 1, 0.05);
   EXPECT_NEAR(r.contact_time / r.hertz.contact_time, 1, 0.05);
   EXPECT_GT(r.velocity_after.z(), 0.99 * s.speed);
-  EXPECT_THROW(run_impact(ImpactSetup{}, append_graded_ellipsoid_grain), UsageError);
+  EXPECT_THROW(run_impact(ImpactSetup{}, mesh::append_graded_ellipsoid_grain), UsageError);
 }

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "graintwin/fdem/ellipsoid_grain.hpp"
+#include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/solver.hpp"
 
@@ -226,7 +226,7 @@ TEST(FdemVerify, ElasticSphereReboundsOnItsContactNodesSpring) {
   sphere.element_size = 1e-3 / 3;
   sphere.kind = GrainKind::tet4;
   sphere.label = 1;
-  append_ellipsoid_grain(m, sphere);
+  mesh::append_ellipsoid_grain(m, sphere);
   m.platens = {Platen{"floor", Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 0}};
   const double v0 = 1.0;
   Solver s(m, SolverOptions{});

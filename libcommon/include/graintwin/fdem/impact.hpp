@@ -4,7 +4,7 @@
 // tests 1, 2, 6 and 7 (sphere on sphere or on a rigid wall, with spin), and the Coulomb sliding
 // solution for the tangential restitution. The spheres are meshed fine only at the poles that
 // touch (SizeGrading); gmsh is passed in, so this module does not link it
-// (fdem/ellipsoid_grain.hpp: append_graded_ellipsoid_grain).
+// (mesh/ellipsoid_grain.hpp: mesh::append_graded_ellipsoid_grain).
 #include <Eigen/Core>
 #include <cstddef>
 #include <functional>
@@ -71,7 +71,7 @@ struct ImpactOutcome {
   HertzImpact hertz;               ///< for this mass, radius and material (E* with the wall rigid)
 };
 
-/// A mesher of graded primitive grains, e.g. fdem::append_graded_ellipsoid_grain.
+/// A mesher of graded primitive grains, e.g. mesh::append_graded_ellipsoid_grain.
 using GradedGrainMesher = std::function<void(Model&, const GrainSpec&, const SizeGrading&)>;
 
 /// Builds the spheres (graded towards the contact pole), runs at the stable step until the

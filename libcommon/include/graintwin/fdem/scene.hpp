@@ -122,7 +122,7 @@ struct Scene {
 Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file = {});
 
 /// Appends a sphere or ellipsoid grain to a model. gmsh is linked only into graintwin_mesh, so
-/// programs that mesh pass fdem::append_ellipsoid_grain (fdem/ellipsoid_grain.hpp).
+/// programs that mesh pass mesh::append_ellipsoid_grain (mesh/ellipsoid_grain.hpp).
 using CurvedGrainMesher = std::function<void(Model&, const GrainSpec&)>;
 
 /// The model of the scene: the model file's grains, then the primitives in scene order (boxes

@@ -2,7 +2,7 @@
 // Element sizes graded towards contact points, for primitive grains that must resolve a contact
 // (the Hertz and Chung & Ooi checks): fine where the grain will touch, growing linearly with the
 // distance up to a coarse size elsewhere. gmsh applies it through mesh::TetOptions::size_at
-// (fdem/ellipsoid_grain.hpp); this part has no gmsh so it can be tested on its own.
+// (mesh/ellipsoid_grain.hpp); this part has no gmsh so it can be tested on its own.
 #include <Eigen/Core>
 #include <vector>
 
