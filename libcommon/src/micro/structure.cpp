@@ -6,6 +6,7 @@
 #include <numbers>
 #include <numeric>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/core/point_grid.hpp"
@@ -33,9 +34,8 @@ double Region::depth(const Eigen::Vector3d& p) const {
 }
 
 Region::Kind parse_region_kind(const std::string& name) {
-  if (name == "box") return Region::Kind::box;
-  if (name == "cylinder") return Region::Kind::cylinder;
-  throw UsageError("unknown region '" + name + "': use box or cylinder");
+  static constexpr std::array<EnumName<Region::Kind>, 2> kNames{{{Region::Kind::box, "box"}, {Region::Kind::cylinder, "cylinder"}}};
+  return parse_enum(kNames, name, "region");
 }
 
 Region enclosing_region(const std::vector<Eigen::Vector3d>& points, Region::Kind kind) {

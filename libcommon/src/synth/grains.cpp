@@ -9,6 +9,7 @@
 #include <numeric>
 #include <random>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -17,12 +18,12 @@
 namespace graintwin::synth {
 
 GrainShape parse_grain_shape(const std::string& name) {
-  if (name == "sphere") return GrainShape::sphere;
-  if (name == "ellipsoid") return GrainShape::ellipsoid;
-  if (name == "sand") return GrainShape::sand;
-  if (name == "angular") return GrainShape::angular;
-  if (name == "library") return GrainShape::library;
-  throw UsageError("--grain-shape '" + name + "' is not one of sphere, ellipsoid, sand, angular, library");
+  static constexpr std::array<EnumName<GrainShape>, 5> kNames{{{GrainShape::sphere, "sphere"},
+                                                                {GrainShape::ellipsoid, "ellipsoid"},
+                                                                {GrainShape::sand, "sand"},
+                                                                {GrainShape::angular, "angular"},
+                                                                {GrainShape::library, "library"}}};
+  return parse_enum(kNames, name, "--grain-shape");
 }
 
 std::vector<const shape::RadialTable*> GrainSet::table_pointers() const {

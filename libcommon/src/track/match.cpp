@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/point_grid.hpp"
 #include "graintwin/core/statistics.hpp"
@@ -396,21 +397,14 @@ double volume_filter(const MatchOptions& o) {
   return o.volume_tol.value_or(o.method == Method::improved ? -1.0 : 0.10);
 }
 
-std::string method_name(Method m) {
-  switch (m) {
-    case Method::paper: return "paper";
-    case Method::improved: return "improved";
-    case Method::nearest: return "nearest";
-    case Method::volume: return "volume";
-  }
-  return "?";
-}
+namespace {
+constexpr std::array<EnumName<Method>, 4> kMethodNames{
+    {{Method::improved, "improved"}, {Method::paper, "paper"}, {Method::nearest, "nearest"}, {Method::volume, "volume"}}};
+}  // namespace
 
-Method parse_method(const std::string& name) {
-  for (Method m : {Method::paper, Method::improved, Method::nearest, Method::volume})
-    if (method_name(m) == name) return m;
-  throw UsageError("matching method '" + name + "' is not improved, paper, nearest or volume");
-}
+std::string method_name(Method m) { return enum_name(kMethodNames, m); }
+
+Method parse_method(const std::string& name) { return parse_enum(kMethodNames, name, "matching method"); }
 
 std::size_t Matching::matched() const {
   return static_cast<std::size_t>(std::count_if(partner.begin(), partner.end(), [](int j) { return j >= 0; }));

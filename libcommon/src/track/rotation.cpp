@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/sh_fitter.hpp"
@@ -58,12 +59,16 @@ void inertia_ellipsoid(const Eigen::VectorXd& coeffs, int degree, Eigen::Vector3
   if (axes.determinant() < 0.0) axes.col(2) *= -1.0;
 }
 
+namespace {
+constexpr std::array<EnumName<RotationMethod>, 3> kRotationMethodNames{
+    {{RotationMethod::sh, "sh"}, {RotationMethod::axes, "axes"}, {RotationMethod::none, "none"}}};
+}  // namespace
+
 RotationMethod parse_rotation_method(const std::string& name) {
-  if (name == "sh") return RotationMethod::sh;
-  if (name == "axes") return RotationMethod::axes;
-  if (name == "none") return RotationMethod::none;
-  throw UsageError("rotation method '" + name + "' is not sh, axes or none");
+  return parse_enum(kRotationMethodNames, name, "rotation method");
 }
+
+const char* rotation_method_name(RotationMethod method) { return enum_name(kRotationMethodNames, method); }
 
 RotationEstimator::RotationEstimator(int coeff_degree, const RotationOptions& o) : options_(o) {
   if (!(o.symmetry_tol >= 0.0 && o.symmetry_tol < 1.0)) throw UsageError("the symmetry tolerance must be in [0, 1)");

@@ -6,15 +6,6 @@
 
 namespace graintwin::track {
 
-const char* rotation_method_name(RotationMethod method) {
-  switch (method) {
-    case RotationMethod::sh: return "sh";
-    case RotationMethod::axes: return "axes";
-    case RotationMethod::none: return "none";
-  }
-  return "none";
-}
-
 std::string tracks_parameters_json(const ChainOptions& co, const RotationOptions& ro) {
   nlohmann::json p = {{"method", method_name(co.match.method)},
                       {"window_d50", co.match.window_d50},

@@ -41,6 +41,8 @@ void inertia_ellipsoid(const Eigen::VectorXd& coeffs, int degree, Eigen::Vector3
 
 /// UsageError naming the others for anything but "sh", "axes" or "none".
 RotationMethod parse_rotation_method(const std::string& name);
+/// The name parse_rotation_method() reads ("sh", "axes", "none"), as the tracks file stores it.
+const char* rotation_method_name(RotationMethod method);
 
 class RotationEstimator {
  public:

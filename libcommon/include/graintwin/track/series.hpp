@@ -25,7 +25,4 @@ TracksFile track_series(const std::vector<std::filesystem::path>& paths, const C
 /// filter, gap, backward check and rotation settings, and the improved matcher's own settings.
 std::string tracks_parameters_json(const ChainOptions& chain, const RotationOptions& rotation);
 
-/// "sh", "axes" or "none": the name parse_rotation_method reads.
-const char* rotation_method_name(RotationMethod method);
-
 }  // namespace graintwin::track

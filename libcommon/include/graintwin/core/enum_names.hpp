@@ -1,0 +1,37 @@
+#pragma once
+// One table per enum gives both its names and its parsing, so that the two directions cannot drift
+// apart (an option's value, a name stored in a file, a message all read the same table).
+#include <array>
+#include <cstddef>
+#include <string>
+
+#include "graintwin/core/error.hpp"
+
+namespace graintwin {
+
+template <class E>
+struct EnumName {
+  E value;
+  const char* name;
+};
+
+/// The name of `value` in `table`; "?" if the table lacks it (a table missing a value is a
+/// programming error, which the enum's tests catch).
+template <class E, std::size_t N>
+const char* enum_name(const std::array<EnumName<E>, N>& table, E value) {
+  for (const EnumName<E>& e : table)
+    if (e.value == value) return e.name;
+  return "?";
+}
+
+/// The value named `text`; UsageError "<what> '<text>' is not a, b or c" otherwise.
+template <class E, std::size_t N>
+E parse_enum(const std::array<EnumName<E>, N>& table, const std::string& text, const std::string& what) {
+  for (const EnumName<E>& e : table)
+    if (text == e.name) return e.value;
+  std::string names;
+  for (std::size_t k = 0; k < N; ++k) names += (k == 0 ? "" : k + 1 == N ? " or " : ", ") + std::string(table[k].name);
+  throw UsageError(what + " '" + text + "' is not " + names);
+}
+
+}  // namespace graintwin
