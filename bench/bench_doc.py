@@ -1,5 +1,6 @@
 """Shared by the Python benchmarks: rewrites one section of docs/benchmarks.md, the part between
 <!-- bench:NAME --> and <!-- /bench:NAME --> (appended when it is not there yet)."""
+import json
 import os
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -15,3 +16,13 @@ def publish(name, text):
     with open(path, "w") as f:
         f.write(doc)
     print("updated", path, f"(section {name})")
+
+
+def finish(name, text, run_dir, results, publish_it=True):
+    """A bench's end: prints its text, keeps its raw results as run_dir/NAME.json and, unless told
+    not to, publishes the text as section NAME."""
+    print(text)
+    with open(os.path.join(run_dir, name + ".json"), "w") as f:
+        json.dump(results, f, indent=1)
+    if publish_it:
+        publish(name, text)

@@ -22,7 +22,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_doc import SOURCE, publish  # noqa: E402
+from bench_doc import SOURCE, finish  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "pipelines", "scenes", "triaxial.toml")
 PERTURBED = 0.98
@@ -106,11 +106,7 @@ def main():
             f"(`python3 bench/fdem_mass_scaling_bench.py`; {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). "
             "fdemrun gives the same bits on any thread count: the shorter step is what shows a small packing's "
             "own scatter.\n\n" + table(rows, a.shares) + "\n")
-    print(text)
-    with open(os.path.join(run_dir, "mass_scaling.json"), "w") as f:
-        json.dump(rows, f, indent=1)
-    if not a.no_publish:
-        publish("fdem_mass_scaling", text)
+    finish("fdem_mass_scaling", text, run_dir, rows, not a.no_publish)
 
 
 if __name__ == "__main__":

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_doc import SOURCE, publish  # noqa: E402
+from bench_doc import SOURCE, finish  # noqa: E402
 
 ANGULAR_SCENE = os.path.join(SOURCE, "sample_volumes", "sand_angular", "scene.toml")
 PARAMS = os.path.join(SOURCE, "pipelines", "params")
@@ -161,9 +161,7 @@ def main():
             f"(`python3 bench/non_star_bench.py`; {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). In the soil crop's own scan, "
             f"labels2shapes flags {100 * scan_share:.0f} % of the whole grains.\n\n" + "\n".join(lines) +
             "\n\n![undercuts found against voxels per d50](img/non_star_detection.png)\n")
-    print(text)
-    if not a.no_publish:
-        publish("non_star", text)
+    finish("non_star", text, work, rows, not a.no_publish)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,6 @@ Each run writes into a new folder of its own under --scratch (printed; nothing e
 """
 import argparse
 import glob
-import json
 import os
 import resource
 import tempfile
@@ -24,7 +23,7 @@ import time
 import h5py
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_doc import SOURCE, publish  # noqa: E402
+from bench_doc import SOURCE, finish  # noqa: E402
 
 PER_SCAN = ("inspect", "segment", "contacts", "shapes")
 PATH_NAMES = ("gmsh remeshed", "kept surface", "ellipsoid")
@@ -150,11 +149,7 @@ def main():
         + table(results, stages) + "\n\nAgainst the speed targets for real scans (labels2contacts at most 1 ms per "
         "contact, shapes2mesh at most 0.1 s per grain per core):\n\n" + targets(results) + "\n\nMeshing paths (shapes2mesh, `/mesh/path`, `/mesh/surface_origin`):\n\n"
         + mesh_table(results) + "\n")
-    print(text)
-    with open(os.path.join(run_dir, "pipeline_stages.json"), "w") as f:
-        json.dump(results, f, indent=1)
-    if not a.no_publish:
-        publish("pipeline_stages", text)
+    finish("pipeline_stages", text, run_dir, results, not a.no_publish)
 
 
 if __name__ == "__main__":

@@ -224,6 +224,16 @@ TEST(Ctsynth, LibraryGrainsFromASegmentedScan) {
   for (auto l : labels.values()) count[l] += 1.0;
   for (std::size_t i = 0; i < volume.size(); ++i)
     EXPECT_NEAR(count[i + 1] * std::pow(voxel, 3) / volume[i], 1.0, 0.05) << "grain " << i + 1;
+  // A library file is an input: never an output, even with --force; a file of another kind is refused.
+  test::expect_clean_failure("ctsynth", dir,
+                             {(dir / "scene.toml").string(), (dir / "shapes.h5").string(), "--force", "--grain-shape",
+                              "library", "--library", (dir / "shapes.h5").string(), "--library-labels",
+                              (dir / "labels.h5").string()},
+                             2, "shapes.h5");
+  test::expect_clean_failure("ctsynth", dir,
+                             {(dir / "scene.toml").string(), (dir / "x").string(), "--grain-shape", "library", "--library",
+                              (dir / "labels.h5").string(), "--library-labels", (dir / "labels.h5").string()},
+                             2, "labels2shapes");
   // The labels the shapes were not measured from are refused, naming both files.
   for (auto& l : c.labels.values()) l = l == 1 ? 0 : l;
   c.grains = segment::grain_table(c.labels);

@@ -8,6 +8,8 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/io/atomic_output.hpp"
+#include "graintwin/io/schema.hpp"
+#include "graintwin/io/volume_io.hpp"
 #include "graintwin/synth/series.hpp"
 #include "graintwin/version.hpp"
 
@@ -293,6 +295,10 @@ int main(int argc, char** argv) {
   add_options(tool, o);
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     const SeriesParams params = series_params(o);
+    if (params.grains.shape == GrainShape::library) {  // their histories carry on; no output may replace them
+      ctx.add_input_history(io::open_kind(params.library_shapes, schema::kind::shapes, "pass the output of labels2shapes"));
+      ctx.add_input_history(io::open_kind(params.library_labels, schema::kind::labels, "pass the output of ct2labels"));
+    }
     io::AtomicOutput out(outdir, ctx.force());
     fs::create_directory(out.temp_path());
     make_series(params, out.temp_path(), ctx.history(),

@@ -15,6 +15,7 @@
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/resources.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "graintwin/shape/grain_measure.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/synth/ground_truth.hpp"
 #include "graintwin/synth/shape_library.hpp"
@@ -53,9 +54,11 @@ double sample_volume(const SeriesParams& p, const LoadingParams& lp, double eps)
   return v;
 }
 
-// The labels2shapes criteria of an unreliable radial fit, applied to the exact measures.
+// labels2shapes' criteria of an unreliable radial fit (its defaults), applied to the exact measures.
 bool misses_much(const NonStarMeasures& m, double voxel) {
-  return m.hidden_void_fraction > 0.01 || m.reentry_depth > voxel;
+  const shape::MeasureOptions criteria;
+  return m.hidden_void_fraction > criteria.max_hidden_void_fraction ||
+         m.reentry_depth > criteria.max_reentry_depth_vox * voxel;
 }
 
 GrainSet make_grain_set(const SeriesParams& p, const ShapeLibrary* library, std::mt19937_64& rng, double& d50,
