@@ -1,7 +1,8 @@
 // The bonded-ball membrane (fdem/membrane.hpp) against exact answers: the spring constants of eq. 24
 // and the lattice's own elastic constants, the volume of a known cylinder, uniaxial tension against
 // FL/(EA), an open tube under internal pressure against thin-shell theory, and a rigid rotation
-// that must store no energy.
+// that must store no energy. The ratios these checks measure to the exact answers are golden
+// numbers (tests/data/fdem_membrane.json), far tighter than the checks' own tolerances.
 #include "graintwin/fdem/membrane.hpp"
 
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "support/golden.hpp"
 
 using namespace graintwin;
 using namespace graintwin::fdem;
@@ -107,6 +109,7 @@ TEST(MembraneVolume, KnownCylinderWithinAPerMilleAndBothFormulasAgree) {
   const double v27 = enclosed_volume(m, m.reference, zb, zt);
   const double v28 = enclosed_volume_radial(m, m.reference, zb, zt);
   EXPECT_NEAR(v27, exact, 1e-3 * exact);
+  test::Golden("fdem_membrane").check("volume_over_cylinder", v27 / exact);
   EXPECT_NEAR(v28, v27, 1e-10 * exact);
   // Any deformation: both are exact for the same closed polyhedron, so they agree to round-off.
   std::mt19937 rng(5);
@@ -144,6 +147,9 @@ TEST(MembraneTension, StretchesByFLOverEA) {
   // Lateral contraction by the lattice's Poisson ratio.
   const double radial = (ring_mean(m, s.x, m.rings / 2).second - m.radius) / m.radius;
   EXPECT_NEAR(radial, -m.material.poisson * expected, 0.1 * m.material.poisson * expected);
+  test::Golden measured("fdem_membrane");
+  measured.check("tension_strain_over_fl_ea", strain / expected);
+  measured.check("tension_contraction_over_poisson", radial / (-m.material.poisson * expected));
 }
 
 TEST(MembranePressure, OpenTubeExpandsAsThinShellTheorySays) {
@@ -157,6 +163,7 @@ TEST(MembranePressure, OpenTubeExpandsAsThinShellTheorySays) {
   const double expected = pressure * m.radius / (m.material.young * m.material.thickness);
   const double hoop = ring_mean(m, s.x, m.rings / 2).second / m.radius - 1;
   EXPECT_NEAR(hoop, expected, 0.03 * expected);
+  test::Golden("fdem_membrane").check("pressure_hoop_strain_over_thin_shell", hoop / expected);
 }
 
 TEST(MembraneObjectivity, ARigidRotationStoresNoShear) {

@@ -3,6 +3,8 @@
 // rigid body's spin (angular momentum, energy, precession cone); with contact: a box bouncing off a
 // platen against the spring-dashpot solution (restitution, contact time), a block on an incline
 // (sticks below tan(phi) = mu, slides above at g (sin - mu cos)), an elastic sphere's rebound.
+// Each check against an exact answer keeps its tolerance here; the figures these runs measure are
+// golden numbers (tests/data/fdem_verify.json), far tighter, so that a change shows in review.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -12,6 +14,7 @@
 #include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/solver.hpp"
+#include "support/golden.hpp"
 
 using namespace graintwin;
 using namespace graintwin::fdem;
@@ -54,6 +57,7 @@ TEST(FdemVerify, BarWaveSpeed) {
     }
     const double c = L / (2 * crossing);
     EXPECT_NEAR(c / c0, 1.0, 0.01) << (kind == GrainKind::tet4 ? "tet4" : "tet10") << ": c = " << c << " m/s, c0 = " << c0;
+    test::Golden("fdem_verify").check(kind == GrainKind::tet4 ? "bar_wave_speed_over_c0_tet4" : "bar_wave_speed_over_c0_tet10", c / c0);
   }
 }
 
@@ -72,6 +76,7 @@ TEST(FdemVerify, EnergyDriftOverTenThousandUndampedSteps) {
     double worst = 0;
     for (int n = 1; n < 10000; ++n) worst = std::max(worst, std::abs(s.step(dt).energies.mechanical() / start - 1));
     EXPECT_LT(worst, 0.005) << (kind == GrainKind::tet4 ? "tet4" : "tet10");
+    test::Golden("fdem_verify").check(kind == GrainKind::tet4 ? "energy_drift_tet4" : "energy_drift_tet10", worst);
     EXPECT_GT(s.grain_rotation(0).angularDistance(Eigen::Quaterniond::Identity()), 1.0) << "the test must rotate the grain";
   }
 }
@@ -168,8 +173,9 @@ TEST(FdemVerify, BoxBouncesOffAPlatenLikeTheSpringDashpot) {
     ASSERT_GT(last, first + 50) << "too few steps in contact to resolve it";
     EXPECT_NEAR((last - first) * dt, t_c, 0.01 * t_c + dt) << "beta " << beta;
     EXPECT_NEAR(s.grain_velocity(0).z() / v0, e, 0.01 * e) << "beta " << beta;
-    RecordProperty(fmt::format("beta_{}_restitution_over_exact", beta), std::to_string(s.grain_velocity(0).z() / v0 / e));
-    RecordProperty(fmt::format("beta_{}_contact_time_over_exact", beta), std::to_string((last - first) * dt / t_c));
+    test::Golden measured("fdem_verify");
+    measured.check(fmt::format("box_bounce_beta_{}_restitution_over_exact", beta), s.grain_velocity(0).z() / v0 / e);
+    measured.check(fmt::format("box_bounce_beta_{}_contact_time_over_exact", beta), (last - first) * dt / t_c);
     EXPECT_LT(s.grain_velocity(0).head<2>().norm(), 1e-6 * v0);  // no spurious sideways kick
   }
 }
@@ -204,7 +210,8 @@ TEST(FdemVerify, BlockOnAnInclineSticksBelowTanPhiEqualsMuAndSlidesAbove) {
         RecordProperty(fmt::format("kind_{}_held_creep_m", int(kind)), fmt::format("{:.3g}", std::abs(x2 - x1)));
       } else {
         EXPECT_NEAR((v2 - v1) / (t2 - t1), sliding, 0.01 * sliding) << "kind " << int(kind);
-        RecordProperty(fmt::format("kind_{}_sliding_acceleration_over_exact", int(kind)), std::to_string((v2 - v1) / (t2 - t1) / sliding));
+        test::Golden("fdem_verify").check(kind == GrainKind::rigid ? "incline_rigid_sliding_acceleration_over_exact" : "incline_tet4_sliding_acceleration_over_exact",
+                                          (v2 - v1) / (t2 - t1) / sliding);
       }
     }
 }
@@ -264,6 +271,8 @@ TEST(FdemVerify, ElasticSphereReboundsOnItsContactNodesSpring) {
   EXPECT_NEAR(peak / (v0 * std::sqrt(M * k_pole)), 1.0, 0.03);
   const double hertz = 2.868 * std::pow(M * M / (1e-3 * std::pow(48e9 / (1 - 0.04), 2) * v0), 0.2);
   RecordProperty("contact_time_over_hertz", std::to_string(t_c / hertz));
-  RecordProperty("contact_time_over_single_node", std::to_string(t_c / t_pole));
-  RecordProperty("rebound_velocity_over_v0", std::to_string(s.grain_velocity(0).z() / v0));
+  test::Golden measured("fdem_verify");
+  measured.check("elastic_sphere_contact_time_over_single_node", t_c / t_pole);
+  measured.check("elastic_sphere_peak_force_over_single_node", peak / (v0 * std::sqrt(M * k_pole)));
+  measured.check("elastic_sphere_rebound_over_v0", s.grain_velocity(0).z() / v0);
 }
