@@ -1,13 +1,15 @@
-// Dense packing of star-shaped grains by growth with overlap relaxation (the measures of a
-// finished packing are in packing_measures.cpp).
+// Dense packing of star-shaped grains by growth with overlap relaxation: the driver. Its parts
+// live beside it: the random start (packing_start.cpp), the candidate pairs (packing_pairs.cpp),
+// the contact kernels (packing_geometry.cpp); the contacts of grains at given poses are in
+// packing_contacts.cpp, the measures of a finished packing in packing_measures.cpp.
 //
 // 1. Start: all grains at a common scale s0 (0.55, or less when the bounding spheres would fill
 //    more than 25 % of the container), random orientation, random position by random sequential
 //    addition of the bounding spheres, largest grains first.
 // 2. Sweeps. Each sweep grows s by a factor 1 + g (unless held), evaluates every candidate pair
-//    (Verlet list from a cell grid, rebuilt when grains have moved by half the skin) and every
-//    grain near a wall, then moves the grains by one FIRE step (Bitzek et al., PRL 97, 170201,
-//    2006) on the overlap energy E = 1/2 sum w (depth + eps)^2 (unit stiffness, unit masses,
+//    (a Verlet list, rebuilt when grains have moved by half the skin) and every grain near a
+//    wall, then moves the grains by one FIRE step (Bitzek et al., PRL 97, 170201, 2006) on the
+//    overlap energy E = 1/2 sum w (depth + eps)^2 (unit stiffness, unit masses,
 //    rotations in arc-length units so that an off-centre contact turns the grain). The sum runs
 //    over the contact regions of every pair (a rough grain can touch another at several bumps;
 //    each region seen from either grain, w = 1/2, so a convex contact seen from both counts once)
@@ -34,15 +36,13 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <limits>
-#include <map>
-#include <numeric>
-#include <random>
 #include <string>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "packing_geometry.hpp"
+#include "packing_pairs.hpp"
+#include "packing_start.hpp"
 
 namespace graintwin::synth {
 
@@ -54,17 +54,17 @@ double Container::volume() const {
 namespace {
 
 using detail::Frame;
-using detail::PairEval;
+using detail::PairSlot;
+using detail::ShapeData;
 using detail::SurfaceView;
 using detail::WallHit;
-using detail::grid_dims;
+using detail::kParallelGrains;
+using detail::kParallelPairs;
 
 // Constants of the method (dimensionless), chosen on packings of spheres and of 1.3:1 ellipsoids
 // with an Ottawa-sand size spread (tests/libcommon/packing_test.cpp).
 struct Tune {
   double max_fill = kDensestPacking;  // refuse anything denser
-  double default_s0 = 0.55;         // initial scale for compact grains ...
-  double s0_bounding_fill = 0.25;   // ... lowered so that bounding spheres fill at most this
   double rotation_gain = 0.5;       // weight of torques against forces (0: grains never turn)
   double max_rotation = 0.05;       // rad per sweep
   double max_step = 0.2;            // of the grain's equivalent radius per sweep
@@ -79,43 +79,15 @@ struct Tune {
   double skin = 0.3;                // Verlet skin, of the mean bounding radius
   double refine_step = 0.008;       // final angular step of the deepest-point search (rad):
                                     // depth error ~ r h^2 / 100, far below the tolerance
-  double exact_refine_step = 5e-4;  // the same for pair_contact() and wall_penetration()
+                                    // (detail::kExactRefineStep in the final check)
   int full_every = 8;               // pairs in contact are sampled afresh every so many sweeps ...
   double warm_motion = 0.05;        // ... or once both grains moved this much (of the smaller
                                     // bounding radius); in between the last contact seeds them
-  int rsa_attempts = 2000;          // random placements per grain before shrinking the start
   int stall_sweeps = 2000;          // sweeps without 0.1 % growth: jammed before full size
   int settle_sweeps = 3000;         // sweeps at full size without 1 % less overlap: jammed
   double stage_regrow_scale = 0.98;  // pack_in_stages(): later stages regrow from this scale
 };
 constexpr Tune kTune{};
-
-// Loops run in parallel only above these sizes: each parallel region costs a barrier, which on a
-// busy machine (more threads than free cores) can cost a scheduler time slice, far more than the
-// work of a small packing.
-constexpr std::size_t kParallelPairs = 1000;
-constexpr std::size_t kParallelGrains = 1000;
-
-// Uniform doubles from a 64-bit Mersenne twister, defined here (not by the standard library's
-// distributions) so that the start is the same on every platform.
-class Rng {
- public:
-  explicit Rng(std::uint64_t seed) : g_(seed) {}
-  double uniform() { return static_cast<double>(g_() >> 11) * 0x1.0p-53; }
-
- private:
-  std::mt19937_64 g_;
-};
-
-// Uniformly random rotation (Shoemake 1992).
-Eigen::Quaterniond random_rotation(Rng& rng) {
-  const double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
-  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
-  Eigen::Quaterniond q(b * std::cos(2.0 * M_PI * u3), a * std::sin(2.0 * M_PI * u2),
-                       a * std::cos(2.0 * M_PI * u2), b * std::sin(2.0 * M_PI * u3));
-  q.normalize();
-  return q;
-}
 
 std::string fmt_num(double v, int digits = 2) {
   char buf[64];
@@ -129,52 +101,13 @@ const char* kind_name(const Container& c) {
   return c.kind == Container::Kind::cylinder ? "cylinder" : "box";
 }
 
-// Per distinct shape: the kernel's view (lattice radii and roughness slack, computed once).
-struct ShapeData {
-  const shape::RadialTable* table = nullptr;
-  detail::ShapeSampling sampling;
-  double max_radius = 0.0;
-  double volume = 0.0;
-  SurfaceView view() const { return detail::view_of(*table, sampling); }
-};
-
-// The distinct shapes of a grain list (by pointer) and each grain's index into them; the lattice
-// radii are computed in parallel.
-void index_shapes(const std::vector<const shape::RadialTable*>& shapes,
-                  std::vector<ShapeData>& data, std::vector<int>& grain_shape) {
-  std::map<const shape::RadialTable*, int> index;
-  grain_shape.resize(shapes.size());
-  for (std::size_t i = 0; i < shapes.size(); ++i) {
-    auto [it, added] = index.emplace(shapes[i], static_cast<int>(data.size()));
-    if (added) {
-      ShapeData d;
-      d.table = shapes[i];
-      d.max_radius = shapes[i]->max_radius();
-      d.volume = shapes[i]->volume();
-      data.push_back(std::move(d));
-    }
-    grain_shape[i] = it->second;
-  }
-#pragma omp parallel for schedule(dynamic, 1) if (data.size() > 8)
-  for (std::size_t k = 0; k < data.size(); ++k) {
-    data[k].sampling = detail::sample_shape(*data[k].table);
-  }
-}
-
-struct PairSlot {
-  int a = 0, b = 0;
-  PairEval eval;
-  double travel_a = 0.0, travel_b = 0.0;  // travel counters when `bound` was taken
-  double bound = -HUGE_VAL;               // lower bound of the gap at that time
-};
-
 class Packer {
  public:
   Packer(const std::vector<const shape::RadialTable*>& shapes, const Container& c,
          const PackingParams& p)
       : c_(c), p_(p), n_(shapes.size()), shapes_(shapes) {
     validate(shapes);
-    index_shapes(shapes, shape_data_, grain_shape_);
+    detail::index_shapes(shapes, shape_data_, grain_shape_);
     rmax_.resize(n_);
     vol_.resize(n_);
     req_.resize(n_);
@@ -303,192 +236,28 @@ class Packer {
   }
   SurfaceView view(std::size_t i) const { return shape_data_[grain_shape_[i]].view(); }
 
-  // Container bounding box.
-  Eigen::Vector3d box_lo() const {
-    if (c_.kind == Container::Kind::box) return Eigen::Vector3d::Zero();
-    return {-c_.radius, -c_.radius, 0.0};
-  }
-  Eigen::Vector3d box_hi() const {
-    if (c_.kind == Container::Kind::box) return c_.box_size;
-    return {c_.radius, c_.radius, c_.height};
-  }
-
-  // Random sequential addition of the bounding spheres at scale s0, largest grains first; the
-  // start shrinks by 10 % whenever some grain finds no room.
   void place_initial() {
-    double bounding = 0.0;
-    for (std::size_t i = 0; i < n_; ++i) bounding += 4.0 / 3.0 * M_PI * std::pow(rmax_[i], 3);
-    bounding /= c_.volume();
-    double s0 = p_.initial_scale > 0.0
-                    ? p_.initial_scale
-                    : std::min(kTune.default_s0, std::cbrt(kTune.s0_bounding_fill / bounding));
-    std::vector<std::size_t> order(n_);
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return rmax_[a] > rmax_[b]; });
-    Rng rng(p_.seed);
-    x_.assign(n_, Eigen::Vector3d::Zero());
-    q_.assign(n_, Eigen::Quaterniond::Identity());
-    R_.assign(n_, Eigen::Matrix3d::Identity());
-    for (;;) {
-      if (try_rsa(s0, order, rng)) break;
-      s0 *= 0.9;
-      if (s0 < 0.15) {
-        throw DataError("scene: could not place the grains even at " + fmt_num(s0 / 0.9) +
-                        " of their size in the " + kind_name(c_) +
-                        "; enlarge the container or lower the grain count");
-      }
+    const detail::RandomStart start = detail::random_start(c_, rmax_, p_.initial_scale, p_.seed, x_, q_);
+    if (!start.placed) {
+      throw DataError("scene: could not place the grains even at " + fmt_num(start.scale) +
+                      " of their size in the " + kind_name(c_) +
+                      "; enlarge the container or lower the grain count");
     }
-    s_ = s0;
-    s0_ = s0;
+    s_ = s0_ = start.scale;
+    R_.resize(n_);
     for (std::size_t i = 0; i < n_; ++i) R_[i] = q_[i].toRotationMatrix();
   }
 
-  bool try_rsa(double s0, const std::vector<std::size_t>& order, Rng& rng) {
-    const Eigen::Vector3d lo = box_lo(), hi = box_hi();
-    const Eigen::Vector3i dims = grid_dims(lo, hi, 2.0 * s0 * rmax_max_, n_);
-    std::vector<std::vector<int>> grid(static_cast<std::size_t>(dims.prod()));
-    auto cell_of = [&](const Eigen::Vector3d& x) {
-      Eigen::Vector3i c;
-      for (int k = 0; k < 3; ++k) {
-        c[k] = std::clamp(static_cast<int>((x[k] - lo[k]) / (hi[k] - lo[k]) * dims[k]), 0,
-                          dims[k] - 1);
-      }
-      return c;
-    };
-    for (std::size_t i : order) {
-      const double r = s0 * rmax_[i];
-      bool placed = false;
-      for (int attempt = 0; attempt < kTune.rsa_attempts && !placed; ++attempt) {
-        Eigen::Vector3d x;
-        if (c_.kind == Container::Kind::cylinder) {
-          const double rr = c_.radius - r;
-          if (rr <= 0.0 || c_.height <= 2.0 * r) return false;
-          const double rad = rr * std::sqrt(rng.uniform());
-          const double ang = 2.0 * M_PI * rng.uniform();
-          x = {rad * std::cos(ang), rad * std::sin(ang), r + (c_.height - 2.0 * r) * rng.uniform()};
-        } else {
-          for (int k = 0; k < 3; ++k) {
-            if (c_.box_size[k] <= 2.0 * r) return false;
-            x[k] = r + (c_.box_size[k] - 2.0 * r) * rng.uniform();
-          }
-        }
-        const Eigen::Vector3i ci = cell_of(x);
-        bool free = true;
-        for (int dz = -1; dz <= 1 && free; ++dz) {
-          for (int dy = -1; dy <= 1 && free; ++dy) {
-            for (int dx = -1; dx <= 1 && free; ++dx) {
-              const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
-              if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
-              for (int j : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
-                const double rs = r + s0 * rmax_[j];
-                if ((x_[j] - x).squaredNorm() < rs * rs) {
-                  free = false;
-                  break;
-                }
-              }
-            }
-          }
-        }
-        if (free) {
-          x_[i] = x;
-          q_[i] = random_rotation(rng);
-          grid[(ci.z() * dims.y() + ci.y()) * dims.x() + ci.x()].push_back(static_cast<int>(i));
-          placed = true;
-        }
-      }
-      if (!placed) return false;
-    }
-    return true;
-  }
-
-  // Verlet list of candidate pairs (bounding spheres within the skin) from a cell grid.
-  void build_pairs() {
-    skin_ = kTune.skin * s_ * rmax_mean_;
-    const Eigen::Vector3d pad = Eigen::Vector3d::Constant(s_ * rmax_max_);
-    const Eigen::Vector3d lo = box_lo() - pad, hi = box_hi() + pad;
-    const Eigen::Vector3i dims = grid_dims(lo, hi, 2.0 * s_ * rmax_max_ + skin_, n_);
-    const std::size_t ncell = static_cast<std::size_t>(dims.prod());
-    std::vector<int> cell_of(n_);
-    std::vector<int> start(ncell + 1, 0);
-    for (std::size_t i = 0; i < n_; ++i) {
-      Eigen::Vector3i c;
-      for (int k = 0; k < 3; ++k) {
-        c[k] = std::clamp(static_cast<int>((x_[i][k] - lo[k]) / (hi[k] - lo[k]) * dims[k]), 0,
-                          dims[k] - 1);
-      }
-      cell_of[i] = (c.z() * dims.y() + c.y()) * dims.x() + c.x();
-      ++start[cell_of[i] + 1];
-    }
-    for (std::size_t k = 0; k < ncell; ++k) start[k + 1] += start[k];
-    std::vector<int> members(n_);
-    {
-      std::vector<int> fill(start.begin(), start.end() - 1);
-      for (std::size_t i = 0; i < n_; ++i) members[fill[cell_of[i]]++] = static_cast<int>(i);
-    }
-    std::vector<std::vector<int>> near(n_);
-#pragma omp parallel for schedule(dynamic, 64) if (n_ > kParallelGrains)
-    for (std::size_t i = 0; i < n_; ++i) {
-      const int ci = cell_of[i];
-      const int cx = ci % dims.x(), cy = (ci / dims.x()) % dims.y(), cz = ci / (dims.x() * dims.y());
-      std::vector<int>& mine = near[i];
-      for (int dz = -1; dz <= 1; ++dz) {
-        for (int dy = -1; dy <= 1; ++dy) {
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int x = cx + dx, y = cy + dy, z = cz + dz;
-            if (x < 0 || y < 0 || z < 0 || x >= dims.x() || y >= dims.y() || z >= dims.z()) {
-              continue;
-            }
-            const int cj = (z * dims.y() + y) * dims.x() + x;
-            for (int m = start[cj]; m < start[cj + 1]; ++m) {
-              const int j = members[m];
-              if (j <= static_cast<int>(i)) continue;
-              const double reach = s_ * (rmax_[i] + rmax_[j]) + skin_;
-              if ((x_[j] - x_[i]).squaredNorm() < reach * reach) mine.push_back(j);
-            }
-          }
-        }
-      }
-      std::sort(mine.begin(), mine.end());
-    }
-    pairs_.clear();
-    for (std::size_t i = 0; i < n_; ++i) {
-      for (int j : near[i]) {
-        PairSlot slot;
-        slot.a = static_cast<int>(i);
-        slot.b = j;
-        pairs_.push_back(slot);
-      }
-    }
-    adj_start_.assign(n_ + 1, 0);
-    for (const PairSlot& pr : pairs_) {
-      ++adj_start_[pr.a + 1];
-      ++adj_start_[pr.b + 1];
-    }
-    for (std::size_t i = 0; i < n_; ++i) adj_start_[i + 1] += adj_start_[i];
-    adj_.assign(adj_start_[n_], 0);
-    std::vector<int> fill(adj_start_.begin(), adj_start_.end() - 1);
-    for (std::size_t k = 0; k < pairs_.size(); ++k) {
-      adj_[fill[pairs_[k].a]++] = static_cast<int>(k);
-      adj_[fill[pairs_[k].b]++] = static_cast<int>(k);
-    }
-    x_build_ = x_;
-    s_build_ = s_;
-  }
-
-  bool pairs_stale() const {
-    double dmax = 0.0;
-    for (std::size_t i = 0; i < n_; ++i) dmax = std::max(dmax, (x_[i] - x_build_[i]).norm());
-    return 2.0 * dmax + 2.0 * (s_ - s_build_) * rmax_max_ > skin_;
-  }
+  void build_pairs() { pairs_.build(x_, rmax_, s_, kTune.skin * s_ * rmax_mean_); }
 
   // Evaluates every candidate pair (skipping, unless `all`, those whose last gap bound still
   // exceeds `gap` after the distance both grains have travelled since) and every grain's walls;
   // h_min: final angular step of the deepest-point search.
   void evaluate(double gap, bool all, double h_min) {
-#pragma omp parallel for schedule(dynamic, 32) if (pairs_.size() > kParallelPairs)
-    for (std::size_t k = 0; k < pairs_.size(); ++k) {
-      PairSlot& pr = pairs_[k];
+    std::vector<PairSlot>& pairs = pairs_.slots();
+#pragma omp parallel for schedule(dynamic, 32) if (pairs.size() > kParallelPairs)
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      PairSlot& pr = pairs[k];
       if (!all && pr.bound - (travel_[pr.a] - pr.travel_a) - (travel_[pr.b] - pr.travel_b) > gap) {
         pr.eval.found = false;
         continue;
@@ -499,7 +268,7 @@ class Packer {
       const bool warm = !all && (pr.eval.ab.peaks > 0 || pr.eval.ba.peaks > 0) &&
                         (k + sweep_) % kTune.full_every != 0 &&
                         moved < kTune.warm_motion * s_ * std::min(rmax_[pr.a], rmax_[pr.b]);
-      const PairEval last = pr.eval;
+      const detail::PairEval last = pr.eval;
       pr.eval = detail::evaluate_pair(view(pr.a), frame(pr.a), view(pr.b), frame(pr.b), gap, h_min,
                                       warm ? &last : nullptr);
       pr.bound = pr.eval.found ? -HUGE_VAL : pr.eval.gap_bound;  // -inf after a warm start
@@ -521,7 +290,7 @@ class Packer {
   };
   Stats stats() const {
     Stats st;
-    for (const PairSlot& pr : pairs_) {
+    for (const PairSlot& pr : pairs_.slots()) {
       if (!pr.eval.found) continue;
       const double d = pr.eval.side.depth;
       if (d > 0.0) {
@@ -553,8 +322,8 @@ class Packer {
         f += force;
         tq += (at - x_[i]).cross(force);
       };
-      for (int m = adj_start_[i]; m < adj_start_[i + 1]; ++m) {
-        const PairSlot& pr = pairs_[adj_[m]];
+      for (int k : pairs_.of(i)) {
+        const PairSlot& pr = pairs_.slots()[k];
         if (!pr.eval.found) continue;
         // Every contact region, seen from either grain, with half weight: a convex pair's single
         // contact (seen from both sides) gets full weight, and rough grains touching at several
@@ -682,7 +451,7 @@ class Packer {
         last_growth = sweep;
       }
       if (s_ < 1.0 && sweep - last_growth > kTune.stall_sweeps) fail_jammed();
-      if (pairs_stale()) build_pairs();
+      if (pairs_.stale(x_, s_, rmax_max_)) build_pairs();
       const bool full = s_ >= 1.0;
       evaluate(tol_, false, kTune.refine_step);
       Stats st = stats();
@@ -691,7 +460,7 @@ class Packer {
         if (st.worst() <= tol_) {
           // Confirm with every candidate pair evaluated afresh, as precisely as pair_contact()
           // and wall_penetration() do, so that the report agrees with find_contacts().
-          evaluate(tol_, true, kTune.exact_refine_step);
+          evaluate(tol_, true, detail::kExactRefineStep);
           st = stats();
           if (st.worst() <= tol_) {
             finish(st, sweep);
@@ -775,20 +544,19 @@ class Packer {
   std::vector<double> rmax_, vol_, req_;
   double rmax_max_ = 0.0, rmax_mean_ = 0.0, req_mean_ = 0.0;
   double tol_ = 0.0, fill_ = 0.0;
-  double s_ = 1.0, s0_ = 1.0, s_build_ = 1.0, skin_ = 0.0;
+  double s_ = 1.0, s0_ = 1.0;
   double last_worst_ = 0.0;
   int sweep_ = 0;
   // Grain state: position, orientation (and its matrix), FIRE velocities, forces, travel counters.
-  std::vector<Eigen::Vector3d> x_, x_build_;
+  std::vector<Eigen::Vector3d> x_;
   std::vector<Eigen::Quaterniond> q_;
   std::vector<Eigen::Matrix3d> R_;
   std::vector<Eigen::Vector3d> vel_, spin_, force_, torque_;
   std::vector<double> travel_;
   double fire_dt_ = 0.1, fire_alpha_ = 0.1;
   int fire_positive_ = 0;
-  // Candidate pairs, each grain's pairs (CSR), wall hits (kMaxWallHits slots per grain).
-  std::vector<PairSlot> pairs_;
-  std::vector<int> adj_start_, adj_;
+  // Candidate pairs, wall hits (kMaxWallHits slots per grain).
+  detail::CandidatePairs pairs_;
   std::vector<WallHit> walls_;
   std::vector<int> wall_count_;
   PackingReport final_report_;
@@ -820,115 +588,6 @@ PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
   Packer packer(shapes, c, p);
   poses = packer.relax_from(poses, &report, progress);
   return report;
-}
-
-std::optional<PairContact> pair_contact(const shape::RadialTable& a, const PackedGrain& ga,
-                                        const shape::RadialTable& b, const PackedGrain& gb,
-                                        double search_gap) {
-  const detail::ShapeSampling sa = detail::sample_shape(a), sb = detail::sample_shape(b);
-  const SurfaceView va = detail::view_of(a, sa), vb = detail::view_of(b, sb);
-  Frame fa, fb;
-  fa.x = ga.position;
-  fa.R = ga.orientation.normalized().toRotationMatrix();
-  fb.x = gb.position;
-  fb.R = gb.orientation.normalized().toRotationMatrix();
-  const PairEval e =
-      detail::evaluate_pair(va, fa, vb, fb, std::max(search_gap, 0.0), kTune.exact_refine_step);
-  if (!e.found) return std::nullopt;
-  return PairContact{e.side.depth, e.side.point, e.side.normal};
-}
-
-std::vector<GrainContact> find_contacts(const std::vector<const shape::RadialTable*>& shapes,
-                                        const std::vector<PackedGrain>& grains, double search_gap) {
-  if (shapes.size() != grains.size()) {
-    throw UsageError("find_contacts: " + std::to_string(shapes.size()) + " shapes but " +
-                     std::to_string(grains.size()) + " grains; pass one shape per grain");
-  }
-  const std::size_t n = grains.size();
-  if (n == 0) return {};
-  double rmax = 0.0;
-  Eigen::Vector3d lo = grains[0].position, hi = grains[0].position;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (shapes[i] == nullptr || shapes[i]->empty()) {
-      throw UsageError("find_contacts: shape " + std::to_string(i) + " is null or empty");
-    }
-    rmax = std::max(rmax, shapes[i]->max_radius());
-    lo = lo.cwiseMin(grains[i].position);
-    hi = hi.cwiseMax(grains[i].position);
-  }
-  const double gap = std::max(search_gap, 0.0);
-  const Eigen::Vector3i dims = grid_dims(lo, hi, 2.0 * rmax + gap, n);
-  auto cell_of = [&](const Eigen::Vector3d& x) {
-    Eigen::Vector3i c;
-    for (int k = 0; k < 3; ++k) {
-      const double span = std::max(hi[k] - lo[k], 1e-300);
-      c[k] = std::clamp(static_cast<int>((x[k] - lo[k]) / span * dims[k]), 0, dims[k] - 1);
-    }
-    return c;
-  };
-  std::vector<std::vector<int>> grid(static_cast<std::size_t>(dims.prod()));
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3i c = cell_of(grains[i].position);
-    grid[(c.z() * dims.y() + c.y()) * dims.x() + c.x()].push_back(static_cast<int>(i));
-  }
-  std::vector<ShapeData> data;
-  std::vector<int> grain_shape;
-  index_shapes(shapes, data, grain_shape);
-  std::vector<Frame> frames(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    frames[i].x = grains[i].position;
-    frames[i].R = grains[i].orientation.normalized().toRotationMatrix();
-  }
-  std::vector<std::vector<GrainContact>> found(n);
-#pragma omp parallel for schedule(dynamic, 16)
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3i ci = cell_of(grains[i].position);
-    std::vector<int> near;
-    for (int dz = -1; dz <= 1; ++dz) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
-          if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
-          for (int j : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
-            if (j <= static_cast<int>(i)) continue;
-            const double reach = shapes[i]->max_radius() + shapes[j]->max_radius() + gap;
-            if ((grains[j].position - grains[i].position).squaredNorm() <= reach * reach) {
-              near.push_back(j);
-            }
-          }
-        }
-      }
-    }
-    std::sort(near.begin(), near.end());
-    const SurfaceView vi = data[grain_shape[i]].view();
-    for (int j : near) {
-      const PairEval e = detail::evaluate_pair(vi, frames[i], data[grain_shape[j]].view(),
-                                               frames[j], gap, kTune.exact_refine_step);
-      if (e.found) {
-        found[i].push_back(GrainContact{i, static_cast<std::size_t>(j),
-                                        PairContact{e.side.depth, e.side.point, e.side.normal}});
-      }
-    }
-  }
-  std::vector<GrainContact> out;
-  for (auto& f : found) out.insert(out.end(), f.begin(), f.end());
-  return out;
-}
-
-double wall_penetration(const shape::RadialTable& a, const PackedGrain& ga, const Container& c) {
-  const detail::ShapeSampling sa = detail::sample_shape(a);
-  const SurfaceView va = detail::view_of(a, sa);
-  Frame fa;
-  fa.x = ga.position;
-  fa.R = ga.orientation.normalized().toRotationMatrix();
-  WallHit hits[detail::kMaxWallHits];
-  // A search gap beyond the container size makes every wall report its depth or clearance.
-  const double everywhere = 4.0 * a.max_radius() + 2.0 * (c.radius + c.height) + c.box_size.sum() +
-                            ga.position.norm();
-  const int n = detail::evaluate_walls(va, fa, c, everywhere, kTune.exact_refine_step, hits);
-  double worst = -HUGE_VAL;
-  for (int k = 0; k < n; ++k) worst = std::max(worst, hits[k].depth);
-  return worst;
 }
 
 std::vector<PackedGrain> pack_in_stages(

@@ -6,22 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 
 namespace graintwin::synth::detail {
-
-Eigen::Vector3i grid_dims(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double min_cell,
-                          std::size_t items) {
-  double cell = min_cell;
-  Eigen::Vector3i dims;
-  for (;;) {
-    for (int k = 0; k < 3; ++k) {
-      dims[k] = std::max(1, static_cast<int>(std::min((hi[k] - lo[k]) / cell, 1e6)));
-    }
-    if (static_cast<double>(dims.x()) * dims.y() * dims.z() <= 8.0 * items + 64.0) return dims;
-    cell *= 1.26;
-  }
-}
-
 
 namespace {
 
@@ -420,6 +407,27 @@ SurfaceView view_of(const shape::RadialTable& t, const ShapeSampling& sampling) 
   v.max_radius = t.max_radius();
   v.slack = sampling.slack;
   return v;
+}
+
+void index_shapes(const std::vector<const shape::RadialTable*>& shapes, std::vector<ShapeData>& data,
+                  std::vector<int>& grain_shape) {
+  std::map<const shape::RadialTable*, int> index;
+  grain_shape.resize(shapes.size());
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    auto [it, added] = index.emplace(shapes[i], static_cast<int>(data.size()));
+    if (added) {
+      ShapeData d;
+      d.table = shapes[i];
+      d.max_radius = shapes[i]->max_radius();
+      d.volume = shapes[i]->volume();
+      data.push_back(std::move(d));
+    }
+    grain_shape[i] = it->second;
+  }
+#pragma omp parallel for schedule(dynamic, 1) if (data.size() > 8)
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    data[k].sampling = sample_shape(*data[k].table);
+  }
 }
 
 PairEval evaluate_pair(const SurfaceView& a, const Frame& fa, const SurfaceView& b, const Frame& fb,

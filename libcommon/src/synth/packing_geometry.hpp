@@ -16,11 +16,6 @@
 
 namespace graintwin::synth::detail {
 
-/// Cells per axis of a grid over [lo, hi] whose cells are at least min_cell wide (so that
-/// neighbours within min_cell are in adjacent cells), widened if needed to keep the number of
-/// cells below about 8 per item (a sparse scene must not allocate a huge grid).
-Eigen::Vector3i grid_dims(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double min_cell, std::size_t items);
-
 /// Sample lattices: Fibonacci (golden-spiral) directions with each direction's neighbours within
 /// 1.6 spacings (CSR). The coarse one (400 directions, spacing 0.18 rad) serves smooth shapes
 /// (spheres, ellipsoids); the fine one (1600, 0.09 rad) rough ones, whose bumps (a degree-15 SH
@@ -59,6 +54,24 @@ ShapeSampling sample_shape(const shape::RadialTable& t);
 /// Twice the largest deviation of a sample's radius from the mean of its neighbours.
 double sample_slack(const Lattice& lattice, const std::vector<float>& radii);
 SurfaceView view_of(const shape::RadialTable& t, const ShapeSampling& sampling);
+
+/// One distinct shape of a grain list, as the kernels see it (its sampling computed once).
+struct ShapeData {
+  const shape::RadialTable* table = nullptr;
+  ShapeSampling sampling;
+  double max_radius = 0.0;
+  double volume = 0.0;
+  SurfaceView view() const { return view_of(*table, sampling); }
+};
+
+/// The distinct shapes of a grain list (by pointer) and each grain's index into them; the
+/// samplings are computed in parallel.
+void index_shapes(const std::vector<const shape::RadialTable*>& shapes, std::vector<ShapeData>& data,
+                  std::vector<int>& grain_shape);
+
+/// Final angular step (rad) of the deepest-point searches of the exact measures: pair_contact(),
+/// find_contacts(), wall_penetration() and the packer's final check.
+inline constexpr double kExactRefineStep = 5e-4;
 
 /// Pose of a grain scaled by s about its body origin: world = x + R * (s * body).
 struct Frame {

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/point_grid.hpp"
 #include "graintwin/synth/packing.hpp"
-#include "packing_geometry.hpp"
 
 namespace graintwin::synth {
 
@@ -77,43 +77,22 @@ std::vector<double> solid_fraction_by_wall_distance(
       std::clamp(box_volume / vmean * kWallBandPointsPerGrain, 1e5, 4e6));
   const double g3 = 1.2207440846057594;
   const Eigen::Vector3d step(1.0 / g3, 1.0 / (g3 * g3), 1.0 / (g3 * g3 * g3));
-  // Cell grid of the grain origins (cell >= twice the largest bounding radius).
-  const Eigen::Vector3d glo = lo - Eigen::Vector3d::Constant(2.0 * rmax);
-  const Eigen::Vector3d ghi = hi + Eigen::Vector3d::Constant(2.0 * rmax);
-  const Eigen::Vector3i dims = detail::grid_dims(glo, ghi, 2.0 * rmax, grains.size());
-  auto cell_index = [&](const Eigen::Vector3d& x, Eigen::Vector3i& ci) {
-    for (int k = 0; k < 3; ++k) {
-      ci[k] = static_cast<int>(std::floor((x[k] - glo[k]) / (ghi[k] - glo[k]) * dims[k]));
-      if (ci[k] < 0 || ci[k] >= dims[k]) return false;
-    }
-    return true;
-  };
-  std::vector<std::vector<int>> grid(static_cast<std::size_t>(dims.prod()));
+  // The grain origins in a grid of cells twice the largest bounding radius: the grains that may
+  // hold a point are those whose origin lies within that radius of it.
+  std::vector<Eigen::Vector3d> origins(grains.size());
   std::vector<Eigen::Matrix3d> rt(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i) {
+    origins[i] = grains[i].position;
     rt[i] = grains[i].orientation.normalized().toRotationMatrix().transpose();
-    Eigen::Vector3i ci;
-    if (cell_index(grains[i].position, ci)) {
-      grid[(ci.z() * dims.y() + ci.y()) * dims.x() + ci.x()].push_back(static_cast<int>(i));
-    }
   }
+  const PointGrid grid(origins, 2.0 * rmax);
   auto solid_at = [&](const Eigen::Vector3d& p) {
-    Eigen::Vector3i ci;
-    if (!cell_index(p, ci)) return false;
-    for (int dz = -1; dz <= 1; ++dz) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const Eigen::Vector3i cj = ci + Eigen::Vector3i(dx, dy, dz);
-          if ((cj.array() < 0).any() || (cj.array() >= dims.array()).any()) continue;
-          for (int i : grid[(cj.z() * dims.y() + cj.y()) * dims.x() + cj.x()]) {
-            const double r = shapes[i]->max_radius();
-            if ((p - grains[i].position).squaredNorm() >= r * r) continue;
-            if (inside_grain(*shapes[i], grains[i], rt[i], p)) return true;
-          }
-        }
-      }
-    }
-    return false;
+    bool solid = false;
+    grid.for_each_within(p, rmax, [&](std::size_t i, double d2) {
+      const double r = shapes[i]->max_radius();
+      if (!solid && d2 < r * r) solid = inside_grain(*shapes[i], grains[i], rt[i], p);
+    });
+    return solid;
   };
   const long long chunk = 4096;
   const long long chunks = (count + chunk - 1) / chunk;
