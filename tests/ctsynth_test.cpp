@@ -244,6 +244,105 @@ TEST(Ctsynth, LibraryGrainsFromASegmentedScan) {
                              2, "has no grain with label 1 of");
 }
 
+// The pipeline's triaxial scene with coarser membrane balls, so that the test runs in seconds.
+fs::path write_loading_scene(const fs::path& dir) {
+  std::ofstream(dir / "triaxial.toml") << "[run]\ndamping = 2000\nkeep_initial_overlaps = true\noverlap_tolerance = 0.3\n"
+                                          "mass_scaled_share = 0.05\n[model]\nkind = \"rigid\"\n"
+                                          "[triaxial]\nboundary = \"membrane\"\nconfining_pressure = 300e3\n"
+                                          "ball_radius = 0.05e-3\nservo_inertial_number = 1e-2\nshear_inertial_number = 1e-2\n";
+  return dir / "triaxial.toml";
+}
+
+TEST(Ctsynth, SimulatedLoadingRendersTheTriaxialTestsFramesWithTheirForces) {
+  test::TempDir dir;
+  write_scene(dir / "scene.toml");
+  const fs::path out = dir / "out";
+  // About 25 grains: the test's cost is the consolidation's few thousand steps.
+  const auto r = run_tool("ctsynth", {(dir / "scene.toml").string(), out.string(), "-q", "--loading", "simulated",
+                                      "--triaxial-scene", write_loading_scene(dir.path()).string(), "--strains", "0,0.01",
+                                      "--simulated-surface-nodes", "100", "--diameter", "1.0mm", "--height", "1.2mm"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto series = nlohmann::json::parse(std::ifstream(out / "series.json"));
+  EXPECT_EQ(series["loading"], "simulated");
+  // The simulation's own results are kept, its frames at the scans' strains.
+  const io::H5File sim = io::open_kind(out / "simulation.h5", "fdem_results");
+  const io::H5File t0 = io::open_kind(out / "truth_000.h5", "ground_truth"), t1 = io::open_kind(out / "truth_001.h5", "ground_truth");
+  const std::size_t n = t0.read<std::uint32_t>("/grains/label").size();
+  const double eps1 = t1.attr_double("/", "axial_strain");
+  EXPECT_EQ(t0.attr_double("/", "axial_strain"), 0.0);
+  EXPECT_NEAR(eps1, 0.01, 5e-4);
+  // The platens: H1 = H0 exp(-eps1), the log strain of the test (to the platens' travel in a step:
+  // the series row is booked at the frame's step, the strain measured after it).
+  EXPECT_NEAR(t1.attr_double("/", "sample_height"), t0.attr_double("/", "sample_height") * std::exp(-eps1), 1e-8);
+  // Every grain moved as the simulation moved its body: the truth's displacement of each grain is
+  // the frame's centroid displacement (the SH origin and the mesh centroid differ by micrometres,
+  // so the turn between the scans moves them apart by far less than a voxel).
+  const auto p0 = t0.read<double>("/grains/centroid"), p1 = t1.read<double>("/grains/centroid");
+  std::vector<std::string> frames = sim.list("/frames");
+  ASSERT_GE(frames.size(), 2u);
+  const auto c0 = sim.read<double>("/frames/" + frames.front() + "/grains/centroid");
+  const auto c1 = sim.read<double>("/frames/" + frames.back() + "/grains/centroid");
+  ASSERT_EQ(c0.size(), 3 * n);
+  double moved = 0.0;
+  for (std::size_t i = 0; i < 3 * n; ++i) {
+    EXPECT_NEAR(p1[i] - p0[i], c1[i] - c0[i], 1e-6) << "grain " << i / 3 + 1;
+    moved = std::max(moved, std::abs(c1[i] - c0[i]));
+  }
+  EXPECT_GT(moved, 5e-6) << "the grains moved";
+  // The scans show the grains where the truth puts them: each label's voxel centroid is its pose.
+  for (const io::H5File* t : {&t0, &t1}) {
+    const auto labels = io::read_image_as<std::uint32_t>(*t, "/labels");
+    const auto& vs = labels.voxel_size();
+    const auto& o = labels.origin();
+    std::vector<Eigen::Vector3d> sum(n + 1, Eigen::Vector3d::Zero());
+    std::vector<double> count(n + 1, 0.0);
+    const auto sh = labels.shape();
+    for (std::size_t z = 0; z < sh[0]; ++z)
+      for (std::size_t y = 0; y < sh[1]; ++y)
+        for (std::size_t x = 0; x < sh[2]; ++x)
+          if (const auto l = labels(z, y, x)) {
+            sum[l] += Eigen::Vector3d(o[2] + x * vs[2], o[1] + y * vs[1], o[0] + z * vs[0]);
+            count[l] += 1.0;
+          }
+    const auto p = t == &t0 ? p0 : p1;
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_GT(count[i + 1], 0.0) << "grain " << i + 1 << " is in the image";
+      const Eigen::Vector3d c = sum[i + 1] / count[i + 1];
+      EXPECT_LT((c - Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2])).norm(), 0.35 * vs[0]) << "grain " << i + 1;
+    }
+  }
+  // Contacts carry the simulation's forces: every loaded pair touches, compressive along its normal.
+  const auto force = t1.read<double>("/contacts/force"), normal = t1.read<double>("/contacts/normal");
+  const auto touching = t1.read<std::uint8_t>("/contacts/touching");
+  std::size_t loaded = 0;
+  for (std::size_t c = 0; c < touching.size(); ++c) {
+    const Eigen::Vector3d f(force[3 * c], force[3 * c + 1], force[3 * c + 2]), nrm(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
+    if (f.norm() == 0.0) continue;
+    ++loaded;
+    EXPECT_TRUE(touching[c]) << "contact " << c;
+    EXPECT_GT(f.dot(nrm), 0.0) << "contact " << c << ": the force on the higher grain pushes it away";
+  }
+  EXPECT_GT(loaded, n) << "a loaded packing carries more contacts than grains";
+  EXPECT_EQ(loaded, series["scans"][1]["force_pairs"].get<std::size_t>());
+  EXPECT_GT(t1.attr_double("/", "stress_ratio"), 1.0);
+}
+
+TEST(Ctsynth, SimulatedLoadingRefusesWhatItCannotRunBeforeAnyWork) {
+  test::TempDir dir;
+  write_scene(dir / "scene.toml");
+  const std::string scene = (dir / "scene.toml").string(), out = (dir / "out").string(), tri = write_loading_scene(dir.path()).string();
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated"}, 2, "--triaxial-scene");
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--triaxial-scene", tri}, 2, "--loading simulated");
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated", "--triaxial-scene", tri, "--grain-shape", "angular"},
+                             2, "angular");
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated", "--triaxial-scene", tri, "--strains", "0"}, 2,
+                             "above 0");
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "pushed"}, 2, "prescribed or simulated");
+  std::ofstream(dir / "stages.toml") << "[run]\nduration = 1e-3\n";
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated", "--triaxial-scene", (dir / "stages.toml").string()},
+                             2, "[triaxial]");
+}
+
 TEST(Ctsynth, OverfullSceneFailsClearlyAndWritesNothing) {
   test::TempDir dir;
   write_scene(dir / "scene.toml");

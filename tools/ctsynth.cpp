@@ -7,6 +7,7 @@
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/strings.hpp"
+#include "graintwin/experiment/triaxial_loading.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -50,6 +51,9 @@ struct Options {
   double band_angle = 60.0, band_azimuth = 0.0, band_slip = 0.5, nonaffine = 0.15, rotation_per_shear = 0.5;
   std::string band_width = "";  // default 10 d50
   std::string contact_search = "";  // default 2 voxels
+  std::string loading = "prescribed";
+  std::string triaxial_scene;
+  double simulated_surface_nodes = 500.0;
 };
 
 // "7,11" -> {7, 11}: increasing SH degrees >= 2, those >= sh_degree dropped; "none" -> {}.
@@ -148,6 +152,21 @@ SeriesParams series_params(const Options& o) {
   p.loading.nonaffine = o.nonaffine;
   p.loading.rotation_per_shear = o.rotation_per_shear;
   p.contact_search = o.contact_search.empty() ? 0.0 : parse_length_m(o.contact_search, "--contact-search");
+  if (o.loading == "simulated") {
+    if (o.triaxial_scene.empty())
+      throw UsageError("--loading simulated needs --triaxial-scene, e.g. pipelines/scenes/triaxial.toml");
+    experiment::check_loading_inputs(p);
+    experiment::TriaxialLoadingParams tp;
+    tp.scene = o.triaxial_scene;
+    experiment::check_loading_scene(tp.scene, p.container, p.membrane_thickness);
+    tp.size.surface_nodes = o.simulated_surface_nodes;
+    tp.membrane_thickness = p.membrane_thickness;
+    p.simulate = experiment::triaxial_loading(tp);
+  } else if (o.loading != "prescribed") {
+    throw UsageError("--loading '" + o.loading + "' is not prescribed or simulated");
+  } else if (!o.triaxial_scene.empty()) {
+    throw UsageError("--triaxial-scene drives --loading simulated only; give both or neither");
+  }
   return p;
 }
 
@@ -261,6 +280,18 @@ void add_options(cli::Tool& tool, Options& o) {
       ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--rotation-per-shear", o.rotation_per_shear, "Grain rotation (rad) per unit local shear")
       ->check(number_in(closed(-10, 10, "rad")))->capture_default_str();
+  app.add_option("--loading", o.loading,
+                 "prescribed: the states are kinematics (compression, bulge, shear band, nonaffine motion; overlaps "
+                 "relaxed); simulated: fdemrun's triaxial test of the packed grains (rigid meshes of their exact SH "
+                 "surfaces) gives the states at the --strains, read as log strains from the start of shearing, and its "
+                 "results are kept as simulation.h5 (sphere, ellipsoid and sand grains in a cylinder)")
+      ->capture_default_str();
+  app.add_option("--triaxial-scene", o.triaxial_scene,
+                 "--loading simulated: the fdemrun scene of the test (its [triaxial] and [run] tables; its target and "
+                 "frame strains are set from --strains, its model is the packed grains), e.g. pipelines/scenes/triaxial.toml");
+  app.add_option("--simulated-surface-nodes", o.simulated_surface_nodes,
+                 "--loading simulated: surface nodes of each grain's rigid mesh")
+      ->check(number_in(closed(20, 1e5)))->capture_default_str();
   app.add_option("--contact-search", o.contact_search, "Record pairs closer than this as near-contacts (default 2 voxels)")
       ->check(length_in(1e-9, 0.01));
   tool.set_examples({"ctsynth pipelines/scenes/sand_small.toml runs/sand_small_truth",
@@ -287,7 +318,9 @@ int main(int argc, char** argv) {
                  "(angular grains with an undercut, library grains) are packed and searched for contacts through their star "
                  "hull and rendered from their solid; their truth files say what a radial description misses of them. Limit: in a cylinder 6.5 d50 wide they jam near 0.58 "
                  "solid fraction (the bundled series packs 0.5804; 0.582 jammed with another draw): the loose layer at "
-                 "the walls costs the most, wider samples pack denser; states are prescribed kinematics, not mechanics.");
+                 "the walls costs the most, wider samples pack denser. The loading states are prescribed kinematics, or with "
+                 "--loading simulated fdemrun's triaxial test of the packed grains: scans of a physically consistent "
+                 "motion, with each pair's contact force and the stress-strain curve (simulation.h5) as truth.");
   Options o;
   fs::path outdir, scene;
   tool.use_positional_config("scene", scene, "Scene file (TOML, keys = option names below)");

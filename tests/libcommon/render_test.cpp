@@ -152,7 +152,7 @@ TEST(Render, GrainsCutByTheVolumeEdgeAreClipped) {
 TEST(Render, ShellVolumeIsTheAnnulusVolume) {
   Shell sh;
   sh.centre_x = sh.centre_y = 2e-4;
-  sh.inner_radius = [](double) { return 1.2e-4; };
+  sh.inner_radius = [](double, double) { return 1.2e-4; };
   sh.thickness = 0.3e-4;
   sh.z0 = 0.5e-4;
   sh.z1 = 2.5e-4;

@@ -25,6 +25,7 @@ DEPENDS = {
     "track": {"core", "io", "shape"},
     "fdem": {"core", "io"},
     "mesh": {"core", "io", "fdem", "shape", "synth"},
+    "experiment": {"core", "io", "fdem", "mesh", "shape", "synth"},
     "micro": {"core", "io", "contacts", "fdem", "shape"},
     "report": {"core", "io", "contacts", "fdem", "micro", "segment", "shape", "track"},
 }

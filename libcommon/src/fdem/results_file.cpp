@@ -211,7 +211,8 @@ TriaxialSeries read_triaxial_series(const std::filesystem::path& path) {
   const auto axial = f.read<double>(sr::series_axial_strain);
   const auto volumetric = f.read<double>(sr::series_volumetric_strain);
   const auto ratio = f.read<double>(sr::series_stress_ratio);
-  if (volumetric.size() != axial.size() || ratio.size() != axial.size())
+  const auto step = f.read<std::uint64_t>(sr::series_step);
+  if (volumetric.size() != axial.size() || ratio.size() != axial.size() || step.size() != axial.size())
     throw DataError(path.string() + ": the series' strains and stress ratio differ in length; rerun fdemrun");
   // fdemrun measures the strains from the start of shearing: the rows before it are NaN.
   for (std::size_t i = 0; i < axial.size(); ++i)
@@ -219,6 +220,7 @@ TriaxialSeries read_triaxial_series(const std::filesystem::path& path) {
       s.axial_strain.push_back(axial[i]);
       s.volumetric_strain.push_back(volumetric[i]);
       s.stress_ratio.push_back(ratio[i]);
+      s.step.push_back(step[i]);
     }
   return s;
 }
@@ -247,6 +249,8 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   r.normal = f.read<double>(at(sr::contact_normal));
   r.force = f.read<double>(at(sr::contact_force));
   r.overlap = f.read<double>(at(sr::contact_overlap));
+  if (f.has_attr(g, "axial_strain")) r.axial_strain = f.attr_double(g, "axial_strain");
+  if (f.exists(at(sr::frame_membrane_position))) r.membrane_position = f.read<double>(at(sr::frame_membrane_position));
   // fdemrun stops before a state goes non-finite (its health checks), so such a frame is damage.
   io::require_finite(f, at(sr::frame_centroid), r.centroid, 3, "rerun fdemrun");
   io::require_finite(f, at(sr::frame_rotation), r.rotation, 4, "rerun fdemrun");

@@ -182,19 +182,24 @@ TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>&
   return spec;
 }
 
-/// The [model] table (or --model): the shapes2mesh model file and its sample cylinder.
+/// The [model] table (or --model, or a model given in memory): the shapes2mesh model and its sample cylinder.
 void parse_model(toml::table& root, const Table& top, const std::filesystem::path& path,
-                 const std::filesystem::path& model_file, const std::string& file, Scene& s) {
-  if (!model_file.empty() && !root.contains("model")) root.insert("model", toml::table{});
+                 const std::filesystem::path& model_file, const std::shared_ptr<const Model>& given,
+                 const std::string& file, Scene& s) {
+  if ((!model_file.empty() || given) && !root.contains("model")) root.insert("model", toml::table{});
   if (const toml::table* model = root["model"].as_table()) {
     const Table t(*model, file + ": [model]", {"file", "kind"});
-    if (!t.has("file") && model_file.empty()) t.fail("file is missing: the kind=fdem_model .h5 of shapes2mesh");
     ModelSource source;
-    source.path = model_file.empty() ? path.parent_path() / t.text("file", "") : model_file;
-    if (!std::filesystem::exists(source.path))
-      t.fail("model file " + source.path.string() + " does not exist" +
-             (model_file.empty() ? " (paths are relative to the scene's folder)" : ""));
-    source.model = std::make_shared<const Model>(read_model_file(source.path));
+    if (given) {
+      source.model = given;
+    } else {
+      if (!t.has("file") && model_file.empty()) t.fail("file is missing: the kind=fdem_model .h5 of shapes2mesh");
+      source.path = model_file.empty() ? path.parent_path() / t.text("file", "") : model_file;
+      if (!std::filesystem::exists(source.path))
+        t.fail("model file " + source.path.string() + " does not exist" +
+               (model_file.empty() ? " (paths are relative to the scene's folder)" : ""));
+      source.model = std::make_shared<const Model>(read_model_file(source.path));
+    }
     if (t.has("kind")) {
       if (parse_kind(t) != GrainKind::rigid)
         t.fail("kind may only be \"rigid\" (a mesh keeps its own element order); leave it out to keep the file's kinds");
@@ -504,7 +509,9 @@ double Scene::total_duration() const {
   return t;
 }
 
-Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file) {
+namespace {
+Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path& model_file,
+                  const std::shared_ptr<const Model>& given) {
   const std::string file = path.string();
   toml::table root;
   try {
@@ -515,7 +522,7 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   }
   const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages", "triaxial"});
   Scene s;
-  parse_model(root, top, path, model_file, file, s);
+  parse_model(root, top, path, model_file, given, file, s);
   parse_sample(root, top, file, s);
   const double duration = parse_run(root, top, file, s);
   const std::vector<std::string> material_names = parse_materials(root, file, s);
@@ -526,6 +533,16 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
   if (parse_triaxial_table(root, top, file, duration, s)) return s;
   finish_stages(file, duration, s);
   return s;
+}
+}  // namespace
+
+Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file) {
+  return parse_scene(path, model_file, nullptr);
+}
+
+Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model) {
+  if (!model) throw UsageError("read_scene: give a model");
+  return parse_scene(path, {}, model);
 }
 
 Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {

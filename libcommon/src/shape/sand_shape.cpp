@@ -208,6 +208,17 @@ RadialTable ellipsoid_table(double a, double b, double c, int n) {
       [&inv2](const Eigen::Vector3d& d) { return 1.0 / std::sqrt(d.cwiseAbs2().dot(inv2)); }, n);
 }
 
+void set_equivalent_ellipsoid(ShapeStats& s, const Eigen::Matrix3d& m) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(m);
+  // Eigenvalues come ascending; a solid ellipsoid has M_ii / V = a_i^2 / 5.
+  for (int i = 0; i < 3; ++i) {
+    s.semi_axes[i] = std::sqrt(5.0 * std::max(eigen.eigenvalues()[2 - i], 0.0));
+    s.axes.col(i) = eigen.eigenvectors().col(2 - i);
+  }
+  if (s.axes.determinant() < 0) s.axes.col(2) = -s.axes.col(2);
+  s.aspect_ratio = s.semi_axes[0] / s.semi_axes[2];
+}
+
 ShapeStats shape_stats(const RadialTable& table) {
   if (table.empty()) {
     throw UsageError("shape_stats got an empty RadialTable; build it with from_function first");
@@ -220,12 +231,7 @@ ShapeStats shape_stats(const RadialTable& table) {
   // J = tr(M) I - M, so M = tr(J)/2 I - J.
   const Eigen::Matrix3d j = table.inertia_tensor();
   const Eigen::Matrix3d m = 0.5 * j.trace() * Eigen::Matrix3d::Identity() - j;
-  const Eigen::Vector3d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m).eigenvalues();
-  // Eigenvalues come ascending; a solid ellipsoid has M_ii = V a_i^2 / 5.
-  for (int i = 0; i < 3; ++i) {
-    s.semi_axes[i] = std::sqrt(5.0 * std::max(lambda[2 - i], 0.0) / s.volume);
-  }
-  s.aspect_ratio = s.semi_axes[0] / s.semi_axes[2];
+  set_equivalent_ellipsoid(s, m / s.volume);
   return s;
 }
 

@@ -143,6 +143,15 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
           with_units("m"));
   f.write("/contacts/overlap", overlap, with_units("m"));
   f.write("/contacts/touching", touching);
+  f.set_attr("/", "loading", std::string(t.simulated ? "simulated" : "prescribed"));
+  if (t.simulated) {
+    if (t.contact_force.size() != m)
+      throw UsageError("write_ground_truth: a simulated state needs one contact force per contact");
+    f.write("/contacts/force", rows(m, 3, [&](std::size_t k, int c) { return t.contact_force[k][c]; }).data(), {m, 3},
+            with_units("N"));
+    f.set_attr("/", "stress_ratio", t.stress_ratio);
+    f.set_attr("/", "volumetric_strain", t.volumetric_strain);
+  }
   io::write_history(f, history);
 }
 

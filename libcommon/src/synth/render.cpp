@@ -315,23 +315,24 @@ Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& 
   auto inside = [&](double x, double y, double z) {
     if (z < shell.z0 || z > shell.z1) return false;
     const double rho = std::hypot(x - shell.centre_x, y - shell.centre_y);
-    const double r_in = shell.inner_radius(z);
+    const double r_in = shell.inner_radius(std::atan2(y - shell.centre_y, x - shell.centre_x), z);
     return rho >= r_in && rho <= r_in + shell.thickness;
   };
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t z = 0; z < shape[0]; ++z) {
     const double wz = origin[0] + static_cast<double>(z) * voxel_size[0];
     if (wz < shell.z0 - h || wz > shell.z1 + h) continue;
-    const double r_in = shell.inner_radius(std::clamp(wz, shell.z0, shell.z1));
     for (std::size_t y = 0; y < shape[1]; ++y) {
       const double wy = origin[1] + static_cast<double>(y) * voxel_size[1];
       for (std::size_t x = 0; x < shape[2]; ++x) {
         const double wx = origin[2] + static_cast<double>(x) * voxel_size[2];
         const double rho = std::hypot(wx - shell.centre_x, wy - shell.centre_y);
+        const double r_in = shell.inner_radius(std::atan2(wy - shell.centre_y, wx - shell.centre_x),
+                                               std::clamp(wz, shell.z0, shell.z1));
         const double in_depth = std::min(rho - r_in, r_in + shell.thickness - rho);
         if (in_depth < -2.0 * h) continue;
         const bool whole_z = wz > shell.z0 + h && wz < shell.z1 - h;
-        if (in_depth > 2.0 * h && whole_z) {  // 2h: r_in(z) may vary across the voxel
+        if (in_depth > 2.0 * h && whole_z) {  // 2h: r_in may vary across the voxel
           out(z, y, x) = 1.0f;
           continue;
         }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -26,7 +27,8 @@ namespace {
 
 std::string scan_name(const char* stem, std::size_t k) { return fmt::format("{}_{:03d}.h5", stem, k); }
 
-// Image box (m, x y z) that holds the sample in its most bulged state, with the membrane and margin.
+// Image box (m, x y z) that holds the sample in its most bulged state, with the membrane and margin:
+// the prescribed bulge's bound (known before any state is made).
 struct ImageBox {
   Vec3 lo, hi;
 };
@@ -41,15 +43,37 @@ ImageBox image_box(const SeriesParams& p) {
   return {{-p.margin, -p.margin, -p.margin}, {b.x() + p.margin, b.y() + p.margin, b.z() + p.margin}};
 }
 
-// Volume (m^3) of the loaded sample at strain eps: the bulged cylinder integrated over its height.
-double sample_volume(const SeriesParams& p, const LoadingParams& lp, double eps) {
-  const double height = lp.height * (1.0 - eps);
+// Simulated states bulge as the mechanics has it: the box around the widest membrane and the
+// platens of every state (at least the container with its membrane and margin).
+constexpr int kProfileSamples = 200;
+ImageBox image_box(const SeriesParams& p, const std::vector<LoadedState>& states) {
+  double r_in = p.container.radius, z_lo = 0.0, z_hi = p.container.height;
+  for (const LoadedState& s : states) {
+    for (int k = 0; k <= kProfileSamples; ++k)
+      for (int a = 0; a < kProfileSamples; ++a)
+        r_in = std::max(r_in, s.membrane_inner_radius(2.0 * std::numbers::pi * a / kProfileSamples,
+                                                      s.base_z + (s.top_z - s.base_z) * k / kProfileSamples));
+    z_lo = std::min(z_lo, s.base_z);
+    z_hi = std::max(z_hi, s.top_z);
+  }
+  const double r_out = r_in + p.membrane_thickness + p.margin;
+  return {{-r_out, -r_out, z_lo - p.margin}, {r_out, r_out, z_hi + p.margin}};
+}
+
+// Volume (m^3) of a loaded sample: its lateral surface integrated between the platens.
+double sample_volume(const SeriesParams& p, const LoadedState& s) {
+  const double height = s.top_z - s.base_z;
   if (p.container.kind == Container::Kind::box) return p.container.box_size.x() * p.container.box_size.y() * height;
+  // Slices of the height, each a polygon of sectors (the prescribed surfaces are round: one sector).
   constexpr int kSlices = 2000;
+  const int sectors = s.simulated ? 720 : 1;
   double v = 0.0;
-  for (int s = 0; s < kSlices; ++s) {
-    const double r = sample_radius_at(lp, (s + 0.5) / kSlices * height, eps);
-    v += std::numbers::pi * r * r * height / kSlices;
+  for (int k = 0; k < kSlices; ++k) {
+    const double z = s.base_z + (k + 0.5) / kSlices * height;
+    for (int a = 0; a < sectors; ++a) {
+      const double r = s.membrane_inner_radius(2.0 * std::numbers::pi * (a + 0.5) / sectors, z);
+      v += std::numbers::pi * r * r * height / kSlices / sectors;
+    }
   }
   return v;
 }
@@ -114,6 +138,80 @@ ScannerParams scanner_for_scan(const SeriesParams& p, const LoadingParams& lp, c
   return sp;
 }
 
+
+// The prescribed kinematics' parameters for this sample: its axis, height and radius, a band width
+// of 0 made 10 d50.
+LoadingParams loading_params(const SeriesParams& p, double d_ref) {
+  const bool cyl = p.container.kind == Container::Kind::cylinder;
+  LoadingParams lp = p.loading;
+  lp.centre_x = cyl ? 0.0 : 0.5 * p.container.box_size.x();
+  lp.centre_y = cyl ? 0.0 : 0.5 * p.container.box_size.y();
+  lp.height = cyl ? p.container.height : p.container.box_size.z();
+  lp.radius = cyl ? p.container.radius : 0.5 * std::min(p.container.box_size.x(), p.container.box_size.y());
+  if (lp.band_width == 0.0) lp.band_width = 10.0 * d_ref;
+  lp.seed = p.seed;
+  return lp;
+}
+
+// The prescribed states: the kinematics moves the packed grains, then their overlaps are relaxed
+// inside the state's walls (the packing itself where the strain is 0).
+std::vector<LoadedState> prescribed_states(const SeriesParams& p, const LoadingParams& lp,
+                                           const std::vector<const shape::RadialTable*>& tables,
+                                           const std::vector<PackedGrain>& packed, const PackingParams& pp,
+                                           const PackingReport& packing) {
+  const bool cyl = p.container.kind == Container::Kind::cylinder;
+  if (!cyl && (lp.band != ShearBand::none || lp.bulge != 0.0) && p.strains.size() > 1)
+    spdlog::info("box container: loading uses the box centre as the sample axis");
+  std::vector<std::vector<PackedGrain>> poses = loading_states(lp, packed, p.strains);
+  std::vector<LoadedState> states(poses.size());
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const double eps = p.strains[k];
+    LoadedState& s = states[k];
+    s.axial_strain = eps;
+    s.poses = std::move(poses[k]);
+    s.top_z = lp.height * (1.0 - eps);
+    s.membrane_inner_radius = [lp, eps](double, double z) { return sample_radius_at(lp, z, eps); };
+    PackingReport relaxed = packing;
+    if (k > 0 || eps != 0.0) {
+      Container walls = p.container;
+      if (cyl) {
+        walls.height = s.top_z;
+        walls.radius = lp.radius * (1.0 + 1.5 * lp.bulge * eps);
+      } else {
+        walls.box_size.z() = s.top_z;
+      }
+      relaxed = relax_grains(tables, s.poses, walls, pp);
+      spdlog::info("state {} (strain {:.4g}): overlaps relaxed in {} sweeps, max overlap {:.3g} um", k, eps,
+                   relaxed.sweeps, relaxed.max_overlap * 1e6);
+    }
+    s.contact_tolerance = relaxed.tolerance;
+    s.max_overlap = relaxed.max_overlap;
+    s.relax_sweeps = relaxed.sweeps;
+    throw_if_interrupted();
+  }
+  return states;
+}
+
+// A simulated state's contact forces on the truth's contacts: every pair that carries a force
+// touches, whatever its overlap; a pair the geometric search missed is reported.
+void attach_forces(GroundTruth& truth, const LoadedState& state) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, Eigen::Vector3d> force;
+  for (const PairForce& f : state.forces) force[{f.low, f.high}] = f.force;
+  truth.contact_force.assign(truth.contacts.size(), Eigen::Vector3d::Zero());
+  std::size_t found = 0;
+  for (std::size_t c = 0; c < truth.contacts.size(); ++c) {
+    const auto it = force.find({truth.contacts[c].low, truth.contacts[c].high});
+    if (it == force.end()) continue;
+    truth.contact_force[c] = it->second;
+    truth.contacts[c].touching = true;
+    ++found;
+  }
+  if (found < force.size())
+    spdlog::warn("{} of {} loaded pairs of the simulation are farther apart than the contact search; their forces are "
+                 "not in the truth (give a larger --contact-search)",
+                 force.size() - found, force.size());
+}
+
 }  // namespace
 
 SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& dir,
@@ -126,11 +224,11 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   std::unique_ptr<ShapeLibrary> library;
   if (from_library) library = std::make_unique<ShapeLibrary>(read_shape_library(p.library_shapes, p.library_labels));
 
-  // --- image geometry: fixed for the series, large enough for the most bulged state ---
-  const ImageBox box = image_box(p);
+  // --- image geometry: the bound of the most bulged state, to check before any heavy work ---
+  const ImageBox bound = image_box(p);
   const double voxel = p.voxel_size;
-  const Vec3 voxels{std::ceil((box.hi[2] - box.lo[2]) / voxel), std::ceil((box.hi[1] - box.lo[1]) / voxel),
-                    std::ceil((box.hi[0] - box.lo[0]) / voxel)};  // z y x, as reals until they are known to fit
+  const Vec3 voxels{std::ceil((bound.hi[2] - bound.lo[2]) / voxel), std::ceil((bound.hi[1] - bound.lo[1]) / voxel),
+                    std::ceil((bound.hi[0] - bound.lo[0]) / voxel)};  // z y x, as reals until they are known to fit
   // What the series holds at once: the grains' tables (and one smoothed copy per packing stage)
   // and one scan being rendered.
   const double target = p.solid_fraction * p.container.volume();
@@ -150,10 +248,10 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
                grain_table_bytes > scan_bytes
                    ? "give larger grains (--d-min, --d50, --d-max), a smaller sample (--diameter, --height or --box) or larger voxels (--voxel-size)"
                    : "make the sample smaller (--diameter, --height or --box), the voxels larger (--voxel-size) or the grains larger (--d-min, --d50, --d-max)");
-  const Shape3 shape{static_cast<std::size_t>(voxels[0]), static_cast<std::size_t>(voxels[1]),
-                     static_cast<std::size_t>(voxels[2])};
   if (p.scanner.blur_sigma_vox > 0.0)
-    check_kernel_fits(std::ceil(3.0 * p.scanner.blur_sigma_vox), shape,
+    check_kernel_fits(std::ceil(3.0 * p.scanner.blur_sigma_vox),
+                      Shape3{static_cast<std::size_t>(voxels[0]), static_cast<std::size_t>(voxels[1]),
+                             static_cast<std::size_t>(voxels[2])},
                       fmt::format("--blur {:g} (a Gaussian cut at 3 sigma)", p.scanner.blur_sigma_vox),
                       "give a smaller --blur or a larger sample");
 
@@ -196,17 +294,16 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   throw_if_interrupted();
 
   // --- loading states ---
-  LoadingParams lp = p.loading;
-  lp.centre_x = cyl ? 0.0 : 0.5 * p.container.box_size.x();
-  lp.centre_y = cyl ? 0.0 : 0.5 * p.container.box_size.y();
-  lp.height = cyl ? p.container.height : p.container.box_size.z();
-  lp.radius = cyl ? p.container.radius : 0.5 * std::min(p.container.box_size.x(), p.container.box_size.y());
-  if (lp.band_width == 0.0) lp.band_width = 10.0 * d_ref;
-  lp.seed = p.seed;
-  if (!cyl && (lp.band != ShearBand::none || lp.bulge != 0.0) && p.strains.size() > 1)
-    spdlog::info("box container: loading uses the box centre as the sample axis");
-  const auto states = loading_states(lp, packed, p.strains);
-
+  const LoadingParams lp = loading_params(p, d_ref);
+  const std::vector<LoadedState> states =
+      p.simulate ? p.simulate(grains, packed, p.container, p.strains, dir, history, progress)
+                 : prescribed_states(p, lp, tables, packed, pp, report);
+  throw_if_interrupted();
+  // The scans' grid: fixed for the series, from the bound (prescribed) or the states (simulated).
+  const ImageBox box = p.simulate ? image_box(p, states) : bound;
+  const Shape3 shape{static_cast<std::size_t>(std::ceil((box.hi[2] - box.lo[2]) / voxel)),
+                     static_cast<std::size_t>(std::ceil((box.hi[1] - box.lo[1]) / voxel)),
+                     static_cast<std::size_t>(std::ceil((box.hi[0] - box.lo[0]) / voxel))};
   const Vec3 vs{voxel, voxel, voxel};
   const Vec3 origin{box.lo[2] + 0.5 * voxel, box.lo[1] + 0.5 * voxel, box.lo[0] + 0.5 * voxel};
   spdlog::info("scans: {} x {} x {} voxels (z,y,x) at {:.4g} um, {} states", shape[0], shape[1], shape[2],
@@ -218,22 +315,10 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   nlohmann::json series;
   series["scans"] = nlohmann::json::array();
   for (std::size_t k = 0; k < states.size(); ++k) {
-    const double eps = p.strains[k];
-    std::vector<PackedGrain> poses = states[k];
-    const double height_k = lp.height * (1.0 - eps);
-    PackingReport relax_report = report;
-    if (k > 0 || eps != 0.0) {
-      Container walls = p.container;
-      if (cyl) {
-        walls.height = height_k;
-        walls.radius = lp.radius * (1.0 + 1.5 * lp.bulge * eps);
-      } else {
-        walls.box_size.z() = height_k;
-      }
-      relax_report = relax_grains(tables, poses, walls, pp);
-      spdlog::info("state {} (strain {:.4g}): overlaps relaxed in {} sweeps, max overlap {:.3g} um", k, eps,
-                   relax_report.sweeps, relax_report.max_overlap * 1e6);
-    }
+    const LoadedState& state = states[k];
+    const std::vector<PackedGrain>& poses = state.poses;
+    const double eps = state.axial_strain;
+    const double height_k = state.top_z - state.base_z;
     // Render.
     std::vector<PlacedGrain> placed(poses.size());
     for (std::size_t i = 0; i < poses.size(); ++i)
@@ -243,10 +328,10 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
     Volume<float> membrane;
     if (p.membrane_thickness > 0.0) {
       Shell shell;
-      shell.inner_radius = [&](double z) { return sample_radius_at(lp, z, eps); };
+      shell.inner_radius = state.membrane_inner_radius;
       shell.thickness = p.membrane_thickness;
-      shell.z0 = 0.0;
-      shell.z1 = height_k;
+      shell.z0 = state.base_z;
+      shell.z1 = state.top_z;
       membrane = render_shell(shell, shape, vs, origin, p.render);
     }
     const Volume<std::uint16_t> scan = simulate_scan(images.fraction, p.membrane_thickness > 0.0 ? &membrane : nullptr,
@@ -259,10 +344,10 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
     truth.axial_strain = eps;
     truth.sample_height = height_k;
     truth.sample_radius = lp.radius;
-    const double volume_k = sample_volume(p, lp, eps);
+    const double volume_k = sample_volume(p, state);
     truth.solid_fraction = grain_volume / volume_k;
     truth.void_ratio = volume_k / grain_volume - 1.0;
-    truth.contact_tolerance = relax_report.tolerance;
+    truth.contact_tolerance = state.contact_tolerance;
     truth.labels = std::move(images.labels);
     truth.poses = poses;
     truth.sh_degree = grains.sh_degree;
@@ -283,23 +368,35 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
       truth.aspect_ratio.push_back(st.aspect_ratio);
     }
     if (!grains.solids.empty()) truth.non_star = grains.non_star;
-    truth.contacts = true_contacts(tables, poses, search_gap, relax_report.tolerance, separating,
+    truth.contacts = true_contacts(tables, poses, search_gap, state.contact_tolerance, separating,
                                    grains.solids.empty() ? std::vector<const GrainSolid*>{} : solids);
+    if (state.simulated) {
+      truth.simulated = true;
+      attach_forces(truth, state);
+      truth.stress_ratio = state.stress_ratio;
+      truth.volumetric_strain = state.volumetric_strain;
+    }
     const auto touching =
         std::count_if(truth.contacts.begin(), truth.contacts.end(), [](const TrueContact& c) { return c.touching; });
     write_ground_truth(dir / scan_name("truth", k), truth, history);
     spdlog::info("scan {}: strain {:.4g}, solid fraction {:.4f} (void ratio {:.4f}), {} touching contacts, {} near", k,
                  eps, truth.solid_fraction, truth.void_ratio, touching, truth.contacts.size() - touching);
-    series["scans"].push_back({{"scan", scan_name("scan", k)},
-                               {"truth", scan_name("truth", k)},
-                               {"axial_strain", eps},
-                               {"sample_height_m", height_k},
-                               {"solid_fraction", truth.solid_fraction},
-                               {"void_ratio", truth.void_ratio},
-                               {"grains", poses.size()},
-                               {"touching_contacts", touching},
-                               {"near_contacts", truth.contacts.size() - touching},
-                               {"max_overlap_m", relax_report.max_overlap}});
+    nlohmann::json row{{"scan", scan_name("scan", k)},
+                       {"truth", scan_name("truth", k)},
+                       {"axial_strain", eps},
+                       {"sample_height_m", height_k},
+                       {"solid_fraction", truth.solid_fraction},
+                       {"void_ratio", truth.void_ratio},
+                       {"grains", poses.size()},
+                       {"touching_contacts", touching},
+                       {"near_contacts", truth.contacts.size() - touching},
+                       {"max_overlap_m", state.max_overlap}};
+    if (state.simulated) {
+      row["stress_ratio"] = state.stress_ratio;
+      row["volumetric_strain"] = state.volumetric_strain;
+      row["force_pairs"] = state.forces.size();
+    }
+    series["scans"].push_back(row);
     throw_if_interrupted();
   }
   SeriesSummary summary;
@@ -313,6 +410,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
                        {"max_overlap_m", report.max_overlap},
                        {"sweeps", report.sweeps},
                        {"seconds", report.seconds}};
+  series["loading"] = p.simulate ? "simulated" : "prescribed";
   series["grains"] = summary.grains;
   if (!grains.solids.empty()) series["non_star_grains"] = summary.non_star_grains;
   series["voxels_per_d50"] = d_ref / voxel;

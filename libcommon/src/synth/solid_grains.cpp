@@ -233,14 +233,12 @@ shape::ShapeStats solid_stats(const GrainSolid& solid, double h) {
     throw DataError("a grain solid holds no grid point at spacing " + std::to_string(h) + " m; give a finer spacing");
   const Eigen::Vector3d mean = first / cells;
   const Eigen::Matrix3d m = second / cells - mean * mean.transpose();  // per unit volume
-  const Eigen::Vector3d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m).eigenvalues();
   shape::ShapeStats s;
   s.volume = iso.volume;
   s.surface_area = iso.area;
   s.equivalent_diameter = std::cbrt(6.0 * s.volume / std::numbers::pi);
   s.sphericity = std::cbrt(std::numbers::pi) * std::pow(6.0 * s.volume, 2.0 / 3.0) / s.surface_area;
-  for (int i = 0; i < 3; ++i) s.semi_axes[i] = std::sqrt(5.0 * std::max(lambda[2 - i], 0.0));
-  s.aspect_ratio = s.semi_axes[0] / s.semi_axes[2];
+  shape::set_equivalent_ellipsoid(s, m);
   return s;
 }
 

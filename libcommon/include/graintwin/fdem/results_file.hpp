@@ -4,9 +4,11 @@
 // with pair, point, normal, force), the time series (energies, platen forces and positions) at the
 // end. Checkpoints (`kind=fdem_checkpoint`) hold the solver state and the contact history.
 #include <Eigen/Core>
+
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -78,6 +80,9 @@ struct ResultsFrame {
   std::vector<std::uint32_t> pair;                           ///< M x 2
   std::vector<std::int32_t> platen;                          ///< M
   std::vector<double> point, normal, force, overlap;         ///< M x 3, M x 3, M x 3, M
+  /// The frame's log axial strain (a triaxial test's frames); NaN when the frame has none.
+  double axial_strain = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> membrane_position;  ///< B x 3 ball centres (m); empty without a membrane
 };
 struct ResultsSeries {
   std::vector<double> time, kinetic, strain, contact_elastic, dissipated, external_work;
@@ -91,6 +96,7 @@ ResultsSeries read_results_series(const std::filesystem::path& path);
 /// before shearing starts). `missing` names the columns the file lacks (then the curves are empty).
 struct TriaxialSeries {
   std::vector<double> axial_strain, volumetric_strain, stress_ratio;
+  std::vector<std::uint64_t> step;  ///< the rows' steps
   std::vector<std::string> missing;
 };
 /// UsageError naming the file when it is not a results file; DataError when the columns differ in length.

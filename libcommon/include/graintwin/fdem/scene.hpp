@@ -53,7 +53,7 @@ struct StageSpec {
 
 /// Grains of a kind=fdem_model file (shapes2mesh) taken into the scene.
 struct ModelSource {
-  std::filesystem::path path;
+  std::filesystem::path path;           ///< empty for a model given in memory
   std::shared_ptr<const Model> model;   ///< as read; build_model copies it
   std::optional<GrainKind> kind;        ///< every grain of the file modelled as this (only rigid: a mesh keeps its order)
 };
@@ -120,6 +120,9 @@ struct Scene {
 /// `model_file` when given, which replaces [model] file); UsageError naming the file, the table
 /// and the fix on any problem.
 Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file = {});
+/// The same with the model's grains given in memory (ModelSource::path empty): [model] file, if
+/// any, is not read.
+Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model);
 
 /// Appends a sphere or ellipsoid grain to a model. gmsh is linked only into graintwin_mesh, so
 /// programs that mesh pass mesh::append_ellipsoid_grain (mesh/ellipsoid_grain.hpp).

@@ -73,7 +73,13 @@ struct ShapeStats {
   /// lambda_i the eigenvalues of M = integral of (x - c)(x - c)^T dV. Equal to (a, b, c) for an
   /// ellipsoid.
   Eigen::Vector3d semi_axes = Eigen::Vector3d::Zero();
+  /// Columns: unit directions of semi_axes[0], [1], [2] in the table's frame (right-handed).
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
 };
+
+/// Sets s.semi_axes, s.axes and s.aspect_ratio: the inertia-equivalent ellipsoid of a body whose
+/// centroidal second moment per unit volume is `m` (integral of (x - c)(x - c)^T dV / V).
+void set_equivalent_ellipsoid(ShapeStats& s, const Eigen::Matrix3d& m);
 
 /// Shape statistics of a table (from its volume, surface area and inertia tensor).
 ShapeStats shape_stats(const RadialTable& table);

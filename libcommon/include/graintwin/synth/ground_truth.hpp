@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -48,7 +49,7 @@ std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTabl
 /// Everything written to one truth_NNN.h5.
 struct GroundTruth {
   int scan_index = 0;
-  double axial_strain = 0.0;                 ///< nominal, compression positive
+  double axial_strain = 0.0;                 ///< compression positive: nominal, or a simulation's ln(H0 / H)
   double sample_height = 0.0;                ///< m, platen to platen
   double sample_radius = 0.0;                ///< m, initial (membrane inner radius before bulging)
   double solid_fraction = 0.0;               ///< grain volume / sample volume
@@ -64,6 +65,12 @@ struct GroundTruth {
   Eigen::MatrixXd sh_coeffs_body;            ///< N x (L+1)^2, body frame
   Eigen::MatrixXd sh_invariants;             ///< N x (L+1)
   std::vector<TrueContact> contacts;
+  /// A simulated state's contact forces, one per contact (N, on `high`; zero where the pair carries
+  /// none), its sigma_1 / sigma_3 and volumetric strain ln(V0 / V); empty and NaN for prescribed states.
+  bool simulated = false;
+  std::vector<Eigen::Vector3d> contact_force;
+  double stress_ratio = std::numeric_limits<double>::quiet_NaN();
+  double volumetric_strain = std::numeric_limits<double>::quiet_NaN();
   /// Per grain: what a radial description misses of it (zeros for star-shaped grains).
   std::vector<NonStarMeasures> non_star;
 };

@@ -62,7 +62,7 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
 /// `inner_radius` (lets the membrane follow a bulging sample), constant thickness, between z0 and z1.
 struct Shell {
   double centre_x = 0.0, centre_y = 0.0;
-  std::function<double(double z)> inner_radius;
+  std::function<double(double theta, double z)> inner_radius;  ///< m, at azimuth theta (rad) about the centre and height z
   double thickness = 0.0;
   double z0 = 0.0, z1 = 0.0;
 };

@@ -2,9 +2,12 @@
 // A synthetic CT scan series, ctsynth's whole stage: the grains (drawn from a PSD, or from a shape
 // library read from a segmented scan), their dense packing, the loading states, and per state a
 // rendered scan and its exact ground truth, written to one folder (docs/ctsynth.md).
+#include <Eigen/Core>
+
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -15,6 +18,39 @@
 #include "graintwin/synth/render.hpp"
 
 namespace graintwin::synth {
+
+/// A contact force of a simulated state between grains `low` < `high` (labels: index + 1): the sum
+/// over the pair's contact points of the force on `high`, N.
+struct PairForce {
+  std::uint32_t low = 0, high = 0;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+};
+
+/// One loaded state of a series: where every grain is and what bounds the sample.
+struct LoadedState {
+  double axial_strain = 0.0;         ///< prescribed: nominal; simulated: log strain ln(H0 / H) from the start of shearing
+  std::vector<PackedGrain> poses;    ///< every grain, in the grains' order
+  double base_z = 0.0, top_z = 0.0;  ///< m, the platens
+  /// Inner radius (m) of the membrane at azimuth theta (rad, about the sample's axis) and height z:
+  /// the sample's lateral surface.
+  std::function<double(double theta, double z)> membrane_inner_radius;
+  double contact_tolerance = 0.0;    ///< m: pairs overlapping at most this much touch
+  double max_overlap = 0.0;          ///< m, largest overlap of two grains
+  std::size_t relax_sweeps = 0;      ///< prescribed states: sweeps of the overlap relaxation
+  /// Simulated states: the pairs' contact forces, sigma_1 / sigma_3 and eps_v = ln(V0 / V) (NaN otherwise).
+  std::vector<PairForce> forces;
+  bool simulated = false;
+  double stress_ratio = std::numeric_limits<double>::quiet_NaN();
+  double volumetric_strain = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The states of a series at the given strains, from the grains (`tables`, in order) packed at
+/// `packed` in `container`; `dir` is the series folder (a simulation may write its results there),
+/// `history` goes into any file it writes, `progress` makes the progress callback of a named step.
+using LoadingSimulation = std::function<std::vector<LoadedState>(
+    const GrainSet& grains, const std::vector<PackedGrain>& packed, const Container& container,
+    const std::vector<double>& strains, const std::filesystem::path& dir, const std::vector<std::string>& history,
+    const std::function<std::function<void(double)>(const std::string&)>& progress)>;
 
 /// Everything a series is made from; lengths in metres. The tool fills it from its options.
 struct SeriesParams {
@@ -32,7 +68,10 @@ struct SeriesParams {
   RenderParams render;
   ScannerParams scanner;          ///< grey levels and artifacts; the axis, field radius and seed are set per scan
   LoadingParams loading;          ///< the kinematics; axis, height, radius, seed and a band width of 0 (= 10 d50) are set here
-  std::vector<double> strains{0.0};  ///< nominal axial strain of each scan
+  std::vector<double> strains{0.0};  ///< axial strain of each scan (nominal, or log with `simulate`)
+  /// Empty: the states are `loading`'s prescribed kinematics, their overlaps relaxed. Else the
+  /// states this simulation gives (a mechanical test of the packed grains).
+  LoadingSimulation simulate;
   double contact_search = 0.0;    ///< truth near-contacts closer than this; 0 = 2 voxels
 };
 
