@@ -286,7 +286,7 @@ struct Damage {
   auto key() const { return std::tie(cost, grain, merged_with, label); }
 };
 
-/// Reference grain i's damage explanations costing less than `limit` (docs/shapes2tracks.md),
+/// Reference grain i's damage explanations as plausible as a right match (docs/shapes2tracks.md),
 /// costed like a match: merged with a touching reference neighbour k into one label (its volume the
 /// sum of theirs, its centroid their volume-weighted predicted centroid), or cut into two labels
 /// (their volumes summing to i's, their volume-weighted centroid at i's prediction). Mass balance
@@ -295,12 +295,12 @@ struct Damage {
 /// The shape term of a match counts 1 (its mean): a damaged shape is not predicted.
 void damage_explanations(std::size_t i, const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid,
                          const PointGrid& def_grid, const Prediction& at, const Scales& k, double largest_diameter,
-                         const Plausible& plausible, double limit, std::vector<Damage>& out) {
+                         const Plausible& plausible, std::vector<Damage>& out) {
   if (plausible.grain[i]) return;
   const Eigen::Vector3d& p = at.position[i];
   const double s2 = at.sigma[i] * at.sigma[i], v = ref.volume[i], d = equivalent_diameter(v);
   const auto consider = [&](double cost, std::size_t with, std::size_t a, std::size_t b) {
-    if (cost + 1.0 < limit) out.push_back({cost + 1.0, i, with, {a, b}});
+    if (cost + 1.0 < kRightMatchCost) out.push_back({cost + 1.0, i, with, {a, b}});
   };
   // Touching grains: centroids at most 0.75 (d_i + d_k) apart (elongated sand grains reach about
   // 0.75 d from their centroid).
@@ -328,10 +328,10 @@ void damage_explanations(std::size_t i, const ScanGrains& ref, const ScanGrains&
     }
 }
 
-/// Each reference grain's lost cost: `lost_cost`, or the cost of its damage explanation, so that
-/// a damaged grain is lost rather than steal a neighbour's label. The explanations are taken
-/// cheapest first, each label explaining one grain's damage (a merged label: the pair's), so that
-/// one damaged grain's labels do not explain away another grain.
+/// Each reference grain's lost cost: `lost_cost`, or the cost of its damage explanation when that
+/// is lower, so that a damaged grain is lost rather than steal a neighbour's label. The
+/// explanations are taken cheapest first, each label explaining one grain's damage (a merged
+/// label: the pair's), so that one damaged grain's labels do not explain away another grain.
 std::vector<double> damage_lost_costs(const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid,
                                       const PointGrid& def_grid, const Prediction& at, const Scales& k,
                                       const SparseCosts& costs, double lost_cost) {
@@ -340,20 +340,32 @@ std::vector<double> damage_lost_costs(const ScanGrains& ref, const ScanGrains& d
   std::vector<std::vector<Damage>> found(ref.size());
 #pragma omp parallel for schedule(dynamic, 256)
   for (std::size_t i = 0; i < ref.size(); ++i)
-    damage_explanations(i, ref, def, ref_grid, def_grid, at, k, largest_diameter, plausible, lost_cost, found[i]);
+    damage_explanations(i, ref, def, ref_grid, def_grid, at, k, largest_diameter, plausible, found[i]);
   std::vector<Damage> all;
   for (const auto& f : found) all.insert(all.end(), f.begin(), f.end());
   std::sort(all.begin(), all.end(), [](const Damage& a, const Damage& b) { return a.key() < b.key(); });
+  // A grain that fills at least 80 % of a merged label, or keeps at least 80 % of its volume in one
+  // piece, is still that label's grain (ct2labels' accuracy criterion, IoU >= 0.8): it keeps its
+  // lost cost and may match that label.
+  const auto dominant = [](double part, double whole) { return part >= 0.8 * whole; };
   std::vector<double> lost(ref.size(), lost_cost);
-  std::vector<char> used(def.size(), 0);
+  std::vector<char> explained(ref.size(), 0), used(def.size(), 0);
   for (const Damage& g : all) {
     const bool merge = g.merged_with != none;
-    if (lost[g.grain] < lost_cost || (merge && lost[g.merged_with] < lost_cost)) continue;
+    if (explained[g.grain] || (merge && explained[g.merged_with])) continue;
     if (std::any_of(g.label.begin(), g.label.end(), [&](std::size_t j) { return j != none && used[j]; })) continue;
     for (std::size_t j : g.label)
       if (j != none) used[j] = 1;
-    lost[g.grain] = g.cost;
-    if (merge) lost[g.merged_with] = g.cost;
+    explained[g.grain] = 1;
+    if (merge) {
+      explained[g.merged_with] = 1;
+      const double v = ref.volume[g.grain], vn = ref.volume[g.merged_with];
+      if (!dominant(v, v + vn)) lost[g.grain] = std::min(lost_cost, g.cost);
+      if (!dominant(vn, v + vn)) lost[g.merged_with] = std::min(lost_cost, g.cost);
+    } else {
+      const double va = def.volume[g.label[0]], vb = def.volume[g.label[1]];
+      if (!dominant(std::max(va, vb), va + vb)) lost[g.grain] = std::min(lost_cost, g.cost);
+    }
   }
   return lost;
 }
