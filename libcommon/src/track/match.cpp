@@ -160,7 +160,7 @@ Anchors consensus_anchors(const ScanGrains& ref, const ScanGrains& def, const Po
       }
     }
   }
-  // Better: more support, then a smaller D (rows are sorted by D, so the first of the most supported).
+  // Better: more support, then a smaller D.
   const auto better = [&](std::size_t e, std::size_t f) { return support[e] > support[f] || (support[e] == support[f] && c.score[e] < c.score[f]); };
   std::vector<std::size_t> best_of_row(ref.size(), none), best_of_column(def.size(), none);
   for (std::size_t i = 0; i < ref.size(); ++i)
