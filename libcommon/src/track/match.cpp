@@ -1,9 +1,12 @@
 #include "graintwin/track/match.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
+#include <tuple>
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
@@ -124,18 +127,53 @@ struct Anchors {
   std::size_t size() const { return from.size(); }
 };
 
-/// The bootstrap anchors: pairs that are each other's best by the paper's criteria (C1, C2, D).
-Anchors mutual_best(const ScanGrains& ref, const ScanGrains& def, const PointGrid& grid, const MatchOptions& o) {
-  const Candidates c = window_candidates(ref, def, grid, Method::paper, o.window_d50 * ref.d50, volume_filter(o));
-  std::vector<int> best_ref(def.size(), -1);
-  std::vector<double> best_score(def.size(), std::numeric_limits<double>::infinity());
+/// Half a grain spacing (in d50): two displacements this close agree. A wrong pair lands this close
+/// to where its grain went only by chance, and a right one moving non-affinely by up to about
+/// 0.15 d50 per component still does.
+constexpr double kAgreement_d50 = 0.5;
+
+/// The bootstrap anchors, before any prediction: the candidates of each reference grain within
+/// the paper's criteria (C1, and C2: the volume filter, or the paper's 10 % when none is set), each
+/// supported by the reference neighbours within 1.5 d50 (about two shells of grains) that have a
+/// candidate moving the same way (within kAgreement_d50): neighbours move alike, while a chance
+/// candidate finds such support only by chance. Anchors are the pairs that are each other's best
+/// by support, then by the paper's score D; shapes and volumes that agree by chance, as those of a
+/// grain and another grain's merged or cut label may, rarely have the support of the neighbours.
+Anchors consensus_anchors(const ScanGrains& ref, const ScanGrains& def, const PointGrid& grid, const PointGrid& ref_grid,
+                          const MatchOptions& o) {
+  const double gate = volume_filter(o) >= 0.0 ? volume_filter(o) : 0.10;
+  const Candidates c = window_candidates(ref, def, grid, Method::paper, o.window_d50 * ref.d50, gate);
+  const double agree2 = std::pow(kAgreement_d50 * ref.d50, 2);
+  std::vector<int> support(c.column.size(), 0);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const std::vector<std::size_t> near = ref_grid.within(ref.centroid[i], 1.5 * ref.d50);
+    for (std::size_t e = c.start[i]; e < c.start[i + 1]; ++e) {
+      const Eigen::Vector3d u = def.centroid[c.column[e]] - ref.centroid[i];
+      for (std::size_t n : near) {
+        if (n == i) continue;
+        for (std::size_t f = c.start[n]; f < c.start[n + 1]; ++f)
+          if (c.column[f] != c.column[e] && (def.centroid[c.column[f]] - ref.centroid[n] - u).squaredNorm() <= agree2) {
+            ++support[e];
+            break;
+          }
+      }
+    }
+  }
+  // Better: more support, then a smaller D.
+  const auto better = [&](std::size_t e, std::size_t f) { return support[e] > support[f] || (support[e] == support[f] && c.score[e] < c.score[f]); };
+  std::vector<std::size_t> best_of_row(ref.size(), none), best_of_column(def.size(), none);
   for (std::size_t i = 0; i < ref.size(); ++i)
-    for (std::size_t e = c.start[i]; e < c.start[i + 1]; ++e)
-      if (c.score[e] < best_score[c.column[e]]) best_score[c.column[e]] = c.score[e], best_ref[c.column[e]] = static_cast<int>(i);
+    for (std::size_t e = c.start[i]; e < c.start[i + 1]; ++e) {
+      if (best_of_row[i] == none || better(e, best_of_row[i])) best_of_row[i] = e;
+      std::size_t& b = best_of_column[c.column[e]];
+      if (b == none || better(e, b)) b = e;
+    }
   Anchors a;
-  for (std::size_t i = 0; i < ref.size(); ++i)
-    if (c.start[i] < c.start[i + 1] && best_ref[c.column[c.start[i]]] == static_cast<int>(i))
-      a.add(ref, i, def, c.column[c.start[i]], i);
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const std::size_t e = best_of_row[i];
+    if (e != none && best_of_column[c.column[e]] == e) a.add(ref, i, def, c.column[e], i);
+  }
   return a;
 }
 
@@ -144,15 +182,23 @@ double shrunk_sigma(const DisplacementField::Estimate& e, double global, double 
   return std::max(floor, std::sqrt((3.0 * global * global + e.weight * e.spread * e.spread) / (3.0 + e.weight)));
 }
 
-/// The displacement field of the anchors with robust weights: a global affine (RANSAC + IRLS),
-/// then local fits in which anchors far from their neighbours' consensus (leave-one-out error
-/// above 6 global spreads) are weighted down by Tukey's biweight before the final fit.
+/// Spreads of the cost's terms over the right anchors: position (per component, m), shape
+/// (D / ||R_0||) and volume (ln(v_def / v_ref), about its scan-wide bias).
+struct Scales {
+  double position = 0.0, shape = 0.0, volume_mean = 0.0, volume = 0.0;
+};
+
+/// The displacement field of the anchors, each weighted by its probability of being a right pair
+/// judged by its position, shape and volume residuals together (right_pair_probability): a global
+/// affine (RANSAC + reweighting), then local fits, refitted once with the weights of their own
+/// leave-one-out errors. The scales are the right anchors' spreads, which wrong anchors (a
+/// bootstrap of shapes that agree by chance, a grain matched to a merged or cut label) do not widen.
 struct Predictor {
   DisplacementField field;
   std::vector<DisplacementField::Estimate> estimate;  ///< leave-one-out estimate at each anchor
   std::vector<double> error;   ///< leave-one-out prediction error of each anchor (m)
-  std::vector<double> weight;  ///< final weight of each anchor
-  double sigma = 0.0;          ///< global per-component spread (m)
+  std::vector<double> weight;  ///< probability of each anchor being right
+  Scales scales;
   double floor = 0.0, clip = 0.0;
 };
 
@@ -161,17 +207,31 @@ Predictor build_predictor(const Anchors& an, double d50, const MatchOptions& o) 
   p.floor = 0.02 * d50;  // a third of a voxel at 16 voxels per d50: segmented centroids repeat no better
   p.clip = 0.5 * d50;
   const std::size_t n = an.size();
-  const Affine base = robust_affine(an.from, an.to, 0.25 * d50, 128, 1);
+  std::vector<double> consensus;
+  const Affine base = robust_affine(an.from, an.to, kAgreement_d50 * d50, 4096, 1, &consensus);
   const double radius = o.local_radius_d50 * d50;
-  p.weight.assign(n, 1.0);
   p.error.assign(n, 0.0);
   p.estimate.resize(n);
+  // The spreads start from the anchors the global map agrees with (the floors keep identical data
+  // from making every difference infinitely expensive).
+  std::vector<ResidualTerm> terms{{ResidualLaw::half_normal, an.shape, 0.0, 0.0, 0.005},
+                                  {ResidualLaw::gaussian, an.log_volume, 0.0, 0.0, 0.005}};
+  const auto take_scales = [&] {
+    p.scales.shape = terms[0].spread;
+    p.scales.volume_mean = terms[1].centre, p.scales.volume = terms[1].spread;
+  };
   if (n < 4) {  // nothing to predict from: the base map with the whole window as uncertainty
+    p.weight = right_pair_probability(terms, consensus);
+    take_scales();
     p.field = DisplacementField(an.from, an.to, p.weight, base, radius);
     for (std::size_t a = 0; a < n; ++a) p.estimate[a] = p.field.estimate(an.from[a], a);
-    p.sigma = o.window_d50 * d50 / o.window_sigmas;
+    p.scales.position = o.window_d50 * d50 / o.window_sigmas;
     return p;
   }
+  std::vector<double> affine_error(n);
+  for (std::size_t a = 0; a < n; ++a) affine_error[a] = (an.to[a] - base(an.from[a])).norm();
+  terms.push_back({ResidualLaw::length3, affine_error, 0.0, 0.0, p.floor});
+  p.weight = right_pair_probability(terms, consensus);
   for (int round = 0; round < 2; ++round) {
     p.field = DisplacementField(an.from, an.to, p.weight, base, radius);
     const std::vector<double> previous = p.error;
@@ -180,68 +240,173 @@ Predictor build_predictor(const Anchors& an, double d50, const MatchOptions& o) 
       p.estimate[a] = p.field.estimate(an.from[a], a, round ? &previous : nullptr, p.clip);
       p.error[a] = (an.to[a] - p.estimate[a].position).norm();
     }
-    std::vector<double> kept;
-    for (std::size_t a = 0; a < n; ++a)
-      if (p.weight[a] > 0.5) kept.push_back(p.error[a]);
-    p.sigma = std::max(median(kept.empty() ? p.error : kept) / 1.538, p.floor);  // median |3-D Gaussian| = 1.538 sigma
-    if (round == 1) break;
-    for (std::size_t a = 0; a < n; ++a) {
-      const double u = p.error[a] / (6.0 * p.sigma);
-      p.weight[a] = u < 1.0 ? (1.0 - u * u) * (1.0 - u * u) : 0.0;
-    }
+    terms[2].value = p.error;
+    const std::vector<double> weight = right_pair_probability(terms, p.weight);
+    if (round == 0) p.weight = weight;  // the final field keeps the weights it was fitted with
   }
+  take_scales();
+  p.scales.position = terms[2].spread;
   return p;
 }
 
-/// Robust spreads of the shape and volume terms over the well-weighted anchors, floored so that
-/// identical data do not make every difference infinitely expensive.
-struct Scales {
-  double shape = 0.0, volume_mean = 0.0, volume = 0.0;
+double equivalent_diameter(double volume) { return std::cbrt(6.0 * volume / std::numbers::pi); }
+
+/// The standardised volume residual of a label of volume v_def for a grain (or grains) of v_ref.
+double volume_z(double v_def, double v_ref, const Scales& k) { return (std::log(v_def / v_ref) - k.volume_mean) / k.volume; }
+
+/// Where each reference grain is looked for: its predicted position, the position spread there
+/// and the candidate window.
+struct Prediction {
+  std::vector<Eigen::Vector3d> position;
+  std::vector<double> sigma, window;
 };
-Scales cost_scales(const Anchors& an, const std::vector<double>& weight) {
-  std::vector<double> s, v;
-  for (std::size_t a = 0; a < an.size(); ++a)
-    if (weight[a] > 0.5) s.push_back(an.shape[a]), v.push_back(an.log_volume[a]);
-  Scales k;
-  k.shape = std::max(1.4826 * median(s), 0.005);  // D / ||R_0|| >= 0: half-normal median
-  k.volume_mean = median(v);
-  for (double& x : v) x = std::abs(x - k.volume_mean);
-  k.volume = std::max(1.4826 * median(v), 0.005);
-  return k;
+
+/// A right match costs less than this 99.9 % of the time (chi^2 with 5 degrees of freedom).
+constexpr double kRightMatchCost = 20.5;
+
+/// Which grains on either side have a match about as good as a right one (below kRightMatchCost).
+/// Such a label is not taken as a merged or cut one: a label that is grain i with a small
+/// neighbour attached, or with a sliver cut off, is grain i's own match, not its damage. Such a
+/// reference grain is not taken as having merged into a neighbour's label.
+struct Plausible {
+  std::vector<char> label, grain;
+  explicit Plausible(const SparseCosts& c) : label(c.columns, 0), grain(c.rows(), 0) {
+    for (std::size_t r = 0; r < c.rows(); ++r)
+      for (std::size_t e = c.row_start[r]; e < c.row_start[r + 1]; ++e)
+        if (c.cost[e] < kRightMatchCost) label[c.column[e]] = 1, grain[r] = 1;
+  }
+};
+
+/// One explanation of a reference grain as damaged by the other scan's segmentation.
+struct Damage {
+  double cost = 0.0;
+  std::size_t grain = none;
+  std::size_t merged_with = none;                ///< the reference neighbour of a merge
+  std::array<std::size_t, 2> label{none, none};  ///< the merged label, or the two pieces
+  auto key() const { return std::tie(cost, grain, merged_with, label); }
+};
+
+/// Reference grain i's damage explanations as plausible as a right match (docs/shapes2tracks.md),
+/// costed like a match: merged with a touching reference neighbour k into one label (its volume the
+/// sum of theirs, its centroid their volume-weighted predicted centroid), or cut into two labels
+/// (their volumes summing to i's, their volume-weighted centroid at i's prediction). Mass balance
+/// ties such labels to grain i as closely as a right match would. Neither i, nor k, nor a label
+/// may have a plausible match: the explanations stand in for matches that are implausible anyway.
+/// The shape term of a match counts 1 (its mean): a damaged shape is not predicted.
+void damage_explanations(std::size_t i, const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid,
+                         const PointGrid& def_grid, const Prediction& at, const Scales& k, double largest_diameter,
+                         const Plausible& plausible, std::vector<Damage>& out) {
+  if (plausible.grain[i]) return;
+  const Eigen::Vector3d& p = at.position[i];
+  const double s2 = at.sigma[i] * at.sigma[i], v = ref.volume[i], d = equivalent_diameter(v);
+  const auto consider = [&](double cost, std::size_t with, std::size_t a, std::size_t b) {
+    if (cost + 1.0 < kRightMatchCost) out.push_back({cost + 1.0, i, with, {a, b}});
+  };
+  // Touching grains: centroids at most 0.75 (d_i + d_k) apart (elongated sand grains reach about
+  // 0.75 d from their centroid).
+  ref_grid.for_each_within(ref.centroid[i], 0.75 * (d + largest_diameter), [&](std::size_t n, double d2) {
+    const double vn = ref.volume[n];
+    if (n == i || plausible.grain[n] || d2 > std::pow(0.75 * (d + equivalent_diameter(vn)), 2)) return;
+    const Eigen::Vector3d joint = (v * p + vn * at.position[n]) / (v + vn);
+    def_grid.for_each_within(joint, at.window[i], [&](std::size_t m, double e2) {
+      if (plausible.label[m]) return;
+      const double zv = volume_z(def.volume[m], v + vn, k);
+      consider(e2 / s2 + zv * zv, n, m, none);
+    });
+  });
+  // Pieces: centroids inside the grain's body, found within its reach plus the prediction's spread.
+  std::vector<std::size_t> piece;
+  def_grid.for_each_within(p, std::min(at.window[i], 0.75 * d + 3.0 * at.sigma[i]), [&](std::size_t j, double) {
+    if (def.volume[j] < v && !plausible.label[j]) piece.push_back(j);
+  });
+  for (std::size_t a = 0; a < piece.size(); ++a)
+    for (std::size_t b = a + 1; b < piece.size(); ++b) {
+      const double va = def.volume[piece[a]], vb = def.volume[piece[b]];
+      const Eigen::Vector3d joint = (va * def.centroid[piece[a]] + vb * def.centroid[piece[b]]) / (va + vb);
+      const double zv = volume_z(va + vb, v, k);
+      consider((joint - p).squaredNorm() / s2 + zv * zv, none, piece[a], piece[b]);
+    }
+}
+
+/// Each reference grain's lost cost: `lost_cost`, or the cost of its damage explanation when that
+/// is lower, so that a damaged grain is lost rather than steal a neighbour's label. The
+/// explanations are taken cheapest first, each label explaining one grain's damage (a merged
+/// label: the pair's), so that one damaged grain's labels do not explain away another grain.
+std::vector<double> damage_lost_costs(const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid,
+                                      const PointGrid& def_grid, const Prediction& at, const Scales& k,
+                                      const SparseCosts& costs, double lost_cost) {
+  const Plausible plausible(costs);
+  const double largest_diameter = ref.size() ? equivalent_diameter(*std::max_element(ref.volume.begin(), ref.volume.end())) : 0.0;
+  std::vector<std::vector<Damage>> found(ref.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    damage_explanations(i, ref, def, ref_grid, def_grid, at, k, largest_diameter, plausible, found[i]);
+  std::vector<Damage> all;
+  for (const auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  std::sort(all.begin(), all.end(), [](const Damage& a, const Damage& b) { return a.key() < b.key(); });
+  // A grain that fills at least 80 % of a merged label, or keeps at least 80 % of its volume in one
+  // piece, is still that label's grain (ct2labels' accuracy criterion, IoU >= 0.8): it keeps its
+  // lost cost and may match that label.
+  const auto dominant = [](double part, double whole) { return part >= 0.8 * whole; };
+  std::vector<double> lost(ref.size(), lost_cost);
+  std::vector<char> explained(ref.size(), 0), used(def.size(), 0);
+  for (const Damage& g : all) {
+    const bool merge = g.merged_with != none;
+    if (explained[g.grain] || (merge && explained[g.merged_with])) continue;
+    if (std::any_of(g.label.begin(), g.label.end(), [&](std::size_t j) { return j != none && used[j]; })) continue;
+    for (std::size_t j : g.label)
+      if (j != none) used[j] = 1;
+    explained[g.grain] = 1;
+    if (merge) {
+      explained[g.merged_with] = 1;
+      const double v = ref.volume[g.grain], vn = ref.volume[g.merged_with];
+      if (!dominant(v, v + vn)) lost[g.grain] = std::min(lost_cost, g.cost);
+      if (!dominant(vn, v + vn)) lost[g.merged_with] = std::min(lost_cost, g.cost);
+    } else {
+      const double va = def.volume[g.label[0]], vb = def.volume[g.label[1]];
+      if (!dominant(std::max(va, vb), va + vb)) lost[g.grain] = std::min(lost_cost, g.cost);
+    }
+  }
+  return lost;
 }
 
 /// One pass: predict, gather candidates around the predictions, cost them, assign.
 struct Pass {
   SparseCosts costs;
+  std::vector<double> lost_cost;  ///< per reference grain
   Assignment assignment;
   std::vector<Eigen::Vector3d> predicted;
 };
 
-Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& grid, const Anchors& an,
-                 const MatchOptions& o, MatchDiagnostics& diag) {
+Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid, const PointGrid& grid,
+                 const Anchors& an, const MatchOptions& o, MatchDiagnostics& diag) {
   const double d50 = ref.d50;
   const Predictor p = build_predictor(an, d50, o);
-  const Scales k = cost_scales(an, p.weight);
-  diag.sigma_position = p.sigma, diag.sigma_shape = k.shape, diag.sigma_volume = k.volume;
+  const Scales& k = p.scales;
+  diag.sigma_position = k.position, diag.sigma_shape = k.shape, diag.sigma_volume = k.volume;
   std::vector<std::size_t> self(ref.size(), none);
   for (std::size_t a = 0; a < an.size(); ++a)
     if (an.ref_index[a] != none) self[an.ref_index[a]] = a;
-  const double gate = volume_filter(o);
-  Pass pass;
-  pass.predicted.resize(ref.size());
-  std::vector<std::vector<std::pair<std::uint32_t, double>>> rows(ref.size());
+  Prediction at{std::vector<Eigen::Vector3d>(ref.size()), std::vector<double>(ref.size()), std::vector<double>(ref.size())};
 #pragma omp parallel for schedule(dynamic, 256)
   for (std::size_t i = 0; i < ref.size(); ++i) {
     // An anchor's own leave-one-out estimate is already there (its spread from the first round's errors).
     const auto e = self[i] != none ? p.estimate[self[i]] : p.field.estimate(ref.centroid[i], none, &p.error, p.clip);
-    const double sigma = shrunk_sigma(e, p.sigma, p.floor);
-    const double window = std::clamp(o.window_sigmas * sigma, o.min_window_d50 * d50, o.window_d50 * d50);
-    pass.predicted[i] = e.position;
-    grid.for_each_within(e.position, window, [&](std::size_t j, double d2) {
+    at.position[i] = e.position;
+    at.sigma[i] = shrunk_sigma(e, k.position, p.floor);
+    at.window[i] = std::clamp(o.window_sigmas * at.sigma[i], o.min_window_d50 * d50, o.window_d50 * d50);
+  }
+  const double gate = volume_filter(o);
+  Pass pass;
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> rows(ref.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const double s2 = at.sigma[i] * at.sigma[i];
+    grid.for_each_within(at.position[i], at.window[i], [&](std::size_t j, double d2) {
       if (!volume_ok(ref, i, def, j, gate)) return;
       const double zs = shape_term(ref, i, def, j) / k.shape;
-      const double zv = (std::log(def.volume[j] / ref.volume[i]) - k.volume_mean) / k.volume;
-      rows[i].push_back({static_cast<std::uint32_t>(j), zs * zs + zv * zv + d2 / (sigma * sigma)});
+      const double zv = volume_z(def.volume[j], ref.volume[i], k);
+      rows[i].push_back({static_cast<std::uint32_t>(j), zs * zs + zv * zv + d2 / s2});
     });
   }
   pass.costs.columns = def.size();
@@ -249,8 +414,12 @@ Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& 
     for (const auto& [j, w] : r) pass.costs.add(j, w);
     pass.costs.end_row();
   }
-  pass.assignment = solve_assignment(pass.costs, std::vector<double>(ref.size(), o.lost_cost));
+  pass.lost_cost = damage_lost_costs(ref, def, ref_grid, grid, at, k, pass.costs, o.lost_cost);
+  pass.assignment = solve_assignment(pass.costs, pass.lost_cost);
+  pass.predicted = std::move(at.position);
   diag.mean_candidates = ref.size() ? static_cast<double>(pass.costs.column.size()) / ref.size() : 0.0;
+  diag.explained_as_damaged = static_cast<std::size_t>(
+      std::count_if(pass.lost_cost.begin(), pass.lost_cost.end(), [&](double c) { return c < o.lost_cost; }));
   return pass;
 }
 
@@ -259,12 +428,12 @@ Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& 
 Matching improved_match(const ScanGrains& ref, const ScanGrains& def, const MatchOptions& o, const Anchors* seed,
                         int passes) {
   Matching m;
-  const PointGrid grid(def.centroid, ref.d50);
-  Anchors an = seed ? *seed : mutual_best(ref, def, grid, o);
+  const PointGrid grid(def.centroid, ref.d50), ref_grid(ref.centroid, ref.d50);
+  Anchors an = seed ? *seed : consensus_anchors(ref, def, grid, ref_grid, o);
   m.diagnostics.anchors = an.size();
   Pass pass;
   for (int k = 0; k < passes; ++k) {
-    pass = assign_pass(ref, def, grid, an, o, m.diagnostics);
+    pass = assign_pass(ref, def, ref_grid, grid, an, o, m.diagnostics);
     if (k + 1 == passes) break;
     an = Anchors();
     for (std::size_t i = 0; i < ref.size(); ++i)
@@ -294,9 +463,10 @@ Matching improved_match(const ScanGrains& ref, const ScanGrains& def, const Matc
   for (std::size_t i = 0; i < n; ++i) {
     if (m.partner[i] < 0) continue;
     const double ci = cost_of[i];
-    double row_sum = std::exp(-(o.lost_cost - ci) / 2.0);
+    const double lost = std::exp(-(pass.lost_cost[i] - ci) / 2.0);
+    double row_sum = lost;
     for (std::size_t e = c.row_start[i]; e < c.row_start[i + 1]; ++e) row_sum += std::exp(-(c.cost[e] - ci) / 2.0);
-    const double col_sum = column_sum[static_cast<std::size_t>(m.partner[i])] + std::exp(-(o.lost_cost - ci) / 2.0);
+    const double col_sum = column_sum[static_cast<std::size_t>(m.partner[i])] + lost;
     m.score[i] = ci;
     m.confidence[i] = 1.0 / std::max(row_sum, col_sum);
   }

@@ -25,12 +25,40 @@ struct Affine {
 Affine fit_affine(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to,
                   const std::vector<double>& weight = {});
 
+/// How one residual of a right pair is distributed. A wrong pair's residual is taken as uniform
+/// over the range the residuals span (for a length: uniform in the ball of that radius).
+enum class ResidualLaw {
+  length3,      ///< the length of an isotropic 3-D Gaussian vector; spread = its per-component standard deviation
+  gaussian,     ///< Gaussian about an unknown centre
+  half_normal,  ///< the magnitude of a Gaussian about 0
+};
+
+/// One residual of every pair with its law when the pair is right.
+struct ResidualTerm {
+  ResidualLaw law = ResidualLaw::gaussian;
+  std::vector<double> value;  ///< one per pair
+  double spread = 0.0;        ///< in: a start; out: the right pairs' standard deviation
+  double centre = 0.0;        ///< gaussian: in: a start; out: the right pairs' mean
+  double floor = 0.0;         ///< the smallest spread (> 0): how well the quantity repeats at best
+};
+
+/// Right pairs told from wrong ones by all their residuals at once: a two-component mixture,
+/// right pairs with the terms' laws (independent), wrong pairs uniform in each, fitted by
+/// expectation-maximisation, starting from `start` (each pair's prior probability of being right,
+/// e.g. a consensus set) or, when that is empty or all zero, from the terms' spreads. Returns each
+/// pair's probability of being right and sets the terms' spreads and centres to the right pairs'
+/// maximum-likelihood values. Unlike a median, these do not widen with the share of wrong pairs as
+/// long as the right ones cluster. UsageError for lengths that differ or a floor that is not positive.
+std::vector<double> right_pair_probability(std::vector<ResidualTerm>& terms, const std::vector<double>& start = {});
+
 /// Robust affine map for pairs of which many may be wrong: RANSAC over minimal samples (4 pairs,
-/// `trials` draws, seeded: deterministic) scoring pairs within `inlier_distance`, then
-/// iteratively reweighted least squares with Tukey's biweight at 4.685 robust standard deviations
-/// (floored at inlier_distance / 4). `weights` (optional) receives each pair's final weight in [0, 1].
+/// seeded: deterministic) scoring pairs within `inlier_distance`, drawing until a sample of right
+/// pairs has been drawn with 99 % probability at the best share found so far (at most
+/// `max_trials`), then the map refitted by least squares weighted by each pair's probability of
+/// being right (right_pair_probability on the residual lengths from the RANSAC inliers on, spread
+/// at least inlier_distance / 4), alternately. `weights` (optional) receives those probabilities.
 Affine robust_affine(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to,
-                     double inlier_distance, int trials = 256, std::uint64_t seed = 1,
+                     double inlier_distance, int max_trials = 4096, std::uint64_t seed = 1,
                      std::vector<double>* weights = nullptr);
 
 /// Displacement field from known pairs: base affine plus, at each query point x, a weighted

@@ -5,14 +5,16 @@
 //             L2 distance of the SH rotation invariants, conflicts resolved by letting the smallest
 //             score keep a contested grain while the others take their next best until no grain is
 //             taken twice (deferred acceptance with reference grains proposing).
-//   improved  (default) predicts each grain's position from matched grains around it (robust
-//             global affine, then local weighted affine, iterated), looks for candidates in a
-//             window of a few residual standard deviations around the prediction, scores them by a
-//             combined cost (invariant distance, volume change, position residual, each normalised
-//             by its robust spread over the matches) and solves one global minimum-cost assignment
-//             on the sparse candidate graph in which every reference grain may also be "lost" at a
-//             fixed cost; each match's confidence comes from its cost against its alternatives
-//             and from a forward-backward check.
+//   improved  (default) seeds on pairs whose neighbours move the same way, predicts each grain's
+//             position from matched grains around it (robust global affine, then local weighted
+//             affine, iterated), looks for candidates in a window of a few residual standard
+//             deviations around the prediction, scores them by a combined cost (invariant
+//             distance, volume change, position residual, each normalised by its spread over the
+//             pairs judged right by a two-component mixture) and solves one global minimum-cost
+//             assignment on the sparse candidate graph in which every reference grain may also be
+//             "lost", at a fixed cost or at the cost of explaining it, by mass balance, as merged
+//             or cut by the other scan's segmentation; each match's confidence comes from its
+//             cost against its alternatives and from a forward-backward check.
 //   nearest   baseline: the paper's algorithm scoring candidates by centroid distance, no volume filter.
 //   volume    baseline: the paper's algorithm scoring candidates by relative volume change.
 // Candidates always come from a spatial index (PointGrid), never from all pairs.
@@ -67,7 +69,9 @@ struct MatchOptions {
   double min_window_d50 = 0.5; ///< ... but at least this (and at most window_d50)
   /// Cost of leaving a reference grain unmatched. A right match costs about 5 (like chi^2 with 5
   /// degrees of freedom); 144 was chosen on ctsynth series (docs/shapes2tracks.md): it keeps grains
-  /// whose segmentation changed a little and still reports merged or split grains lost.
+  /// whose segmentation changed a little and still reports merged or split grains lost. A grain
+  /// without a plausible match whose damage mass balance explains is lost at that explanation's
+  /// cost when it is lower.
   double lost_cost = 144.0;
   bool backward_check = true;  ///< match the scans the other way round too; disagreeing matches get confidence 0
 };
@@ -78,11 +82,13 @@ double volume_filter(const MatchOptions& options);
 /// Figures of one matching, for logs and benchmarks.
 struct MatchDiagnostics {
   double mean_candidates = 0.0;   ///< candidates per reference grain in the final pass
-  std::size_t anchors = 0;        ///< improved: pairs the first prediction rested on
+  std::size_t anchors = 0;        ///< improved: pairs the first prediction rested on (the bootstrap's)
   double sigma_position = 0.0;    ///< improved: global position residual spread (m, per component)
   double sigma_shape = 0.0;       ///< improved: spread of D / ||R_0|| over the matches
   double sigma_volume = 0.0;      ///< improved: spread of ln(v_j / v_i)
   std::size_t backward_disagreements = 0;  ///< matches the backward pass did not confirm
+  /// improved: reference grains whose lost cost a merge or cut explanation lowered (final pass)
+  std::size_t explained_as_damaged = 0;
 };
 
 struct Matching {
