@@ -62,13 +62,11 @@ ImageHeader read_image_header(const H5File& file, const std::string& path) {
                     std::to_string(di.dims.size()) + ")");
   ImageHeader h;
   h.shape = {di.dims[0], di.dims[1], di.dims[2]};
-  if (di.dtype == "uint8") h.dtype = DType::uint8;
-  else if (di.dtype == "uint16") h.dtype = DType::uint16;
-  else if (di.dtype == "uint32") h.dtype = DType::uint32;
-  else if (di.dtype == "float32") h.dtype = DType::float32;
-  else
+  const std::optional<DType> dtype = dtype_named(di.dtype);  // HDF5 element types go by the same names
+  if (!dtype)
     throw DataError(file.path().string() + ":" + path + " has element type " + di.dtype +
                     "; volumes must be uint8, uint16, uint32 or float32");
+  h.dtype = *dtype;
   const auto order = file.attr_string(path, schema::attr::axis_order).value_or("zyx");
   if (order != "zyx")
     throw DataError(file.path().string() + ":" + path + " has axis_order '" + excerpt(order) + "', expected 'zyx'");
