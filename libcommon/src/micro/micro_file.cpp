@@ -60,7 +60,7 @@ void write_state(io::H5File& f, const std::string& g, const StateResult& r, cons
   f.write(g + "/" + sm::rdf_g, r.rdf.g, units("1"));
   f.set_attr(g + "/rdf", "density", r.rdf.density);
   f.set_attr(g + "/rdf", "points", static_cast<long long>(r.rdf.points));
-  f.set_attr(g + "/rdf", "region", r.region.kind == Region::Kind::box ? "box" : "cylinder");
+  f.set_attr(g + "/rdf", "region", region_kind_name(r.region.kind));
   f.set_attr(g + "/rdf", "region_lo", std::vector<double>{r.region.lo.x(), r.region.lo.y(), r.region.lo.z()});
   f.set_attr(g + "/rdf", "region_hi", std::vector<double>{r.region.hi.x(), r.region.hi.y(), r.region.hi.z()});
   if (r.region.kind == Region::Kind::cylinder) {
@@ -270,7 +270,7 @@ MicroTables read_micro_tables(const std::filesystem::path& path) {
 
 std::vector<double> d2min_of_increment(const MicroTables& m, const std::string& name, const SimulationGrains& grains,
                                        std::size_t from, std::size_t to) {
-  if (m.source != "fdem_results")
+  if (m.source != schema::kind::fdem_results)
     throw UsageError("--micro " + name + " was made from " + m.source + ", not from simulation frames; run tracks2micro on the results file");
   std::size_t k = m.increments.size();
   for (std::size_t q = 0; q < m.increments.size(); ++q)
