@@ -10,13 +10,13 @@
 namespace graintwin::io {
 
 void write_root_attrs(H5File& file, const std::string& kind) {
-  file.set_attr("/", schema::attr::kind, kind);
-  file.set_attr("/", schema::attr::schema_version, static_cast<long long>(schema::version));
-  file.set_attr("/", schema::attr::creator, std::string("graintwin ") + graintwin::version);
+  file.set_attr(schema::path::root, schema::attr::kind, kind);
+  file.set_attr(schema::path::root, schema::attr::schema_version, static_cast<long long>(schema::version));
+  file.set_attr(schema::path::root, schema::attr::creator, std::string("graintwin ") + graintwin::version);
 }
 
 std::string file_kind(const H5File& file) {
-  return file.attr_string("/", schema::attr::kind).value_or("");
+  return file.attr_string(schema::path::root, schema::attr::kind).value_or("");
 }
 
 H5File open_kind(const std::filesystem::path& path, const std::string& kind, const std::string& hint) {
@@ -28,7 +28,7 @@ H5File open_kind(const std::filesystem::path& path, const std::string& kind, con
                      kind + (hint.empty() ? "; import foreign images with volconvert" : tail));
   if (found != kind)
     throw UsageError(path.string() + " holds kind=" + excerpt(found) + ", expected kind=" + kind + tail);
-  const auto v = f.attr_int("/", schema::attr::schema_version);
+  const auto v = f.attr_int(schema::path::root, schema::attr::schema_version);
   if (!v)
     throw UsageError(path.string() + " has no schema_version attribute; rewrite it with the current tools");
   if (*v > schema::version || *v < 1)
