@@ -4,6 +4,7 @@
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/volume.hpp"
 
 using namespace graintwin;
 
@@ -25,4 +26,27 @@ TEST(EnumNames, AnUnknownNameIsAUsageErrorListingTheKnownOnes) {
     EXPECT_EQ(e.message(), "--colour 'mauve' is not red, green or blue");
   }
   EXPECT_THROW(parse_enum(kColours, "Red", "--colour"), UsageError);  // names are exact
+}
+
+TEST(EnumNames, FindEnumIsExactAndMayFindNothing) {
+  EXPECT_EQ(find_enum(kColours, "green"), Colour::green);
+  EXPECT_FALSE(find_enum(kColours, "Green").has_value());
+  EXPECT_FALSE(find_enum(kColours, "").has_value());
+}
+
+TEST(EnumNames, VoxelTypesReadTheirOwnNamesAndTheUsersShortOnes) {
+  for (DType t : {DType::uint8, DType::uint16, DType::uint32, DType::float32}) {
+    EXPECT_EQ(dtype_named(dtype_name(t)), t);  // the names files carry
+    EXPECT_EQ(parse_dtype(dtype_name(t)), t);
+  }
+  EXPECT_EQ(parse_dtype(" U16 "), DType::uint16);
+  EXPECT_EQ(parse_dtype("float"), DType::float32);
+  EXPECT_FALSE(dtype_named("u16").has_value());  // a file's element type goes by its full name
+  EXPECT_FALSE(dtype_named("int16").has_value());
+  try {
+    parse_dtype("int7");
+    FAIL() << "int7 parsed";
+  } catch (const UsageError& e) {
+    EXPECT_EQ(e.message(), "unknown data type 'int7' is not uint8, uint16, uint32 or float32");
+  }
 }

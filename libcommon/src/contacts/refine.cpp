@@ -7,25 +7,26 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <numbers>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/core/volume_ops.hpp"
 
 namespace graintwin::contacts {
 
-const char* status_name(RefineStatus s) {
-  switch (s) {
-    case RefineStatus::fitted: return "fitted";
-    case RefineStatus::few_voxels: return "few_voxels";
-    case RefineStatus::not_converged: return "not_converged";
-    case RefineStatus::rejected: return "rejected";
-  }
-  return "?";
-}
+namespace {
+constexpr std::array<EnumName<RefineStatus>, 4> kRefineStatusNames{{{RefineStatus::fitted, "fitted"},
+                                                                    {RefineStatus::few_voxels, "few_voxels"},
+                                                                    {RefineStatus::not_converged, "not_converged"},
+                                                                    {RefineStatus::rejected, "rejected"}}};
+}  // namespace
+
+const char* status_name(RefineStatus s) { return enum_name(kRefineStatusNames, s); }
 
 void check_grey_for_refinement(const AnyVolume& grey, const std::string& name) {
   const ValueRange r = value_range(grey);

@@ -1,27 +1,31 @@
 #include "graintwin/core/volume.hpp"
 
+#include <array>
+
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/strings.hpp"
 
 namespace graintwin {
 
-std::string dtype_name(DType t) {
-  switch (t) {
-    case DType::uint8: return "uint8";
-    case DType::uint16: return "uint16";
-    case DType::uint32: return "uint32";
-    case DType::float32: return "float32";
-  }
-  return "unknown";
-}
+namespace {
+
+constexpr std::array<EnumName<DType>, 4> kDTypeNames{
+    {{DType::uint8, "uint8"}, {DType::uint16, "uint16"}, {DType::uint32, "uint32"}, {DType::float32, "float32"}}};
+/// Short spellings a user may type (--dtype u16); files and messages use the names above.
+constexpr std::array<EnumName<DType>, 5> kDTypeShortNames{
+    {{DType::uint8, "u8"}, {DType::uint16, "u16"}, {DType::uint32, "u32"}, {DType::float32, "f32"}, {DType::float32, "float"}}};
+
+}  // namespace
+
+std::string dtype_name(DType t) { return enum_name(kDTypeNames, t); }
+
+std::optional<DType> dtype_named(const std::string& name) { return find_enum(kDTypeNames, name); }
 
 DType parse_dtype(const std::string& name) {
   const std::string n = lower(trim(name));
-  if (n == "uint8" || n == "u8") return DType::uint8;
-  if (n == "uint16" || n == "u16") return DType::uint16;
-  if (n == "uint32" || n == "u32") return DType::uint32;
-  if (n == "float32" || n == "f32" || n == "float") return DType::float32;
-  throw UsageError("unknown data type '" + name + "'; use uint8, uint16, uint32 or float32");
+  if (const std::optional<DType> t = find_enum(kDTypeShortNames, n)) return *t;
+  return parse_enum(kDTypeNames, n, "unknown data type");
 }
 
 std::size_t dtype_bytes(DType t) {

@@ -9,6 +9,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/strings.hpp"
+#include "graintwin/io/schema.hpp"
 
 namespace graintwin::io {
 
@@ -297,7 +298,7 @@ void H5File::write(const std::string& path, const T* data, const std::vector<hsi
   if (!ds.valid()) throw DataError(where(path) + ": cannot create dataset" + hdf5_detail());
   if (n > 0 && H5Dwrite(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     throw DataError(where(path) + ": cannot write dataset" + hdf5_detail() + "; is the disk full?");
-  if (!opt.units.empty()) set_attr(path, "units", opt.units);
+  if (!opt.units.empty()) set_attr(path, schema::attr::units, opt.units);
 }
 
 void H5File::write_strings(const std::string& path, const std::vector<std::string>& lines) {

@@ -10,13 +10,13 @@
 namespace graintwin::io {
 
 void write_root_attrs(H5File& file, const std::string& kind) {
-  file.set_attr("/", schema::attr::kind, kind);
-  file.set_attr("/", schema::attr::schema_version, static_cast<long long>(schema::version));
-  file.set_attr("/", schema::attr::creator, std::string("graintwin ") + graintwin::version);
+  file.set_attr(schema::path::root, schema::attr::kind, kind);
+  file.set_attr(schema::path::root, schema::attr::schema_version, static_cast<long long>(schema::version));
+  file.set_attr(schema::path::root, schema::attr::creator, std::string("graintwin ") + graintwin::version);
 }
 
 std::string file_kind(const H5File& file) {
-  return file.attr_string("/", schema::attr::kind).value_or("");
+  return file.attr_string(schema::path::root, schema::attr::kind).value_or("");
 }
 
 H5File open_kind(const std::filesystem::path& path, const std::string& kind, const std::string& hint) {
@@ -28,7 +28,7 @@ H5File open_kind(const std::filesystem::path& path, const std::string& kind, con
                      kind + (hint.empty() ? "; import foreign images with volconvert" : tail));
   if (found != kind)
     throw UsageError(path.string() + " holds kind=" + excerpt(found) + ", expected kind=" + kind + tail);
-  const auto v = f.attr_int("/", schema::attr::schema_version);
+  const auto v = f.attr_int(schema::path::root, schema::attr::schema_version);
   if (!v)
     throw UsageError(path.string() + " has no schema_version attribute; rewrite it with the current tools");
   if (*v > schema::version || *v < 1)
@@ -62,13 +62,11 @@ ImageHeader read_image_header(const H5File& file, const std::string& path) {
                     std::to_string(di.dims.size()) + ")");
   ImageHeader h;
   h.shape = {di.dims[0], di.dims[1], di.dims[2]};
-  if (di.dtype == "uint8") h.dtype = DType::uint8;
-  else if (di.dtype == "uint16") h.dtype = DType::uint16;
-  else if (di.dtype == "uint32") h.dtype = DType::uint32;
-  else if (di.dtype == "float32") h.dtype = DType::float32;
-  else
+  const std::optional<DType> dtype = dtype_named(di.dtype);  // HDF5 element types go by the same names
+  if (!dtype)
     throw DataError(file.path().string() + ":" + path + " has element type " + di.dtype +
                     "; volumes must be uint8, uint16, uint32 or float32");
+  h.dtype = *dtype;
   const auto order = file.attr_string(path, schema::attr::axis_order).value_or("zyx");
   if (order != "zyx")
     throw DataError(file.path().string() + ":" + path + " has axis_order '" + excerpt(order) + "', expected 'zyx'");

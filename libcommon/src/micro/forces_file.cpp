@@ -71,19 +71,19 @@ void write_forces_file(const std::filesystem::path& path, const ForcesFile& c, c
   io::write_root_attrs(f, schema::kind::forces);
   f.write(sf::grain_label, c.label);
   f.write(sf::grain_q, c.q.data(), {g, nf}, units("Pa"));
-  f.set_attr(sf::grain_q, "definition", kQDefinition);
+  f.set_attr(sf::grain_q, sf::definition, kQDefinition);
   f.write(sf::grain_volatility, volatility.data(), {g, nw}, units("1"));
-  f.set_attr(sf::grain_volatility, "definition",
+  f.set_attr(sf::grain_volatility, sf::definition,
              "sample standard deviation of R_i = ln(q_i / q_{i-1}) over the window's frames; NaN where q is not positive");
   f.write(sf::grain_d2min, d2min.data(), {g, nw}, units("1"));
-  f.set_attr(sf::grain_d2min, "source", c.d2min_source);
+  f.set_attr(sf::grain_d2min, sf::d2min_source, c.d2min_source);
   f.write(sf::frame_index, index);
   f.write(sf::frame_time, time, units("s"));
   f.write(sf::frame_contacts, contacts);
   f.write(sf::frame_platen_contacts, platen);
   f.write(sf::frame_mean_force, mean, units("N"));
   f.write(sf::frame_strong, strong);
-  f.set_attr(sf::frame_strong, "chain_threshold", c.chain_threshold);
+  f.set_attr(sf::frame_strong, sf::chain_threshold, c.chain_threshold);
   f.write(sf::frame_strong_scale, scale, units("1"));
   f.write(sf::frame_strong_scale_error, scale_error, units("1"));
   f.write(sf::frame_weak_theta, theta, units("1"));
@@ -146,8 +146,8 @@ void write_pvd(const std::filesystem::path& path, const std::vector<std::string>
 
 void check_forces_tables(const io::H5File& f) {
   const std::string fix = "rewrite it with fdem2forces";
-  for (const char* g : {"/frames", "/grains", "/windows"}) io::table_rows(f, g, fix);
-  for (const char* g : {"/frames", "/grains", "/windows"}) io::require_finite_table(f, g, {}, fix);
+  for (const char* g : {sf::frames, sf::grains, sf::windows}) io::table_rows(f, g, fix);
+  for (const char* g : {sf::frames, sf::grains, sf::windows}) io::require_finite_table(f, g, {}, fix);
 }
 
 ForcesTables read_forces_tables(const std::filesystem::path& path) {

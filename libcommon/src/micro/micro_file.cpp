@@ -37,35 +37,36 @@ void write_increment(io::H5File& f, const std::string& g, const IncrementResult&
   f.write(g + "/" + sm::cluster_size, c.size);
   f.write(g + "/" + sm::cluster_rg, c.radius_of_gyration, units("m"));
   f.set_attr(cg, sm::selected, static_cast<long long>(c.selected));
-  f.set_attr(cg, "threshold_d2min", c.threshold);
+  f.set_attr(cg, sm::threshold_d2min, c.threshold);
   f.set_attr(cg, sm::size_fit_valid, static_cast<long long>(c.size_fit.valid));
   // An unfitted P(s) (too few clusters) is NaN, never a number that looks like a result.
   const auto fitted = [&](double v) { return c.size_fit.valid ? v : std::nan(""); };
   f.set_attr(cg, sm::size_alpha, fitted(c.size_fit.alpha));
   f.set_attr(cg, sm::size_alpha_error, fitted(c.size_fit.alpha_error));
   f.set_attr(cg, sm::size_s_min, fitted(c.size_fit.x_min));
-  f.set_attr(cg, "size_ks", fitted(c.size_fit.ks));
+  f.set_attr(cg, sm::size_ks, fitted(c.size_fit.ks));
   f.set_attr(cg, sm::size_tail, static_cast<long long>(c.size_fit.tail));
   f.set_attr(cg, sm::fractal_dimension, c.fractal_dimension);
   f.set_attr(cg, sm::fractal_dimension_error, c.fractal_dimension_error);
-  f.set_attr(cg, "rg_fit_clusters", static_cast<long long>(c.rg_fit.count));
-  const char* axis[3] = {"x", "y", "z"};
-  for (int k = 0; k < 3; ++k) write_histogram(f, g + "/" + sm::displacement + "/" + axis[k], r.displacement.component[k], "1");
-  write_histogram(f, g + "/" + sm::displacement + "/magnitude", r.displacement.magnitude, "1");
+  f.set_attr(cg, sm::rg_fit_clusters, static_cast<long long>(c.rg_fit.count));
+  const std::string dg = g + "/" + sm::displacement + "/";
+  for (int k = 0; k < 3; ++k) write_histogram(f, dg + sm::displacement_histograms[k], r.displacement.component[k], "1");
+  write_histogram(f, dg + sm::displacement_histograms[3], r.displacement.magnitude, "1");
 }
 
 void write_state(io::H5File& f, const std::string& g, const StateResult& r, const shape::SizeDistribution* psd) {
-  f.ensure_group(g + "/" + sm::rdf);
+  const std::string rdf = g + "/" + sm::rdf;
+  f.ensure_group(rdf);
   f.write(g + "/" + sm::rdf_r, r.rdf.r, units("m"));
   f.write(g + "/" + sm::rdf_g, r.rdf.g, units("1"));
-  f.set_attr(g + "/rdf", "density", r.rdf.density);
-  f.set_attr(g + "/rdf", "points", static_cast<long long>(r.rdf.points));
-  f.set_attr(g + "/rdf", "region", r.region.kind == Region::Kind::box ? "box" : "cylinder");
-  f.set_attr(g + "/rdf", "region_lo", std::vector<double>{r.region.lo.x(), r.region.lo.y(), r.region.lo.z()});
-  f.set_attr(g + "/rdf", "region_hi", std::vector<double>{r.region.hi.x(), r.region.hi.y(), r.region.hi.z()});
+  f.set_attr(rdf, sm::rdf_density, r.rdf.density);
+  f.set_attr(rdf, sm::rdf_points, static_cast<long long>(r.rdf.points));
+  f.set_attr(rdf, sm::rdf_region, region_kind_name(r.region.kind));
+  f.set_attr(rdf, sm::rdf_region_lo, std::vector<double>{r.region.lo.x(), r.region.lo.y(), r.region.lo.z()});
+  f.set_attr(rdf, sm::rdf_region_hi, std::vector<double>{r.region.hi.x(), r.region.hi.y(), r.region.hi.z()});
   if (r.region.kind == Region::Kind::cylinder) {
-    f.set_attr(g + "/rdf", "region_axis_xy", std::vector<double>{r.region.axis.x(), r.region.axis.y()});
-    f.set_attr(g + "/rdf", "region_radius", r.region.radius);
+    f.set_attr(rdf, sm::rdf_region_axis_xy, std::vector<double>{r.region.axis.x(), r.region.axis.y()});
+    f.set_attr(rdf, sm::rdf_region_radius, r.region.radius);
   }
   const CoordinationDistribution& cn = r.coordination_distribution;
   f.ensure_group(g + "/" + sm::state_coordination);
@@ -74,7 +75,7 @@ void write_state(io::H5File& f, const std::string& g, const StateResult& r, cons
   f.write(g + "/" + sm::state_coordination_z, z);
   f.write(g + "/" + sm::state_coordination_count, cn.count);
   f.set_attr(g + "/" + sm::state_coordination, sm::mean, cn.mean);
-  f.set_attr(g + "/coordination", "source", r.coordination_from_contacts ? "contacts" : "distance");
+  f.set_attr(g + "/" + sm::state_coordination, sm::coordination_source, r.coordination_from_contacts ? "contacts" : "distance");
   if (psd) {
     f.ensure_group(g + "/" + sm::psd);
     f.write(g + "/" + sm::psd_diameter, psd->diameter, units("m"));
@@ -123,7 +124,7 @@ void write_micro_file(const std::filesystem::path& path, const MicroFile& c, con
   f.write(sm::grain_eps_q, eps_q.data(), {n, k}, units("1"));
   f.write(sm::grain_neighbours, neighbours.data(), {n, k});
   f.write(sm::grain_status, status.data(), {n, k});
-  f.set_attr(sm::grain_status, "codes", kStatusCodes);
+  f.set_attr(sm::grain_status, sm::codes, kStatusCodes);
   f.write(sm::grain_cluster, cluster.data(), {n, k});
   f.write(sm::grain_coordination, coordination.data(), {n, t});
   f.write(sm::increment_from, from);
@@ -203,8 +204,8 @@ double attr_or_nan(const io::H5File& f, const std::string& object, const std::st
 
 void check_micro_tables(const io::H5File& f) {
   const std::string fix = "rewrite it with tracks2micro";
-  for (const char* g : {"/grains", "/increments", "/states"}) io::table_rows(f, g, fix);
-  for (const char* g : {"/grains", "/increments", "/states"}) io::require_finite_table(f, g, {"d50"}, fix);
+  for (const char* g : {sm::grains, sm::increments, sm::states}) io::table_rows(f, g, fix);
+  for (const char* g : {sm::grains, sm::increments, sm::states}) io::require_finite_table(f, g, {sm::d50_column}, fix);
 }
 
 MicroTables read_micro_tables(const std::filesystem::path& path) {
@@ -240,8 +241,7 @@ MicroTables read_micro_tables(const std::filesystem::path& path) {
     inc.from = from[k], inc.to = to[k], inc.d50 = d50[k];
     inc.pdf_d2min = read_histogram(f, g + sm::pdf_d2min);
     inc.pdf_eps_q = read_histogram(f, g + sm::pdf_eps_q);
-    const char* axis[4] = {"x", "y", "z", "magnitude"};
-    for (int a = 0; a < 4; ++a) inc.displacement[a] = read_histogram(f, g + sm::displacement + "/" + axis[a]);
+    for (int a = 0; a < 4; ++a) inc.displacement[a] = read_histogram(f, g + sm::displacement + "/" + sm::displacement_histograms[a]);
     const std::string c = g + sm::clusters;
     inc.cluster_size = f.read<double>(g + sm::cluster_size);
     inc.cluster_rg = f.read<double>(g + sm::cluster_rg);
@@ -270,7 +270,7 @@ MicroTables read_micro_tables(const std::filesystem::path& path) {
 
 std::vector<double> d2min_of_increment(const MicroTables& m, const std::string& name, const SimulationGrains& grains,
                                        std::size_t from, std::size_t to) {
-  if (m.source != "fdem_results")
+  if (m.source != schema::kind::fdem_results)
     throw UsageError("--micro " + name + " was made from " + m.source + ", not from simulation frames; run tracks2micro on the results file");
   std::size_t k = m.increments.size();
   for (std::size_t q = 0; q < m.increments.size(); ++q)

@@ -33,10 +33,13 @@ double Region::depth(const Eigen::Vector3d& p) const {
   return std::min({axial, p.x() - lo.x(), hi.x() - p.x(), p.y() - lo.y(), hi.y() - p.y()});
 }
 
-Region::Kind parse_region_kind(const std::string& name) {
-  static constexpr std::array<EnumName<Region::Kind>, 2> kNames{{{Region::Kind::box, "box"}, {Region::Kind::cylinder, "cylinder"}}};
-  return parse_enum(kNames, name, "region");
-}
+namespace {
+constexpr std::array<EnumName<Region::Kind>, 2> kRegionKindNames{{{Region::Kind::box, "box"}, {Region::Kind::cylinder, "cylinder"}}};
+}  // namespace
+
+Region::Kind parse_region_kind(const std::string& name) { return parse_enum(kRegionKindNames, name, "region"); }
+
+const char* region_kind_name(Region::Kind kind) { return enum_name(kRegionKindNames, kind); }
 
 Region enclosing_region(const std::vector<Eigen::Vector3d>& points, Region::Kind kind) {
   Region r;

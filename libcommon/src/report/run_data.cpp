@@ -107,20 +107,21 @@ void check_tables(const io::H5File& f, const std::string& kind) {
     io::require_finite_table(f, group, never_nan, "rewrite it with " + tool);
   };
   if (kind == schema::kind::labels) {
-    tables({"/grains"}, "ct2labels");
-    finite("/grains", {"centroid", "volume"}, "ct2labels");
+    segment::check_labels_tables(f);
   } else if (kind == schema::kind::contacts) {
     contacts::check_contacts_tables(f);
   } else if (kind == schema::kind::tracks) {
-    tables({"/tracks", "/steps", "/scans"}, "shapes2tracks");
-    finite("/tracks", {}, "shapes2tracks");
+    tables({schema::tracks::group, schema::tracks::steps, schema::tracks::scans}, "shapes2tracks");
+    finite(schema::tracks::group, {}, "shapes2tracks");
   } else if (kind == schema::kind::micro) {
     micro::check_micro_tables(f);
   } else if (kind == schema::kind::fdem_results) {
-    tables({"/grains", "/series", "/stages"}, "fdemrun");
-    finite("/series", {"time", "kinetic"}, "fdemrun");
-    if (f.exists("/frames"))
-      for (const std::string& frame : f.list("/frames")) finite("/frames/" + frame + "/grains", {"centroid", "rotation"}, "fdemrun");
+    namespace sr = schema::fdem_results;
+    tables({sr::grains, sr::series, sr::stages}, "fdemrun");
+    finite(sr::series, {"time", "kinetic"}, "fdemrun");
+    if (f.exists(sr::frames))
+      for (const std::string& frame : f.list(sr::frames))
+        finite(std::string(sr::frames) + "/" + frame + "/" + sr::frame_grains, {"centroid", "rotation"}, "fdemrun");
   } else if (kind == schema::kind::forces) {
     micro::check_forces_tables(f);
   }

@@ -1,10 +1,12 @@
 #include "graintwin/segment/segment_grains.hpp"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <string>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/volume_ops.hpp"
 #include "graintwin/segment/denoise.hpp"
@@ -68,27 +70,25 @@ std::size_t count_nonzero(const Volume<std::uint8_t>& m) {
 
 double smallest_voxel(const Vec3& s) { return std::min({s[0], s[1], s[2]}); }
 
+constexpr std::array<EnumName<Denoise>, 3> kDenoiseNames{
+    {{Denoise::none, "none"}, {Denoise::median, "median"}, {Denoise::gaussian, "gaussian"}}};
+constexpr std::array<EnumName<MarkerMethod>, 2> kMarkerMethodNames{{{MarkerMethod::h_maxima, "h-maxima"}, {MarkerMethod::peaks, "peaks"}}};
+constexpr std::array<EnumName<FragmentPolicy>, 2> kFragmentPolicyNames{
+    {{FragmentPolicy::merge, "merge"}, {FragmentPolicy::remove, "remove"}}};
+constexpr std::array<EnumName<RegionMode>, 3> kRegionModeNames{
+    {{RegionMode::auto_cylinder, "auto"}, {RegionMode::whole_volume, "volume"}, {RegionMode::given_cylinder, "cylinder"}}};
+
 }  // namespace
 
-const char* to_string(Denoise d) {
-  switch (d) {
-    case Denoise::none: return "none";
-    case Denoise::median: return "median";
-    case Denoise::gaussian: return "gaussian";
-  }
-  return "?";
-}
+const char* to_string(Denoise d) { return enum_name(kDenoiseNames, d); }
+const char* to_string(MarkerMethod m) { return enum_name(kMarkerMethodNames, m); }
+const char* to_string(FragmentPolicy f) { return enum_name(kFragmentPolicyNames, f); }
+const char* to_string(RegionMode r) { return enum_name(kRegionModeNames, r); }
 
-const char* to_string(MarkerMethod m) { return m == MarkerMethod::h_maxima ? "h-maxima" : "peaks"; }
-
-const char* to_string(RegionMode r) {
-  switch (r) {
-    case RegionMode::auto_cylinder: return "auto";
-    case RegionMode::given_cylinder: return "cylinder";
-    case RegionMode::whole_volume: return "volume";
-  }
-  return "?";
-}
+Denoise parse_denoise(const std::string& name) { return parse_enum(kDenoiseNames, name, "--denoise"); }
+MarkerMethod parse_marker_method(const std::string& name) { return parse_enum(kMarkerMethodNames, name, "--markers"); }
+FragmentPolicy parse_fragment_policy(const std::string& name) { return parse_enum(kFragmentPolicyNames, name, "--fragments"); }
+RegionMode parse_region_mode(const std::string& name) { return parse_enum(kRegionModeNames, name, "--region"); }
 
 void validate(const SegmentOptions& o) {
   if (o.denoise == Denoise::gaussian && !(o.gaussian_sigma_vox > 0.0 && std::isfinite(o.gaussian_sigma_vox)))

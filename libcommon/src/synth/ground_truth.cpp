@@ -11,6 +11,8 @@
 
 namespace graintwin::synth {
 
+namespace sg = schema::ground_truth;
+
 namespace {
 // Whether the solid (null: its hull is the grain) holds a point within `depth` of world point
 // `point` along unit `inward`.
@@ -82,48 +84,48 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
   };
   io::H5File f = io::H5File::create(path);
   io::write_root_attrs(f, schema::kind::ground_truth);
-  f.set_attr("/", "scan_index", static_cast<long long>(t.scan_index));
-  f.set_attr("/", "axial_strain", t.axial_strain);
-  f.set_attr("/", "sample_height", t.sample_height);
-  f.set_attr("/", "sample_radius", t.sample_radius);
-  f.set_attr("/", "solid_fraction", t.solid_fraction);
-  f.set_attr("/", "void_ratio", t.void_ratio);
-  f.set_attr("/", "contact_tolerance", t.contact_tolerance);
+  f.set_attr(schema::path::root, sg::scan_index, static_cast<long long>(t.scan_index));
+  f.set_attr(schema::path::root, sg::axial_strain, t.axial_strain);
+  f.set_attr(schema::path::root, sg::sample_height, t.sample_height);
+  f.set_attr(schema::path::root, sg::sample_radius, t.sample_radius);
+  f.set_attr(schema::path::root, sg::solid_fraction, t.solid_fraction);
+  f.set_attr(schema::path::root, sg::void_ratio, t.void_ratio);
+  f.set_attr(schema::path::root, sg::contact_tolerance, t.contact_tolerance);
   io::write_image(f, schema::path::labels, t.labels, "1");
 
   const std::size_t n = t.poses.size();
   std::vector<std::uint32_t> label(n);
   for (std::size_t i = 0; i < n; ++i) label[i] = static_cast<std::uint32_t>(i + 1);
-  f.write("/grains/label", label);
+  f.write(sg::grain_label, label);
   const auto& P = t.poses;
-  f.write("/grains/centroid", rows(n, 3, [&](std::size_t i, int c) { return P[i].position[c]; }).data(), {n, 3},
+  f.write(sg::grain_centroid, rows(n, 3, [&](std::size_t i, int c) { return P[i].position[c]; }).data(), {n, 3},
           with_units("m"));
-  f.write("/grains/orientation",
+  f.write(sg::grain_orientation,
           rows(n, 4, [&](std::size_t i, int c) { return c == 0 ? P[i].orientation.w() : P[i].orientation.vec()[c - 1]; })
               .data(),
           {n, 4}, with_units("1"));
-  f.set_attr("/grains/orientation", "convention", std::string("unit quaternion (w, x, y, z), body to world"));
-  f.write("/grains/volume", t.volume, with_units("m^3"));
-  f.write("/grains/equivalent_diameter", t.equivalent_diameter, with_units("m"));
-  f.write("/grains/sphericity", t.sphericity, with_units("1"));
-  f.write("/grains/aspect_ratio", t.aspect_ratio, with_units("1"));
+  f.set_attr(sg::grain_orientation, sg::orientation_convention, std::string("unit quaternion (w, x, y, z), body to world"));
+  f.write(sg::grain_volume, t.volume, with_units("m^3"));
+  f.write(sg::grain_equivalent_diameter, t.equivalent_diameter, with_units("m"));
+  f.write(sg::grain_sphericity, t.sphericity, with_units("1"));
+  f.write(sg::grain_aspect_ratio, t.aspect_ratio, with_units("1"));
   const hsize_t ncoef = static_cast<hsize_t>(t.sh_coeffs.cols());
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> cw = t.sh_coeffs, cb = t.sh_coeffs_body,
                                                                                inv = t.sh_invariants;
-  f.write("/sh/coeffs", cw.data(), {n, ncoef}, with_units("m"));
-  f.write("/sh/coeffs_body", cb.data(), {n, ncoef}, with_units("m"));
-  f.write("/sh/invariants", inv.data(), {n, static_cast<hsize_t>(inv.cols())}, with_units("m"));
+  f.write(sg::sh_coeffs, cw.data(), {n, ncoef}, with_units("m"));
+  f.write(sg::sh_coeffs_body, cb.data(), {n, ncoef}, with_units("m"));
+  f.write(sg::sh_invariants, inv.data(), {n, static_cast<hsize_t>(inv.cols())}, with_units("m"));
   if (!t.non_star.empty()) {
     const auto& ns = t.non_star;
-    f.write("/grains/multi_exit_fraction",
+    f.write(sg::grain_multi_exit_fraction,
             rows(n, 1, [&](std::size_t i, int) { return ns[i].multi_exit_fraction; }), with_units("1"));
-    f.write("/grains/hidden_void_fraction",
+    f.write(sg::grain_hidden_void_fraction,
             rows(n, 1, [&](std::size_t i, int) { return ns[i].hidden_void_fraction; }), with_units("1"));
-    f.write("/grains/reentry_depth", rows(n, 1, [&](std::size_t i, int) { return ns[i].reentry_depth; }),
+    f.write(sg::grain_reentry_depth, rows(n, 1, [&](std::size_t i, int) { return ns[i].reentry_depth; }),
             with_units("m"));
   }
-  f.set_attr("/sh/coeffs", "degree", static_cast<long long>(t.sh_degree));
-  f.set_attr("/sh/coeffs", "basis",
+  f.set_attr(sg::sh_coeffs, schema::attr::sh_degree, static_cast<long long>(t.sh_degree));
+  f.set_attr(sg::sh_coeffs, schema::attr::sh_basis,
              std::string("real orthonormal, index n*n+n+m, no Condon-Shortley phase (graintwin/shape/sh_basis.hpp)"));
 
   const std::size_t m = t.contacts.size();
@@ -136,21 +138,21 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
     touching[k] = t.contacts[k].touching;
     overlap[k] = t.contacts[k].overlap;
   }
-  f.write("/contacts/pair", pair.data(), {m, 2});
-  f.write("/contacts/normal", rows(m, 3, [&](std::size_t k, int c) { return t.contacts[k].normal[c]; }).data(), {m, 3},
+  f.write(sg::contact_pair, pair.data(), {m, 2});
+  f.write(sg::contact_normal, rows(m, 3, [&](std::size_t k, int c) { return t.contacts[k].normal[c]; }).data(), {m, 3},
           with_units("1"));
-  f.write("/contacts/point", rows(m, 3, [&](std::size_t k, int c) { return t.contacts[k].point[c]; }).data(), {m, 3},
+  f.write(sg::contact_point, rows(m, 3, [&](std::size_t k, int c) { return t.contacts[k].point[c]; }).data(), {m, 3},
           with_units("m"));
-  f.write("/contacts/overlap", overlap, with_units("m"));
-  f.write("/contacts/touching", touching);
-  f.set_attr("/", "loading", std::string(t.simulated ? "simulated" : "prescribed"));
+  f.write(sg::contact_overlap, overlap, with_units("m"));
+  f.write(sg::contact_touching, touching);
+  f.set_attr(schema::path::root, sg::loading, std::string(t.simulated ? "simulated" : "prescribed"));
   if (t.simulated) {
     if (t.contact_force.size() != m)
       throw UsageError("write_ground_truth: a simulated state needs one contact force per contact");
-    f.write("/contacts/force", rows(m, 3, [&](std::size_t k, int c) { return t.contact_force[k][c]; }).data(), {m, 3},
+    f.write(sg::contact_force, rows(m, 3, [&](std::size_t k, int c) { return t.contact_force[k][c]; }).data(), {m, 3},
             with_units("N"));
-    f.set_attr("/", "stress_ratio", t.stress_ratio);
-    f.set_attr("/", "volumetric_strain", t.volumetric_strain);
+    f.set_attr(schema::path::root, sg::stress_ratio, t.stress_ratio);
+    f.set_attr(schema::path::root, sg::volumetric_strain, t.volumetric_strain);
   }
   io::write_history(f, history);
 }

@@ -3,6 +3,7 @@
 // apart (an option's value, a name stored in a file, a message all read the same table).
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 
 #include "graintwin/core/error.hpp"
@@ -24,11 +25,18 @@ const char* enum_name(const std::array<EnumName<E>, N>& table, E value) {
   return "?";
 }
 
+/// The value named `text` (exactly), or nothing: for names read from files, whose errors say more.
+template <class E, std::size_t N>
+std::optional<E> find_enum(const std::array<EnumName<E>, N>& table, const std::string& text) {
+  for (const EnumName<E>& e : table)
+    if (text == e.name) return e.value;
+  return std::nullopt;
+}
+
 /// The value named `text`; UsageError "<what> '<text>' is not a, b or c" otherwise.
 template <class E, std::size_t N>
 E parse_enum(const std::array<EnumName<E>, N>& table, const std::string& text, const std::string& what) {
-  for (const EnumName<E>& e : table)
-    if (text == e.name) return e.value;
+  if (const std::optional<E> value = find_enum(table, text)) return *value;
   std::string names;
   for (std::size_t k = 0; k < N; ++k) names += (k == 0 ? "" : k + 1 == N ? " or " : ", ") + std::string(table[k].name);
   throw UsageError(what + " '" + text + "' is not " + names);

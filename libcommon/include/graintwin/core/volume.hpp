@@ -4,6 +4,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -35,9 +36,12 @@ struct dtype_of<float> {
   static constexpr DType value = DType::float32;
 };
 
-/// "uint8", "uint16", "uint32", "float32".
+/// "uint8", "uint16", "uint32", "float32": the names files (HDF5 element types) and messages use.
 std::string dtype_name(DType t);
-/// Parses a dtype name (also accepts u8/u16/u32/f32/float); throws UsageError naming the choices.
+/// The type of exactly that name, or nothing (a file's element type is checked by its reader).
+std::optional<DType> dtype_named(const std::string& name);
+/// Parses a dtype name as a user types it (any case; also u8/u16/u32/f32/float); throws
+/// UsageError naming the choices.
 DType parse_dtype(const std::string& name);
 std::size_t dtype_bytes(DType t);
 

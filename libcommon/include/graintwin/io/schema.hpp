@@ -27,9 +27,12 @@ inline constexpr const char* axis_order = "axis_order";  ///< "zyx" for every im
 inline constexpr const char* voxel_size = "voxel_size";  ///< metres, (dz, dy, dx)
 inline constexpr const char* origin = "origin";          ///< metres, centre of voxel 0, (z, y, x)
 inline constexpr const char* creator = "creator";        ///< "graintwin <version>"
+inline constexpr const char* sh_degree = "degree";       ///< of every SH coefficient table: its degree L
+inline constexpr const char* sh_basis = "basis";         ///< of every SH coefficient table: the basis' description
 }  // namespace attr
 
 namespace path {
+inline constexpr const char* root = "/";  ///< holds the root attributes (kind, schema_version, creator)
 inline constexpr const char* volume = "/volume";
 inline constexpr const char* labels = "/labels";
 inline constexpr const char* provenance = "/provenance";
@@ -103,7 +106,9 @@ inline constexpr const char* rotation_defined = "/tracks/rotation_defined";  ///
 inline constexpr const char* rotation_misfit = "/tracks/rotation_misfit";    ///< (N x T) surface misfit / equivalent radius
 inline constexpr const char* confidence = "/tracks/confidence";        ///< (N x T) of the match into scan t
 inline constexpr const char* parameters = "/tracks/parameters";        ///< string (1), JSON
+inline constexpr const char* group = "/tracks";                        ///< group: the per-track tables above
 inline constexpr const char* steps = "/steps";                         ///< group: per-scan counts (T)
+inline constexpr const char* scans = "/scans";                         ///< group: per-scan files and d50 (T)
 inline constexpr const char* scan_file = "/scans/file";                ///< string (T)
 inline constexpr const char* scan_d50 = "/scans/d50";                  ///< (T) m
 }  // namespace graintwin::schema::tracks
@@ -176,6 +181,7 @@ inline constexpr const char* grain_strain = "/grains/strain";          ///< (N x
 inline constexpr const char* grain_eps_q = "/grains/eps_q";            ///< (N x K)
 inline constexpr const char* grain_neighbours = "/grains/neighbours";  ///< uint32 (N x K)
 inline constexpr const char* grain_status = "/grains/status";          ///< uint8 (N x K), codes in its attribute
+inline constexpr const char* codes = "codes";                          ///< attribute of /grains/status: the codes' meaning
 inline constexpr const char* grain_cluster = "/grains/cluster";        ///< int32 (N x K), -1 = not in the top fraction
 inline constexpr const char* grain_coordination = "/grains/coordination";  ///< uint32 (N x T)
 inline constexpr const char* increment_from = "/increments/from";      ///< uint64 (K), state
@@ -185,7 +191,9 @@ inline constexpr const char* increments = "/increments";               ///< grou
 inline constexpr const char* states = "/states";                       ///< group; /states/<t>/... per state
 inline constexpr const char* state_file = "/states/file";              ///< string (T)
 inline constexpr const char* state_d50 = "/states/d50";                ///< (T) m
+inline constexpr const char* d50_column = "d50";                       ///< member of /increments and /states: the d50 above
 inline constexpr const char* parameters = "/micro/parameters";         ///< string (1), JSON
+inline constexpr const char* grains = "/grains";                       ///< group: the per-grain tables
 // Members of each histogram group (pdf_d2min, pdf_eps_q, displacement/x, ...) and its attributes.
 inline constexpr const char* edges = "edges";
 inline constexpr const char* density = "density";
@@ -193,10 +201,18 @@ inline constexpr const char* count = "count";
 inline constexpr const char* histogram_used = "used";        ///< attribute: values binned
 inline constexpr const char* histogram_outside = "outside";  ///< attribute: values outside the edges
 // Members of each state group /states/<t>.
-inline constexpr const char* rdf = "rdf";                              ///< group; attributes density, points, region...
+inline constexpr const char* rdf = "rdf";                              ///< group; the attributes below
 inline constexpr const char* rdf_r = "rdf/r";                          ///< m
 inline constexpr const char* rdf_g = "rdf/g";                          ///< 1
+inline constexpr const char* rdf_density = "density";                  ///< attribute of rdf: points per m^3
+inline constexpr const char* rdf_points = "points";                    ///< attribute of rdf: grains counted
+inline constexpr const char* rdf_region = "region";                    ///< attribute of rdf: cylinder or box
+inline constexpr const char* rdf_region_lo = "region_lo";              ///< attribute of rdf, m (x, y, z)
+inline constexpr const char* rdf_region_hi = "region_hi";              ///< attribute of rdf, m (x, y, z)
+inline constexpr const char* rdf_region_axis_xy = "region_axis_xy";    ///< attribute of rdf (cylinder), m
+inline constexpr const char* rdf_region_radius = "region_radius";      ///< attribute of rdf (cylinder), m
 inline constexpr const char* state_coordination = "coordination";      ///< group; attributes mean, source
+inline constexpr const char* coordination_source = "source";           ///< attribute of coordination: contacts or distance
 inline constexpr const char* state_coordination_z = "coordination/z";  ///< uint32: Z = 0 .. max
 inline constexpr const char* state_coordination_count = "coordination/count";  ///< uint64: grains with that Z
 inline constexpr const char* psd = "psd";                              ///< group (optional); attribute d50 (m)
@@ -208,17 +224,22 @@ inline constexpr const char* d50 = "d50";                              ///< attr
 inline constexpr const char* pdf_d2min = "pdf_d2min";                  ///< histogram of D2min / d50^2
 inline constexpr const char* pdf_eps_q = "pdf_eps_q";                  ///< histogram of eps_q
 inline constexpr const char* displacement = "displacement";            ///< group of histograms x, y, z, magnitude (over d50)
+/// The histograms of the displacement group: the components, then the magnitude.
+inline constexpr const char* displacement_histograms[4] = {"x", "y", "z", "magnitude"};
 inline constexpr const char* clusters = "clusters";                    ///< group; attributes below
 inline constexpr const char* cluster_size = "clusters/size";           ///< grains per cluster
 inline constexpr const char* cluster_rg = "clusters/radius_of_gyration";  ///< m
 inline constexpr const char* selected = "selected";                    ///< attribute: grains in the top fraction
+inline constexpr const char* threshold_d2min = "threshold_d2min";      ///< attribute: least D2min / d50^2 selected
 inline constexpr const char* size_fit_valid = "size_fit_valid";        ///< attribute, 0 or 1
 inline constexpr const char* size_alpha = "size_alpha";                ///< attribute, NaN unless fitted
 inline constexpr const char* size_alpha_error = "size_alpha_error";    ///< attribute
 inline constexpr const char* size_s_min = "size_s_min";                ///< attribute
+inline constexpr const char* size_ks = "size_ks";                      ///< attribute: Kolmogorov-Smirnov distance of the fit
 inline constexpr const char* size_tail = "size_tail";                  ///< attribute: clusters in the fitted tail
 inline constexpr const char* fractal_dimension = "fractal_dimension";  ///< attribute
 inline constexpr const char* fractal_dimension_error = "fractal_dimension_error";  ///< attribute
+inline constexpr const char* rg_fit_clusters = "rg_fit_clusters";      ///< attribute: clusters in the R_g ~ s fit
 }  // namespace graintwin::schema::micro
 
 // kind=fdem_results (fdemrun), layout in docs/formats.md. R series rows, P platens, G grains,
@@ -237,16 +258,19 @@ inline constexpr const char* series_external_work = "/series/external_work";    
 inline constexpr const char* series_node_contacts = "/series/node_contacts";      ///< uint64 (R)
 inline constexpr const char* series_platen_force = "/series/platen_force";        ///< (R x P x 3) N, grains on platen
 inline constexpr const char* series_platen_position = "/series/platen_position";  ///< (R x P x 3) m, platen point
+inline constexpr const char* grains = "/grains";                      ///< group of (G) columns
 inline constexpr const char* grain_label = "/grains/label";           ///< uint32 (G)
 inline constexpr const char* grain_kind = "/grains/kind";             ///< uint8 (G): 0 rigid, 1 tet4, 2 tet10
 inline constexpr const char* grain_mass = "/grains/mass";             ///< (G) kg
 inline constexpr const char* grain_volume = "/grains/volume";         ///< (G) m^3
 inline constexpr const char* platen_name = "/platens/name";           ///< string (P)
+inline constexpr const char* stages = "/stages";                      ///< group of (S) columns
 inline constexpr const char* stage_name = "/stages/name";             ///< string (S)
 inline constexpr const char* stage_start = "/stages/start";           ///< (S) s
 inline constexpr const char* parameters = "/run/parameters";          ///< string (1), JSON
 inline constexpr const char* frames = "/frames";                      ///< group; attrs time, step per frame group
 // Members of each frame group.
+inline constexpr const char* frame_grains = "grains";                 ///< group of the frame's (G) columns below
 inline constexpr const char* frame_centroid = "grains/centroid";      ///< (G x 3) m
 inline constexpr const char* frame_rotation = "grains/rotation";      ///< (G x 4) quaternion (w, x, y, z) from the reference
 inline constexpr const char* frame_stress = "grains/stress";          ///< (G x 3 x 3) Pa, compression positive, volume average
@@ -266,6 +290,9 @@ inline constexpr const char* grain_label = "/grains/label";            ///< uint
 inline constexpr const char* grain_q = "/grains/q";                    ///< (G x F) Pa; attribute `definition`
 inline constexpr const char* grain_volatility = "/grains/volatility";  ///< (G x W)
 inline constexpr const char* grain_d2min = "/grains/d2min";            ///< (G x W) D2min / d50^2; attribute `source`
+inline constexpr const char* definition = "definition";                ///< attribute of /grains/q and /grains/volatility
+inline constexpr const char* d2min_source = "source";                  ///< attribute of /grains/d2min: where D2min came from
+inline constexpr const char* grains = "/grains";                       ///< group: the per-grain tables
 inline constexpr const char* frames = "/frames";                       ///< group; /frames/<f>/pdf, /frames/<f>/rose
 inline constexpr const char* frame_index = "/frames/index";            ///< uint64 (F), frame of the results file
 inline constexpr const char* frame_time = "/frames/time";              ///< (F) s
@@ -273,10 +300,12 @@ inline constexpr const char* frame_contacts = "/frames/contacts";      ///< uint
 inline constexpr const char* frame_platen_contacts = "/frames/platen_contacts";  ///< uint64 (F)
 inline constexpr const char* frame_mean_force = "/frames/mean_normal_force";     ///< (F) N, <f_n>
 inline constexpr const char* frame_strong = "/frames/strong_contacts";           ///< uint64 (F), f_n >= threshold <f_n>
+inline constexpr const char* chain_threshold = "chain_threshold";                ///< attribute of /frames/strong_contacts
 inline constexpr const char* frame_strong_scale = "/frames/strong_scale";        ///< (F) exponential scale of f >= 1
 inline constexpr const char* frame_strong_scale_error = "/frames/strong_scale_error";  ///< (F)
 inline constexpr const char* frame_weak_theta = "/frames/weak_theta";            ///< (F) P(f) ~ f^theta for f < 1
 inline constexpr const char* frame_weak_theta_error = "/frames/weak_theta_error";  ///< (F)
+inline constexpr const char* windows = "/windows";                     ///< group: the per-window tables
 inline constexpr const char* window_from = "/windows/from";            ///< uint64 (W), frame
 inline constexpr const char* window_to = "/windows/to";                ///< uint64 (W), frame
 inline constexpr const char* window_r = "/windows/pearson_r";          ///< (W) volatility against D2min
@@ -293,10 +322,23 @@ inline constexpr const char* rose_count = "count";                   ///< uint64
 inline constexpr const char* rose_mean_force = "mean_force";         ///< (n_theta x n_phi) N, NaN in empty bins
 }  // namespace graintwin::schema::forces
 
-// kind=labels (ct2labels): the sample measurement the report reads (segment/labels_file.cpp writes
-// and reads it).
+// kind=labels (ct2labels), layout in docs/formats.md. N grains; the label image is path::labels.
 namespace graintwin::schema::labels {
-inline constexpr const char* sample_void_ratio = "/sample/void_ratio";  ///< (1) e = V_void / V_solid
+inline constexpr const char* grains = "/grains";                           ///< group: the grain table
+inline constexpr const char* grain_label = "/grains/label";                ///< uint32 (N), 1..N
+inline constexpr const char* grain_voxels = "/grains/voxels";              ///< uint64 (N)
+inline constexpr const char* grain_volume = "/grains/volume";              ///< (N) m^3
+inline constexpr const char* grain_centroid = "/grains/centroid";          ///< (N x 3) m, (x, y, z)
+inline constexpr const char* grain_bbox = "/grains/bbox";                  ///< uint64 (N x 6) voxels, half-open (z0, y0, x0, z1, y1, x1)
+inline constexpr const char* grain_touches_edge = "/grains/touches_edge";  ///< uint8 (N)
+inline constexpr const char* sample = "/sample";                           ///< group; the attributes below
+inline constexpr const char* cylinder_centre_xy = "cylinder_centre_xy";    ///< attribute of /sample, float64[2] m
+inline constexpr const char* cylinder_radius = "cylinder_radius";          ///< attribute of /sample, m; NaN = unbounded
+inline constexpr const char* cylinder_z_range = "cylinder_z_range";        ///< attribute of /sample, float64[2] m; NaN = unbounded
+inline constexpr const char* sample_void_ratio = "/sample/void_ratio";     ///< (1) e = V_void / V_solid
+inline constexpr const char* sample_solid_volume = "/sample/solid_volume";  ///< (1) m^3
+inline constexpr const char* sample_void_volume = "/sample/void_volume";   ///< (1) m^3
+inline constexpr const char* parameters = "/segmentation/parameters";      ///< string (1), JSON
 }  // namespace graintwin::schema::labels
 
 // The triaxial measurements of fdemrun's time series (a scene with [triaxial]; docs/fdem_triaxial.md),
@@ -318,10 +360,71 @@ inline constexpr const char* series_inertial_number = "/series/inertial_number";
 inline constexpr const char* frame_membrane_position = "membrane/position";
 }  // namespace graintwin::schema::fdem_results
 
-// kind=shapes (labels2shapes), layout in docs/formats.md: the star-shape and edge measures.
+// kind=shapes (labels2shapes), layout in docs/formats.md. N grains, SH degree L.
 namespace graintwin::schema::shapes {
+inline constexpr const char* grain_label = "/grains/label";                          ///< uint32 (N)
+inline constexpr const char* grain_voxels = "/grains/voxels";                        ///< uint64 (N)
+inline constexpr const char* grain_volume = "/grains/volume";                        ///< (N) m^3
+inline constexpr const char* grain_centroid = "/grains/centroid";                    ///< (N x 3) m
+inline constexpr const char* grain_surface_area = "/grains/surface_area";            ///< (N) m^2
+inline constexpr const char* grain_equivalent_diameter = "/grains/equivalent_diameter";  ///< (N) m
+inline constexpr const char* grain_sphericity = "/grains/sphericity";                ///< (N)
+inline constexpr const char* grain_semi_axes = "/grains/semi_axes";                  ///< (N x 3) m, a >= b >= c
+inline constexpr const char* grain_axes = "/grains/axes";                            ///< (N x 3 x 3), [i, k, :] direction of axis k
+inline constexpr const char* grain_aspect_ratio = "/grains/aspect_ratio";            ///< (N) a / c
+inline constexpr const char* grain_elongation = "/grains/elongation";                ///< (N) b / a
+inline constexpr const char* grain_flatness = "/grains/flatness";                    ///< (N) c / b
+inline constexpr const char* coeffs = "/sh/coeffs";                                  ///< (N x (L+1)^2) m; attributes sh_degree, sh_basis, origin
+inline constexpr const char* coeffs_origin = "origin";                               ///< attribute of /sh/coeffs: the expansion's origin
+inline constexpr const char* degree = "/sh/degree";                                  ///< int32 (N), degree kept
+inline constexpr const char* invariants = "/sh/invariants";                          ///< (N x (L+1)) m
+inline constexpr const char* rms_error = "/sh/rms_error";                            ///< (N) / equivalent radius
+inline constexpr const char* max_error = "/sh/max_error";                            ///< (N) / equivalent radius
+inline constexpr const char* volume_error = "/sh/volume_error";                      ///< (N) (V_sh - V) / V
 inline constexpr const char* multi_exit_fraction = "/sh/multi_exit_fraction";    ///< (N) share of re-entrant rays
 inline constexpr const char* hidden_void_fraction = "/sh/hidden_void_fraction";  ///< (N) void inside the radial surface / V
 inline constexpr const char* reentry_depth = "/sh/reentry_depth";                ///< (N) m, deepest missed surface
 inline constexpr const char* edge_sigma = "/sh/edge_sigma";                      ///< (N) m, edge width (Gaussian sigma)
+inline constexpr const char* flags = "/sh/flags";                                ///< uint8 (N); attribute bits
+inline constexpr const char* flag_bits = "bits";                                 ///< attribute of /sh/flags: the bits' meaning
+inline constexpr const char* psd_diameter = "/psd/diameter";                     ///< m
+inline constexpr const char* psd_percent_passing = "/psd/percent_passing";       ///< %
+inline constexpr const char* psd_d50 = "/psd/d50";                               ///< (1) m
+inline constexpr const char* parameters = "/shapes/parameters";                  ///< string (1), JSON
 }  // namespace graintwin::schema::shapes
+
+// kind=ground_truth (ctsynth: truth_NNN.h5 beside scan_NNN.h5), layout in docs/formats.md. N
+// grains, M contact pairs; the label image is path::labels.
+namespace graintwin::schema::ground_truth {
+// Root attributes.
+inline constexpr const char* scan_index = "scan_index";
+inline constexpr const char* axial_strain = "axial_strain";
+inline constexpr const char* sample_height = "sample_height";          ///< m
+inline constexpr const char* sample_radius = "sample_radius";          ///< m
+inline constexpr const char* solid_fraction = "solid_fraction";
+inline constexpr const char* void_ratio = "void_ratio";
+inline constexpr const char* contact_tolerance = "contact_tolerance";  ///< m
+inline constexpr const char* loading = "loading";                      ///< "prescribed" or "simulated"
+inline constexpr const char* stress_ratio = "stress_ratio";            ///< simulated loading: sigma_1 / sigma_3
+inline constexpr const char* volumetric_strain = "volumetric_strain";  ///< simulated loading: ln(V0 / V)
+inline constexpr const char* grain_label = "/grains/label";            ///< uint32 (N), 1..N
+inline constexpr const char* grain_centroid = "/grains/centroid";      ///< (N x 3) m
+inline constexpr const char* grain_orientation = "/grains/orientation";  ///< (N x 4) quaternion; attribute convention
+inline constexpr const char* orientation_convention = "convention";    ///< attribute of /grains/orientation
+inline constexpr const char* grain_volume = "/grains/volume";          ///< (N) m^3
+inline constexpr const char* grain_equivalent_diameter = "/grains/equivalent_diameter";  ///< (N) m
+inline constexpr const char* grain_sphericity = "/grains/sphericity";  ///< (N)
+inline constexpr const char* grain_aspect_ratio = "/grains/aspect_ratio";  ///< (N)
+inline constexpr const char* grain_multi_exit_fraction = "/grains/multi_exit_fraction";    ///< (N), series with non-star grains
+inline constexpr const char* grain_hidden_void_fraction = "/grains/hidden_void_fraction";  ///< (N), the same
+inline constexpr const char* grain_reentry_depth = "/grains/reentry_depth";                ///< (N) m, the same
+inline constexpr const char* sh_coeffs = "/sh/coeffs";                 ///< (N x (L+1)^2) m, world frame; attributes sh_degree, sh_basis
+inline constexpr const char* sh_coeffs_body = "/sh/coeffs_body";       ///< (N x (L+1)^2) m, body frame
+inline constexpr const char* sh_invariants = "/sh/invariants";         ///< (N x (L+1)) m
+inline constexpr const char* contact_pair = "/contacts/pair";          ///< uint32 (M x 2), low first
+inline constexpr const char* contact_normal = "/contacts/normal";      ///< (M x 3) unit, low -> high
+inline constexpr const char* contact_point = "/contacts/point";        ///< (M x 3) m
+inline constexpr const char* contact_overlap = "/contacts/overlap";    ///< (M) m, > 0 interpenetration
+inline constexpr const char* contact_touching = "/contacts/touching";  ///< uint8 (M)
+inline constexpr const char* contact_force = "/contacts/force";        ///< (M x 3) N on the higher label; simulated loading
+}  // namespace graintwin::schema::ground_truth

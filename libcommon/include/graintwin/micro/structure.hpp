@@ -26,6 +26,8 @@ struct Region {
 };
 /// "box" or "cylinder"; UsageError otherwise.
 Region::Kind parse_region_kind(const std::string& name);
+/// "box" or "cylinder", as parse_region_kind reads it.
+const char* region_kind_name(Region::Kind kind);
 /// The smallest region of that kind holding every finite point: the box of their extents; the
 /// cylinder about their mean (x, y) reaching the farthest, between their lowest and highest z.
 Region enclosing_region(const std::vector<Eigen::Vector3d>& points, Region::Kind kind);

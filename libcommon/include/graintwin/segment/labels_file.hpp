@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "graintwin/core/volume.hpp"
+#include "graintwin/io/h5file.hpp"
 #include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/sample_region.hpp"
 
@@ -33,6 +34,11 @@ void write_labels_file(const std::filesystem::path& path, const LabelsFile& cont
 /// the file (not recomputed) and checked against the label image (grain_table_mismatch): DataError
 /// naming the file when a grain has no row or a row disagrees with its voxels.
 LabelsFile read_labels_file(const std::filesystem::path& path);
+
+/// The checks a reader makes on the grain table of an open labels file, without reading the label
+/// image (for the report's check of a run): its columns of one length, no infinity anywhere, no NaN
+/// in a centroid or volume (io/table_checks; DataError naming the file and the column).
+void check_labels_tables(const io::H5File& file);
 
 /// The void ratio a labels file measured in its sample region (/sample/void_ratio), without
 /// reading the label image: for readers that need only the sample's measurement (the report).

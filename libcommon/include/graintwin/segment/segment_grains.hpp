@@ -76,8 +76,15 @@ SegmentResult segment_grains(Volume<T> grey, const SegmentOptions& options);
 /// Checks option values before any heavy work (UsageError naming the option).
 void validate(const SegmentOptions& options);
 
+/// The options' names, as ct2labels takes them and its labels files record them; the parse
+/// functions refuse an unknown name (UsageError naming the option and listing the known names).
 const char* to_string(Denoise d);
 const char* to_string(MarkerMethod m);
+const char* to_string(FragmentPolicy f);
 const char* to_string(RegionMode r);
+Denoise parse_denoise(const std::string& name);                 ///< --denoise: none, median or gaussian
+MarkerMethod parse_marker_method(const std::string& name);      ///< --markers: h-maxima or peaks
+FragmentPolicy parse_fragment_policy(const std::string& name);  ///< --fragments: merge or remove
+RegionMode parse_region_mode(const std::string& name);          ///< --region: auto, volume or cylinder
 
 }  // namespace graintwin::segment
