@@ -24,8 +24,7 @@ const std::vector<test::Ball> kBalls = test::jittered_lattice(3, 7.0, 13.0, 9.0,
 /// A uint16 scan of 27 touching spheres, 44^3 voxels of 20 um.
 std::filesystem::path write_phantom(const test::TempDir& dir) {
   const Volume<float> f = test::scan_balls({44, 44, 44}, kBalls, 4, 0.03, {2e-5, 2e-5, 2e-5});
-  Volume<std::uint16_t> v(f.shape(), f.voxel_size());
-  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  const Volume<std::uint16_t> v = test::uint16_scan(f);
   io::write_volume_file(dir / "scan.h5", v, {"phantom"});
   return dir / "scan.h5";
 }

@@ -24,8 +24,7 @@ const std::vector<test::Ball> kBalls = test::jittered_lattice(2, 7.0, 18.0, 11.0
 
 std::filesystem::path write_scan(const test::TempDir& dir) {
   const Volume<float> f = test::scan_balls({40, 40, 40}, kBalls, 2, 0.02, {2e-5, 2e-5, 2e-5});
-  Volume<std::uint16_t> v(f.shape(), f.voxel_size());
-  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  const Volume<std::uint16_t> v = test::uint16_scan(f);
   io::write_volume_file(dir / "scan.h5", v, {"phantom scan"});
   return dir / "scan.h5";
 }

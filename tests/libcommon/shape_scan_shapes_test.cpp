@@ -35,8 +35,7 @@ struct Phantom {
 /// The phantom's scan at grey levels 1000 (void) to 3000 (grain).
 AnyVolume grey_scan() {
   const Volume<float> f = test::scan_balls({38, 38, 38}, kBalls, 4, 0.01, {kVoxel, kVoxel, kVoxel});
-  Volume<std::uint16_t> v(f.shape(), f.voxel_size());
-  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  const Volume<std::uint16_t> v = test::uint16_scan(f);
   return v;
 }
 

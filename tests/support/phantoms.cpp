@@ -67,6 +67,12 @@ std::vector<Ball> jittered_lattice(int n, double r, double step, double first, d
   return b;
 }
 
+Volume<std::uint16_t> uint16_scan(const Volume<float>& f) {
+  Volume<std::uint16_t> v(f.shape(), f.voxel_size(), f.origin());
+  for (std::size_t i = 0; i < f.size(); ++i) v.values()[i] = static_cast<std::uint16_t>(std::lround(4000.0 * f.values()[i]));
+  return v;
+}
+
 Volume<float> scan_balls(Shape3 shape, const std::vector<Ball>& balls, std::uint32_t seed, double noise, Vec3 voxel) {
   Volume<float> occ(shape, voxel);
   for (const Ball& b : balls)

@@ -30,6 +30,9 @@ std::vector<Ball> jittered_lattice(int n, double r, double step, double first, d
 Volume<float> scan_balls(Shape3 shape, const std::vector<Ball>& balls, std::uint32_t seed, double noise = 0.03,
                          Vec3 voxel = {1e-5, 1e-5, 1e-5});
 
+/// The scan as a uint16 file stores it: round(4000 x grey), with f's geometry.
+Volume<std::uint16_t> uint16_scan(const Volume<float>& f);
+
 /// A grain that is not star-shaped beside one that is, 40 x 40 x `nx` voxels (nx >= 72): label 1 a
 /// ball of radius 15 at (19.9, 20.2, 19.7) (z, y, x) with an enclosed spherical cavity of radius
 /// 5.5 whose centre is 7.5 voxels along +x (its share of the grain: 5.5^3 / (15^3 - 5.5^3)), and
