@@ -14,6 +14,7 @@
 #include "graintwin/shape/shapes_file.hpp"
 #include "graintwin/track/tracks_file.hpp"
 #include "support/cli_contract.hpp"
+#include "support/phantoms.hpp"
 #include "support/simulation_results.hpp"
 #include "support/vtk_summary.hpp"
 
@@ -47,31 +48,15 @@ std::vector<std::vector<Eigen::Vector3d>> lattice_states() {
 /// Shapes files (labels 100 + index) and a tracks file following every grain through the states.
 std::vector<std::string> write_series(const test::TempDir& dir, const std::vector<std::vector<Eigen::Vector3d>>& states) {
   const std::size_t n = states[0].size(), t = states.size();
-  const double volume = std::numbers::pi / 6.0 * std::pow(kSpacing, 3);
   track::TracksFile tf;
   std::vector<std::string> shapes_paths;
   for (std::size_t s = 0; s < t; ++s) {
-    shape::ShapesFile sh;
-    std::vector<double> d, v;
-    for (std::size_t i = 0; i < n; ++i) {
-      shape::GrainShape g;
-      g.label = std::uint32_t(100 + i);
-      g.volume = volume;
-      g.equivalent_diameter = kSpacing;
-      g.centroid = states[s][i];
-      g.coeffs = Eigen::VectorXd::Constant(1, kSpacing);
-      g.invariants = g.coeffs;
-      sh.grains.push_back(g);
-      d.push_back(kSpacing), v.push_back(volume);
-    }
-    sh.psd = shape::size_distribution(d, v);
-    sh.parameters_json = "{}";
+    std::vector<std::uint32_t> labels;
+    for (std::size_t i = 0; i < n; ++i) labels.push_back(std::uint32_t(100 + i));
     shapes_paths.push_back((dir / ("shapes_" + std::to_string(s) + ".h5")).string());
-    shape::write_shapes_file(shapes_paths.back(), sh, {"lattice shapes " + std::to_string(s)});
+    test::write_sphere_shapes(shapes_paths.back(), labels, states[s], kSpacing, "lattice shapes " + std::to_string(s));
     tf.scans.push_back(shapes_paths.back());
     tf.d50.push_back(kSpacing);
-    std::vector<std::uint32_t> labels;
-    for (const auto& g : sh.grains) labels.push_back(g.label);
     tf.scan_labels.push_back(labels);
   }
   track::Tracks& tr = tf.tracks;

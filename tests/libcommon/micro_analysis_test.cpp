@@ -11,6 +11,7 @@
 #include "graintwin/io/schema.hpp"
 #include "graintwin/micro/micro_analysis.hpp"
 #include "graintwin/shape/shapes_file.hpp"
+#include "support/phantoms.hpp"
 #include "support/run_tool.hpp"
 
 using namespace graintwin;
@@ -34,26 +35,17 @@ struct TrackedLattice {
     tracks.label.resize(n * t);
     tracks.centroid.resize(n * t * 3);
     for (std::size_t s = 0; s < t; ++s) {
-      shape::ShapesFile sh;
-      std::vector<double> d, v;
+      std::vector<std::uint32_t> labels;
+      std::vector<Eigen::Vector3d> centroids;
       for (std::size_t i = 0; i < n; ++i) {
-        shape::GrainShape g;
-        g.label = std::uint32_t(10 + i);
-        g.volume = volume;
-        g.equivalent_diameter = kSpacing;
-        g.centroid = Eigen::Vector3d(double(i % kSide), double(i / kSide % kSide), double(i / (kSide * kSide))) * kSpacing;
-        g.centroid.z() *= 1.0 - 0.005 * double(s);
-        g.coeffs = Eigen::VectorXd::Constant(1, kSpacing);
-        g.invariants = g.coeffs;
-        sh.grains.push_back(g);
-        d.push_back(kSpacing), v.push_back(volume);
-        tracks.label[i * t + s] = g.label;
-        for (int q = 0; q < 3; ++q) tracks.centroid[(i * t + s) * 3 + std::size_t(q)] = g.centroid[q];
+        labels.push_back(std::uint32_t(10 + i));
+        centroids.push_back(Eigen::Vector3d(double(i % kSide), double(i / kSide % kSide), double(i / (kSide * kSide))) * kSpacing);
+        centroids.back().z() *= 1.0 - 0.005 * double(s);
+        tracks.label[i * t + s] = labels.back();
+        for (int q = 0; q < 3; ++q) tracks.centroid[(i * t + s) * 3 + std::size_t(q)] = centroids.back()[q];
       }
-      sh.psd = shape::size_distribution(d, v);
-      sh.parameters_json = "{}";
       tracks.scan_files.push_back((dir / ("shapes_" + std::to_string(s) + ".h5")).string());
-      shape::write_shapes_file(tracks.scan_files.back(), sh, {"lattice shapes"});
+      test::write_sphere_shapes(tracks.scan_files.back(), labels, centroids, kSpacing, "lattice shapes");
       tracks.scan_d50.push_back(kSpacing);
     }
   }

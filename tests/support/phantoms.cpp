@@ -1,7 +1,10 @@
 #include "support/phantoms.hpp"
 
+#include "graintwin/shape/shapes_file.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <set>
 
@@ -65,6 +68,27 @@ std::vector<Ball> jittered_lattice(int n, double r, double step, double first, d
         b.push_back({first + step * i + jitter * u(), first + step * j + jitter * u(), first + step * k + jitter * u(),
                      radius_jitter != 0.0 ? r * (1.0 + radius_jitter * u()) : r});
   return b;
+}
+
+void write_sphere_shapes(const std::filesystem::path& path, const std::vector<std::uint32_t>& labels,
+                         const std::vector<Eigen::Vector3d>& centroids, double diameter, const std::string& history) {
+  const double volume = std::numbers::pi / 6.0 * std::pow(diameter, 3);
+  shape::ShapesFile sh;
+  std::vector<double> d, v;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    shape::GrainShape g;
+    g.label = labels[i];
+    g.volume = volume;
+    g.equivalent_diameter = diameter;
+    g.centroid = centroids[i];
+    g.coeffs = Eigen::VectorXd::Constant(1, diameter);
+    g.invariants = g.coeffs;
+    sh.grains.push_back(g);
+    d.push_back(diameter), v.push_back(volume);
+  }
+  sh.psd = shape::size_distribution(d, v);
+  sh.parameters_json = "{}";
+  shape::write_shapes_file(path, sh, {history});
 }
 
 Volume<std::uint16_t> uint16_scan(const Volume<float>& f) {

@@ -1,7 +1,11 @@
 #pragma once
 // Sphere phantoms with exact answers, shared by the segmentation tests: painted masks, jittered
-// lattices and noisy synthetic scans (the spam / kalisphera protocol).
+// lattices and noisy synthetic scans (the spam / kalisphera protocol); shapes files of spheres.
+#include <Eigen/Core>
+
 #include <cstdint>
+#include <filesystem>
+#include <string>
 #include <vector>
 
 #include "graintwin/core/volume.hpp"
@@ -29,6 +33,11 @@ std::vector<Ball> jittered_lattice(int n, double r, double step, double first, d
 /// Gaussian blur 0.8 voxel, Gaussian noise of the given standard deviation.
 Volume<float> scan_balls(Shape3 shape, const std::vector<Ball>& balls, std::uint32_t seed, double noise = 0.03,
                          Vec3 voxel = {1e-5, 1e-5, 1e-5});
+
+/// Writes a shapes file (kind=shapes) of equal spheres of `diameter` (m), degree-0 SH surfaces,
+/// with these labels and centroids (m).
+void write_sphere_shapes(const std::filesystem::path& path, const std::vector<std::uint32_t>& labels,
+                         const std::vector<Eigen::Vector3d>& centroids, double diameter, const std::string& history);
 
 /// The scan as a uint16 file stores it: round(4000 x grey), with f's geometry.
 Volume<std::uint16_t> uint16_scan(const Volume<float>& f);
