@@ -338,6 +338,11 @@ TEST(Ctsynth, SimulatedLoadingRefusesWhatItCannotRunBeforeAnyWork) {
   test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated", "--triaxial-scene", tri, "--strains", "0"}, 2,
                              "above 0");
   test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "pushed"}, 2, "prescribed or simulated");
+  test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated", "--triaxial-scene", (dir / "nope.toml").string()},
+                             2, "is not a readable file");
+  // The scene is an input: the output folder may not replace it, even with --force.
+  test::expect_clean_failure("ctsynth", dir, {scene, tri, "--force", "--loading", "simulated", "--triaxial-scene", tri}, 2,
+                             "triaxial.toml");
   std::ofstream(dir / "stages.toml") << "[run]\nduration = 1e-3\n";
   test::expect_clean_failure("ctsynth", dir, {scene, out, "--loading", "simulated", "--triaxial-scene", (dir / "stages.toml").string()},
                              2, "[triaxial]");

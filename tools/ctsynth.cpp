@@ -159,6 +159,7 @@ SeriesParams series_params(const Options& o) {
     experiment::TriaxialLoadingParams tp;
     tp.scene = o.triaxial_scene;
     experiment::check_loading_scene(tp.scene, p.container, p.membrane_thickness);
+    io::declare_input(tp.scene);  // an input: no output may replace it, even with --force
     tp.size.surface_nodes = o.simulated_surface_nodes;
     tp.membrane_thickness = p.membrane_thickness;
     p.simulate = experiment::triaxial_loading(tp);

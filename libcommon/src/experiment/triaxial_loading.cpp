@@ -67,6 +67,10 @@ std::size_t row_at(const std::vector<std::uint64_t>& steps, std::uint64_t step) 
 }  // namespace
 
 void check_loading_scene(const std::filesystem::path& scene, const synth::Container& container, double membrane_thickness) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(scene, ec))
+    throw UsageError("--triaxial-scene " + scene.string() +
+                     " is not a readable file; give a triaxial scene such as pipelines/scenes/triaxial.toml");
   // The scene is read over a model with the sample but no grain yet: every table is checked.
   auto sample_only = std::make_shared<fdem::Model>();
   sample_only->sample = fdem::SampleCylinder{Eigen::Vector2d::Zero(), container.radius, 0.0, container.height, membrane_thickness};
