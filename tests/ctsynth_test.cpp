@@ -325,6 +325,22 @@ TEST(Ctsynth, SimulatedLoadingRendersTheTriaxialTestsFramesWithTheirForces) {
   EXPECT_GT(loaded, n) << "a loaded packing carries more contacts than grains";
   EXPECT_EQ(loaded, series["scans"][1]["force_pairs"].get<std::size_t>());
   EXPECT_GT(t1.attr_double("/", "stress_ratio"), 1.0);
+  // The test's whole curve is in every truth, from the start of shearing; each scan sits on it.
+  for (const io::H5File* t : {&t0, &t1}) {
+    const auto strain = t->read<double>("/loading/axial_strain"), ratio = t->read<double>("/loading/stress_ratio");
+    const auto volumetric = t->read<double>("/loading/volumetric_strain");
+    ASSERT_GT(strain.size(), 10u);
+    ASSERT_EQ(ratio.size(), strain.size());
+    ASSERT_EQ(volumetric.size(), strain.size());
+    EXPECT_TRUE(std::is_sorted(strain.begin(), strain.end()));
+    EXPECT_NEAR(strain.back(), 0.01, 5e-4);
+    const double at = t->attr_double("/", "axial_strain");
+    const auto nearest = std::min_element(strain.begin(), strain.end(),
+                                          [&](double a, double b) { return std::abs(a - at) < std::abs(b - at); }) - strain.begin();
+    // (Within a step's change: the frame's strain is measured after the step whose row it takes.)
+    EXPECT_NEAR(ratio[nearest], t->attr_double("/", "stress_ratio"), 0.02 * ratio[nearest]);
+    EXPECT_NEAR(volumetric[nearest], t->attr_double("/", "volumetric_strain"), 1e-4);
+  }
 }
 
 TEST(Ctsynth, SimulatedLoadingRefusesWhatItCannotRunBeforeAnyWork) {

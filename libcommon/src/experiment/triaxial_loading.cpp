@@ -296,7 +296,9 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
     const fdem::TriaxialSeries curve = fdem::read_triaxial_series(results);
     const std::vector<std::size_t> at = frames_at(frames, strains, results);
     const std::size_t platens = rows.step.empty() ? 0 : rows.platen_position.size() / (3 * rows.step.size());
-    std::vector<synth::LoadedState> states(strains.size());
+    synth::SimulatedLoading loaded;
+    std::vector<synth::LoadedState>& states = loaded.states;
+    states.resize(strains.size());
     for (std::size_t k = 0; k < strains.size(); ++k) {
       const fdem::ResultsFrame& frame = frames[at[k]];
       synth::LoadedState& s = states[k];
@@ -323,7 +325,14 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
       if (std::abs(s.axial_strain - strains[k]) > 0.05 * std::max(strains[k], 1e-3))
         spdlog::warn("scan {}: the nearest frame is at strain {:.4g}, not {:.4g}", k, s.axial_strain, strains[k]);
     }
-    return states;
+    // The curve of the truth: the rows from the start of shearing (before it, no axial strain).
+    for (std::size_t r = 0; r < curve.step.size(); ++r)
+      if (std::isfinite(curve.axial_strain[r])) {
+        loaded.curve.axial_strain.push_back(curve.axial_strain[r]);
+        loaded.curve.stress_ratio.push_back(curve.stress_ratio[r]);
+        loaded.curve.volumetric_strain.push_back(curve.volumetric_strain[r]);
+      }
+    return loaded;
   };
 }
 

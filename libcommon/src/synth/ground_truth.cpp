@@ -153,6 +153,12 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
             with_units("N"));
     f.set_attr(schema::path::root, sg::stress_ratio, t.stress_ratio);
     f.set_attr(schema::path::root, sg::volumetric_strain, t.volumetric_strain);
+    const LoadingCurve& c = t.loading_curve;
+    if (c.stress_ratio.size() != c.axial_strain.size() || c.volumetric_strain.size() != c.axial_strain.size())
+      throw UsageError("write_ground_truth: the loading curve's columns differ in length");
+    f.write(sg::curve_axial_strain, c.axial_strain, with_units("1"));
+    f.write(sg::curve_stress_ratio, c.stress_ratio, with_units("1"));
+    f.write(sg::curve_volumetric_strain, c.volumetric_strain, with_units("1"));
   }
   io::write_history(f, history);
 }

@@ -295,9 +295,12 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
 
   // --- loading states ---
   const LoadingParams lp = loading_params(p, d_ref);
-  const std::vector<LoadedState> states =
-      p.simulate ? p.simulate(grains, packed, p.container, p.strains, dir, history, progress)
-                 : prescribed_states(p, lp, tables, packed, pp, report);
+  SimulatedLoading loaded;
+  if (p.simulate)
+    loaded = p.simulate(grains, packed, p.container, p.strains, dir, history, progress);
+  else
+    loaded.states = prescribed_states(p, lp, tables, packed, pp, report);
+  const std::vector<LoadedState>& states = loaded.states;
   throw_if_interrupted();
   // The scans' grid: fixed for the series, from the bound (prescribed) or the states (simulated).
   const ImageBox box = p.simulate ? image_box(p, states) : bound;
@@ -375,6 +378,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
       attach_forces(truth, state);
       truth.stress_ratio = state.stress_ratio;
       truth.volumetric_strain = state.volumetric_strain;
+      truth.loading_curve = loaded.curve;
     }
     const auto touching =
         std::count_if(truth.contacts.begin(), truth.contacts.end(), [](const TrueContact& c) { return c.touching; });

@@ -427,4 +427,9 @@ inline constexpr const char* contact_point = "/contacts/point";        ///< (M x
 inline constexpr const char* contact_overlap = "/contacts/overlap";    ///< (M) m, > 0 interpenetration
 inline constexpr const char* contact_touching = "/contacts/touching";  ///< uint8 (M)
 inline constexpr const char* contact_force = "/contacts/force";        ///< (M x 3) N on the higher label; simulated loading
+// Simulated loading: the test's stress-strain curve from the start of shearing (K rows, one per
+// recorded step; the same in every scan of the series).
+inline constexpr const char* curve_axial_strain = "/loading/axial_strain";            ///< (K) ln(H0 / H)
+inline constexpr const char* curve_stress_ratio = "/loading/stress_ratio";            ///< (K) sigma_1 / sigma_3
+inline constexpr const char* curve_volumetric_strain = "/loading/volumetric_strain";  ///< (K) ln(V0 / V)
 }  // namespace graintwin::schema::ground_truth

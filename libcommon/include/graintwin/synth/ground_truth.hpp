@@ -46,6 +46,12 @@ std::vector<TrueContact> true_contacts(const std::vector<const shape::RadialTabl
                                        double tolerance, bool separating = false,
                                        const std::vector<const GrainSolid*>& solids = {});
 
+/// A simulated test's stress-strain curve from the start of shearing, one entry per recorded step:
+/// axial log strain ln(H0 / H), sigma_1 / sigma_3 and volumetric strain ln(V0 / V).
+struct LoadingCurve {
+  std::vector<double> axial_strain, stress_ratio, volumetric_strain;
+};
+
 /// Everything written to one truth_NNN.h5.
 struct GroundTruth {
   int scan_index = 0;
@@ -71,6 +77,7 @@ struct GroundTruth {
   std::vector<Eigen::Vector3d> contact_force;
   double stress_ratio = std::numeric_limits<double>::quiet_NaN();
   double volumetric_strain = std::numeric_limits<double>::quiet_NaN();
+  LoadingCurve loading_curve;                ///< simulated states: the whole test's curve (the same in every scan)
   /// Per grain: what a radial description misses of it (zeros for star-shaped grains).
   std::vector<NonStarMeasures> non_star;
 };

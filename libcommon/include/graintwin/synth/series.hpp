@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "graintwin/synth/grains.hpp"
+#include "graintwin/synth/ground_truth.hpp"
 #include "graintwin/synth/loading.hpp"
 #include "graintwin/synth/packing.hpp"
 #include "graintwin/synth/psd.hpp"
@@ -44,10 +45,16 @@ struct LoadedState {
   double volumetric_strain = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// What a simulated test gives a series: its state at each scan's strain and its whole curve.
+struct SimulatedLoading {
+  std::vector<LoadedState> states;
+  LoadingCurve curve;
+};
+
 /// The states of a series at the given strains, from the grains (`tables`, in order) packed at
 /// `packed` in `container`; `dir` is the series folder (a simulation may write its results there),
 /// `history` goes into any file it writes, `progress` makes the progress callback of a named step.
-using LoadingSimulation = std::function<std::vector<LoadedState>(
+using LoadingSimulation = std::function<SimulatedLoading(
     const GrainSet& grains, const std::vector<PackedGrain>& packed, const Container& container,
     const std::vector<double>& strains, const std::filesystem::path& dir, const std::vector<std::string>& history,
     const std::function<std::function<void(double)>(const std::string&)>& progress)>;
