@@ -2,6 +2,7 @@
 // scenes that cannot be made.
 #include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -341,6 +342,36 @@ TEST(Ctsynth, SimulatedLoadingRendersTheTriaxialTestsFramesWithTheirForces) {
     EXPECT_NEAR(ratio[nearest], t->attr_double("/", "stress_ratio"), 0.02 * ratio[nearest]);
     EXPECT_NEAR(volumetric[nearest], t->attr_double("/", "volumetric_strain"), 1e-4);
   }
+}
+
+// The bundled default series is a simulated triaxial test: at least 4 scans to at least 10 %
+// axial strain with one step of 5 % or more, each truth on the test's curve with its contact
+// forces, the whole folder within the 20 MB budget.
+TEST(Ctsynth, BundledSandSmallIsASimulatedTriaxialTestWithinItsBudget) {
+  const fs::path series = fs::path(GRAINTWIN_SOURCE_DIR) / "sample_volumes" / "sand_small";
+  std::uintmax_t bytes = 0;
+  for (const auto& e : fs::directory_iterator(series)) bytes += e.is_regular_file() ? e.file_size() : 0;
+  EXPECT_LE(bytes, 20u << 20);
+  std::vector<double> strains;
+  for (std::size_t k = 0; fs::exists(series / fmt::format("truth_{:03d}.h5", k)); ++k) {
+    SCOPED_TRACE(k);
+    ASSERT_TRUE(fs::exists(series / fmt::format("scan_{:03d}.h5", k)));
+    const io::H5File t = io::open_kind(series / fmt::format("truth_{:03d}.h5", k), "ground_truth");
+    EXPECT_EQ(t.attr_string("/", "loading").value_or(""), "simulated");
+    strains.push_back(t.attr_double("/", "axial_strain"));
+    const auto curve_strain = t.read<double>("/loading/axial_strain"), curve_ratio = t.read<double>("/loading/stress_ratio");
+    ASSERT_EQ(curve_ratio.size(), curve_strain.size());
+    ASSERT_GT(curve_strain.size(), 100u);
+    EXPECT_GE(curve_strain.back(), strains.back() - 1e-3);
+    const auto force = t.read<double>("/contacts/force");
+    EXPECT_EQ(force.size(), t.read<double>("/contacts/normal").size());
+    EXPECT_GT(std::count_if(force.begin(), force.end(), [](double f) { return f != 0.0; }), 0);
+  }
+  ASSERT_GE(strains.size(), 4u);
+  EXPECT_GE(strains.back(), 0.10 - 1e-3);
+  double largest_step = 0.0;
+  for (std::size_t k = 1; k < strains.size(); ++k) largest_step = std::max(largest_step, strains[k] - strains[k - 1]);
+  EXPECT_GE(largest_step, 0.05 - 1e-3);
 }
 
 TEST(Ctsynth, SimulatedLoadingRefusesWhatItCannotRunBeforeAnyWork) {

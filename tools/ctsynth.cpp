@@ -54,6 +54,7 @@ struct Options {
   std::string loading = "prescribed";
   std::string triaxial_scene;
   double simulated_surface_nodes = 500.0;
+  bool keep_simulation = true;
 };
 
 // "7,11" -> {7, 11}: increasing SH degrees >= 2, those >= sh_degree dropped; "none" -> {}.
@@ -161,6 +162,7 @@ SeriesParams series_params(const Options& o) {
     experiment::check_loading_scene(tp.scene, p.container, p.membrane_thickness);
     io::declare_input(tp.scene);  // an input: no output may replace it, even with --force
     tp.size.surface_nodes = o.simulated_surface_nodes;
+    tp.keep_results = o.keep_simulation;
     tp.membrane_thickness = p.membrane_thickness;
     p.simulate = experiment::triaxial_loading(tp);
   } else if (o.loading != "prescribed") {
@@ -284,8 +286,7 @@ void add_options(cli::Tool& tool, Options& o) {
   app.add_option("--loading", o.loading,
                  "prescribed: the states are kinematics (compression, bulge, shear band, nonaffine motion; overlaps "
                  "relaxed); simulated: fdemrun's triaxial test of the packed grains (rigid meshes of their exact SH "
-                 "surfaces) gives the states at the --strains, read as log strains from the start of shearing, and its "
-                 "results are kept as simulation.h5 (sphere, ellipsoid and sand grains in a cylinder)")
+                 "surfaces) gives the states at the --strains, read as log strains from the start of shearing (sphere, ellipsoid and sand grains in a cylinder)")
       ->capture_default_str();
   app.add_option("--triaxial-scene", o.triaxial_scene,
                  "--loading simulated: the fdemrun scene of the test (its [triaxial] and [run] tables; its target and "
@@ -293,6 +294,10 @@ void add_options(cli::Tool& tool, Options& o) {
   app.add_option("--simulated-surface-nodes", o.simulated_surface_nodes,
                  "--loading simulated: surface nodes of each grain's rigid mesh")
       ->check(number_in(closed(20, 1e5)))->capture_default_str();
+  app.add_flag("--keep-simulation,!--drop-simulation", o.keep_simulation,
+               "--loading simulated: keep the test's results as simulation.h5 (frames, series; kind=fdem_results), or "
+               "drop them: the truth files hold the stress-strain curve either way")
+      ->capture_default_str();
   app.add_option("--contact-search", o.contact_search, "Record pairs closer than this as near-contacts (default 2 voxels)")
       ->check(length_in(1e-9, 0.01));
   tool.set_examples({"ctsynth pipelines/scenes/sand_small.toml runs/sand_small_truth",

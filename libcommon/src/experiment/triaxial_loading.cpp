@@ -332,6 +332,7 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
         loaded.curve.stress_ratio.push_back(curve.stress_ratio[r]);
         loaded.curve.volumetric_strain.push_back(curve.volumetric_strain[r]);
       }
+    if (!params.keep_results) std::filesystem::remove(results);
     return loaded;
   };
 }

@@ -3,8 +3,9 @@
 // --loading simulated; docs/ctsynth.md): the packed grains, whose SH surfaces are exact, meshed as
 // rigid FDEM grains (mesh/), run through fdemrun's triaxial test of a scene (fdem/), and the
 // frames taken at the scans' strains turned back into grain poses, platens, the membrane's
-// surface and the pairs' contact forces (synth::LoadedState). The run's results file is kept in
-// the series folder as simulation.h5, the truth of the stress-strain curve.
+// surface and the pairs' contact forces (synth::LoadedState), and the test's stress-strain curve
+// (synth::LoadingCurve). The run's results file is kept in the series folder as simulation.h5
+// unless the caller drops it.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -30,6 +31,7 @@ struct TriaxialLoadingParams {
   mesh::SizeTargets size;         ///< element sizes of the grains' rigid meshes
   double platen_friction = 0.0;   ///< Coulomb friction of the end platens
   double membrane_thickness = 0.3e-3;
+  bool keep_results = true;       ///< keep the test's results as simulation.h5 in the series folder
 };
 
 /// UsageError naming the scene file when it cannot drive the loading of a sample in `container`
