@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <set>
 
 #include <omp.h>
 #include <signal.h>
@@ -249,6 +250,25 @@ TEST(Sizing, LargeGrainsAreCappedAtTheSizeOfGrainsOfTheD50) {
   EXPECT_EQ(mesh::neighbour_size_cap(d50, 0.0, 2, t), 0.0);
   // The typical grain's element count does not depend on the cap.
   EXPECT_DOUBLE_EQ(mesh::expected_elements_per_grain(2, t), mesh::expected_elements_per_grain(2, mesh::SizeTargets{.max_per_diameter = 2.0}));
+}
+
+// The names the logs and notes print: one table per enum, every value named once.
+TEST(GrainMesher, EveryRuleOriginAndPathHasItsOwnName) {
+  std::set<std::string> names;
+  for (auto r : {mesh::SizeRule::contact, mesh::SizeRule::accuracy, mesh::SizeRule::coarsest, mesh::SizeRule::finest,
+                 mesh::SizeRule::given, mesh::SizeRule::neighbours})
+    EXPECT_TRUE(names.insert(mesh::size_rule_name(r)).second) << mesh::size_rule_name(r);
+  EXPECT_EQ(names.count("?"), 0u);
+  names.clear();
+  for (auto o : {mesh::SurfaceOrigin::sh, mesh::SurfaceOrigin::voxels, mesh::SurfaceOrigin::ellipsoid})
+    EXPECT_TRUE(names.insert(mesh::surface_origin_name(o)).second) << mesh::surface_origin_name(o);
+  EXPECT_EQ(names.count("?"), 0u);
+  EXPECT_STREQ(mesh::mesh_path_name(mesh::MeshPath::gmsh_surface), "gmsh surface");
+  EXPECT_STREQ(mesh::mesh_path_name(mesh::MeshPath::kept_surface), "kept surface");
+  EXPECT_STREQ(mesh::mesh_path_name(mesh::MeshPath::ellipsoid), "ellipsoid");
+  EXPECT_EQ(parse_enum(mesh::kShMeshingNames, "gmsh", "--sh-meshing"), mesh::MeshPath::gmsh_surface);
+  EXPECT_EQ(parse_enum(mesh::kShMeshingNames, "kept", "--sh-meshing"), mesh::MeshPath::kept_surface);
+  EXPECT_THROW(parse_enum(mesh::kShMeshingNames, "ellipsoid", "--sh-meshing"), UsageError);
 }
 
 TEST(GrainMesher, SphereGrainMeetsTheContactTargetAndItsVolume) {
