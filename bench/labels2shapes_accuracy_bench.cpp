@@ -20,6 +20,7 @@
 #include <iostream>
 #include <numbers>
 
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
@@ -109,7 +110,7 @@ Errors measure(const Volume<std::uint32_t>& labels, const Volume<std::uint16_t>*
     Eigen::VectorXd ours = Eigen::VectorXd::Zero(sh_count(kmax)), exact = Eigen::VectorXd::Zero(sh_count(kmax));
     ours.head(g.coeffs.size()) = g.coeffs;
     exact.head(truth.coeffs[t - 1].size()) = truth.coeffs[t - 1];
-    const double r_eq = std::cbrt(3.0 * truth.volume[t - 1] / (4.0 * std::numbers::pi));
+    const double r_eq = equivalent_radius(truth.volume[t - 1]);
     surface.push_back((ours - exact).norm() / std::sqrt(4.0 * std::numbers::pi) / r_eq);
     const Eigen::VectorXd ri = sh_invariants(ours, kmax), rt = sh_invariants(exact, kmax);
     invariant.push_back((ri.tail(kmax - 1) / ri[0] - rt.tail(kmax - 1) / rt[0]).norm());

@@ -15,6 +15,7 @@
 
 #include <fmt/format.h>
 
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
@@ -46,7 +47,7 @@ shape::GrainShape test_grain(double radius, bool rough) {
       degree, 4000);
   const shape::ShMoments mom = shape::sh_moments(g.coeffs, degree);
   g.volume = mom.volume;
-  g.equivalent_diameter = std::cbrt(6 * g.volume / M_PI);
+  g.equivalent_diameter = equivalent_diameter(g.volume);
   g.surface_area = 4 * M_PI * radius * radius * 1.05;
   g.semi_axes = Eigen::Vector3d::Constant(radius);
   return g;

@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/mesh/equivalent_packing.hpp"
 #include "graintwin/mesh/gmsh_adapter.hpp"
@@ -339,7 +340,7 @@ TEST(GrainMesher, Bumpy4NodeGrainMeetsTheVolumeTarget) {
   g.coeffs[6] = 0.2 * r0, g.coeffs[15] = 0.15 * r0, g.coeffs[22] = -0.12 * r0;
   g.coeffs[33] = 0.15 * r0, g.coeffs[44] = 0.12 * r0, g.coeffs[57] = 0.09 * r0, g.coeffs[74] = 0.075 * r0;
   const double exact = shape::sh_moments(g.coeffs, degree).volume;
-  g.equivalent_diameter = std::cbrt(6.0 * exact / M_PI);
+  g.equivalent_diameter = equivalent_diameter(exact);
   const mesh::ShSurfaceBasis basis(4, degree);
   mesh::GrainMeshOptions o;
   o.order = 1;
@@ -474,8 +475,8 @@ struct UGrain {
     grain.centroid = sum / double(voxels);
     grain.flags = shape::shape_flag::not_star_shaped | shape::shape_flag::unreliable_fit;
     grain.coeffs = Eigen::VectorXd::Zero(25);
-    grain.coeffs[0] = std::cbrt(3.0 * volume / (4.0 * M_PI)) * std::sqrt(4.0 * M_PI);
-    grain.equivalent_diameter = std::cbrt(6.0 * volume / M_PI);
+    grain.coeffs[0] = equivalent_radius(volume) * std::sqrt(4.0 * M_PI);
+    grain.equivalent_diameter = equivalent_diameter(volume);
     grain.surface_area = 2.0 * (8 * 16 + 8 * 16 + 16 * 16) * h * h + 2.0 * 10 * 6 * h * h;
     grain.semi_axes = Vector3d(4, 8, 8) * h;
   }

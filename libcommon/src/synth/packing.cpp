@@ -41,6 +41,7 @@
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "packing_geometry.hpp"
 #include "packing_pairs.hpp"
@@ -123,7 +124,7 @@ class Packer {
       const ShapeData& d = shape_data_[grain_shape_[i]];
       rmax_[i] = d.max_radius;
       vol_[i] = d.volume;
-      req_[i] = std::cbrt(3.0 * d.volume / (4.0 * M_PI));
+      req_[i] = equivalent_radius(d.volume);
       vsum += d.volume;
       rmin_eq = std::min(rmin_eq, req_[i]);
       req_sum += req_[i];
