@@ -18,6 +18,7 @@
 #include "graintwin/core/geometry.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -186,9 +187,9 @@ int main(int argc, char** argv) {
       const double cpu = children_cpu_seconds() - cpu_before;
       models.push_back(fdem::read_model_file(model));
       const io::H5File f = io::H5File::open(model);
-      const auto path = f.read<std::uint8_t>("/mesh/path");
-      const auto seconds = f.read<double>("/mesh/seconds");
-      const auto overran = f.read<std::uint8_t>("/mesh/overran_budget");
+      const auto path = f.read<std::uint8_t>(schema::fdem_model::mesh::path);
+      const auto seconds = f.read<double>(schema::fdem_model::mesh::seconds);
+      const auto overran = f.read<std::uint8_t>(schema::fdem_model::mesh::overran_budget);
       std::size_t on[3] = {0, 0, 0}, overruns = 0;
       double path_seconds[3] = {0, 0, 0}, slowest = 0;
       for (std::size_t g = 0; g < path.size(); ++g) {

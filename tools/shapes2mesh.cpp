@@ -187,7 +187,7 @@ double check_options(Options& o) {
 std::size_t open_inputs(cli::RunContext& ctx, const Options& o) {
   const io::H5File sf = io::open_kind(o.shapes, schema::kind::shapes, "pass the output of labels2shapes");
   ctx.add_input_history(sf);
-  const auto dims = sf.info("/grains/label").dims;
+  const auto dims = sf.info(schema::shapes::grain_label).dims;
   std::size_t meshes = dims.empty() ? 0 : dims[0];
   if (o.packing_choice == Packing::equivalent) meshes = std::max<std::size_t>(meshes, o.equivalent.grains);
   if (!o.labels.empty()) ctx.add_input_history(io::open_kind(o.labels, schema::kind::labels, "pass the output of ct2labels"));
