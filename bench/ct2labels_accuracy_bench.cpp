@@ -27,6 +27,7 @@
 
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/metaimage.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "harness.hpp"
@@ -34,6 +35,7 @@
 
 namespace fs = std::filesystem;
 using namespace graintwin;
+namespace sg = schema::ground_truth;
 using nlohmann::json;
 
 namespace {
@@ -45,7 +47,7 @@ using bench::MatchResult;
 using bench::TruthGrain;
 
 Volume<std::uint32_t> read_truth_labels(const fs::path& truth) {
-  return io::read_image_as<std::uint32_t>(io::open_kind(truth, "ground_truth"), "/labels");
+  return io::read_image_as<std::uint32_t>(io::open_kind(truth, schema::kind::ground_truth), schema::path::labels);
 }
 
 Volume<std::uint32_t> read_any_labels(const fs::path& path) {
@@ -98,13 +100,13 @@ struct Truth {
 };
 
 Truth read_truth(const fs::path& path) {
-  const io::H5File f = io::open_kind(path, "ground_truth");
+  const io::H5File f = io::open_kind(path, schema::kind::ground_truth);
   Truth t;
-  t.labels = io::read_image_as<std::uint32_t>(f, "/labels");
-  t.diameter_m = f.read<double>("/grains/equivalent_diameter");
-  const auto c = f.read<double>("/grains/centroid");
+  t.labels = io::read_image_as<std::uint32_t>(f, schema::path::labels);
+  t.diameter_m = f.read<double>(sg::grain_equivalent_diameter);
+  const auto c = f.read<double>(sg::grain_centroid);
   for (std::size_t i = 0; i + 2 < c.size(); i += 3) t.radial_m.push_back(std::hypot(c[i], c[i + 1]));
-  t.sample_radius = f.attr_doubles("/", "sample_radius").at(0);
+  t.sample_radius = f.attr_doubles(schema::path::root, sg::sample_radius).at(0);
   return t;
 }
 

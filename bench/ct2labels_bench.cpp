@@ -26,6 +26,7 @@
 #include <optional>
 
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/segment_grains.hpp"
 #include "harness.hpp"
@@ -361,8 +362,8 @@ int scale_main(const fs::path& work) {
   const fs::path big = work / "sand1000.h5";
   std::size_t grains_in_tile = 0;
   {
-    const io::H5File truth = io::open_kind(dir / "truth_000.h5", "ground_truth");
-    grains_in_tile = truth.read<std::uint32_t>("/grains/label").size();
+    const io::H5File truth = io::open_kind(dir / "truth_000.h5", schema::kind::ground_truth);
+    grains_in_tile = truth.read<std::uint32_t>(schema::ground_truth::grain_label).size();
   }
   // Rebuilt when missing or older than the scan it tiles (the scene may have been remade).
   if (!fs::exists(big) || fs::last_write_time(big) < fs::last_write_time(dir / "scan_000.h5")) {
@@ -401,8 +402,8 @@ int scale_main(const fs::path& work) {
                                   {(bench::bin_dir() / "ct2labels").string(), big.string(), out.string(), "--force",
                                    "--quiet", "--region", "volume", "-j", std::to_string(cores)});
   std::cout << fmt::format(" {:.0f} s, {:.2f} GB peak", r.seconds, r.peak_bytes / 1e9) << std::endl;
-  const io::H5File lf = io::open_kind(out, "labels");
-  const json p = json::parse(lf.read_strings("/segmentation/parameters").at(0));
+  const io::H5File lf = io::open_kind(out, schema::kind::labels);
+  const json p = json::parse(lf.read_strings(schema::labels::parameters).at(0));
   const double voxels = static_cast<double>(n * n * n);
   r.note = fmt::format("{:.2f} GB peak = {:.1f} B/voxel (limit 24 GB: {}); {} labels from 64 copies of a {}-grain scan "
                        "(those on the far faces cropped, cutting grains); h {:.2f}",

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <random>
 
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/synth/grains.hpp"
 #include "graintwin/synth/psd.hpp"
 #include "graintwin/synth/render.hpp"
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
   // Ottawa PSD scaled so that about 2 000 grains fill 256^3 voxels at solid fraction 0.6.
   const double target_grains = quick ? 250.0 : 2000.0;
   const double box = side * voxel;
-  const double d_mean = std::cbrt(6.0 * 0.6 * box * box * box / (M_PI * target_grains));
+  const double d_mean = equivalent_diameter(0.6 * box * box * box / target_grains);
   Psd psd{0.544 * d_mean, d_mean, 1.87 * d_mean, 0.25};
   std::mt19937_64 rng(3);
   const auto diameters = sample_diameters(psd, 0.6 * box * box * box, rng);

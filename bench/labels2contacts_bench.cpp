@@ -22,6 +22,7 @@
 #include "graintwin/contacts/fabric.hpp"
 #include "graintwin/contacts/refine.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/edt.hpp"
 #include "graintwin/segment/labels.hpp"
@@ -36,6 +37,7 @@
 namespace fs = std::filesystem;
 using namespace graintwin;
 using namespace graintwin::contacts;
+namespace sg = schema::ground_truth;
 
 namespace {
 const std::string kSource = GRAINTWIN_SOURCE_DIR;
@@ -183,8 +185,8 @@ SceneResult evaluate_scene(const std::string& name, const fs::path& scan, const 
   s.name = name;
   const segment::LabelsFile lab = segment::read_labels_file(labels_path);
   const AnyVolume grey = io::read_volume_file(scan);
-  const io::H5File truth = io::open_kind(truth_path, "ground_truth");
-  const Volume<std::uint32_t> tl = io::read_image_as<std::uint32_t>(truth, "/labels");
+  const io::H5File truth = io::open_kind(truth_path, schema::kind::ground_truth);
+  const Volume<std::uint32_t> tl = io::read_image_as<std::uint32_t>(truth, schema::path::labels);
   const double vox = tl.voxel_size()[0];
   std::unordered_map<std::uint64_t, std::uint64_t> overlap;
   for (std::size_t i = 0; i < tl.size(); ++i)
@@ -194,10 +196,10 @@ SceneResult evaluate_scene(const std::string& name, const fs::path& scan, const 
     auto& best = to_true[static_cast<std::uint32_t>(key >> 32)];
     if (count > best.second) best = {static_cast<std::uint32_t>(key & 0xFFFFFFFFu), count};
   }
-  const auto pair = truth.read<std::uint32_t>("/contacts/pair");
-  const auto normal = truth.read<double>("/contacts/normal");
-  const auto gap_m = truth.read<double>("/contacts/overlap");
-  const auto touching = truth.read<std::uint8_t>("/contacts/touching");
+  const auto pair = truth.read<std::uint32_t>(sg::contact_pair);
+  const auto normal = truth.read<double>(sg::contact_normal);
+  const auto gap_m = truth.read<double>(sg::contact_overlap);
+  const auto touching = truth.read<std::uint8_t>(sg::contact_touching);
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> true_index;
   std::vector<Vec3> true_normals;
   for (std::size_t k = 0; k < touching.size(); ++k) {
@@ -206,7 +208,7 @@ SceneResult evaluate_scene(const std::string& name, const fs::path& scan, const 
   }
   s.grains = lab.grains.size();
   s.true_touching = true_normals.size();
-  s.z_true = 2.0 * static_cast<double>(s.true_touching) / static_cast<double>(truth.read<std::uint32_t>("/grains/label").size());
+  s.z_true = 2.0 * static_cast<double>(s.true_touching) / static_cast<double>(truth.read<std::uint32_t>(sg::grain_label).size());
   s.a_true = fabric_tensor(true_normals).anisotropy;
 
   const auto cs = find_contacts(lab.labels, lab.grains);

@@ -20,7 +20,9 @@
 #include <iostream>
 #include <numbers>
 
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/segment_grains.hpp"
@@ -31,6 +33,7 @@
 namespace fs = std::filesystem;
 using namespace graintwin;
 using namespace graintwin::shape;
+namespace sg = schema::ground_truth;
 
 namespace {
 
@@ -46,13 +49,13 @@ struct Truth {
 Truth read_truth(const fs::path& p) {
   const io::H5File f = io::H5File::open(p);
   Truth t;
-  t.labels = io::read_image_as<std::uint32_t>(f, "/labels");
-  t.degree = static_cast<int>(f.attr_int("/sh/coeffs", "degree").value());
+  t.labels = io::read_image_as<std::uint32_t>(f, schema::path::labels);
+  t.degree = static_cast<int>(f.attr_int(sg::sh_coeffs, schema::attr::sh_degree).value());
   std::vector<hsize_t> dims;
-  const auto c = f.read<double>("/sh/coeffs", &dims);
+  const auto c = f.read<double>(sg::sh_coeffs, &dims);
   for (hsize_t i = 0; i < dims[0]; ++i)
     t.coeffs.push_back(Eigen::Map<const Eigen::VectorXd>(c.data() + i * dims[1], static_cast<Eigen::Index>(dims[1])));
-  t.volume = f.read<double>("/grains/volume");
+  t.volume = f.read<double>(sg::grain_volume);
   return t;
 }
 
@@ -109,7 +112,7 @@ Errors measure(const Volume<std::uint32_t>& labels, const Volume<std::uint16_t>*
     Eigen::VectorXd ours = Eigen::VectorXd::Zero(sh_count(kmax)), exact = Eigen::VectorXd::Zero(sh_count(kmax));
     ours.head(g.coeffs.size()) = g.coeffs;
     exact.head(truth.coeffs[t - 1].size()) = truth.coeffs[t - 1];
-    const double r_eq = std::cbrt(3.0 * truth.volume[t - 1] / (4.0 * std::numbers::pi));
+    const double r_eq = equivalent_radius(truth.volume[t - 1]);
     surface.push_back((ours - exact).norm() / std::sqrt(4.0 * std::numbers::pi) / r_eq);
     const Eigen::VectorXd ri = sh_invariants(ours, kmax), rt = sh_invariants(exact, kmax);
     invariant.push_back((ri.tail(kmax - 1) / ri[0] - rt.tail(kmax - 1) / rt[0]).norm());
@@ -155,7 +158,7 @@ int main(int argc, char** argv) {
     }
     const Truth truth = read_truth(dir / "truth_000.h5");
     const io::H5File scan = io::H5File::open(dir / "scan_000.h5");
-    const auto grey = io::read_image_as<std::uint16_t>(scan, "/volume");
+    const auto grey = io::read_image_as<std::uint16_t>(scan, schema::path::volume);
     omp_set_num_threads(omp_get_num_procs());
     const segment::SegmentResult seg = segment::segment_grains(grey, segment::SegmentOptions{});
     for (const auto& [source, labels, use_grey] :

@@ -21,6 +21,7 @@
 #include <numbers>
 
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/labels_file.hpp"
@@ -34,6 +35,7 @@
 namespace fs = std::filesystem;
 using namespace graintwin;
 using namespace graintwin::shape;
+namespace sg = schema::ground_truth;
 
 namespace {
 
@@ -126,9 +128,9 @@ double median(std::vector<double> v) {
 PackedErrors packed_errors(const Volume<std::uint32_t>& labels, const Volume<std::uint16_t>& scan, const io::H5File& truth,
                            const ShFitter& fitter, const MeasureOptions& o) {
   std::vector<hsize_t> dims;
-  const auto coeffs = truth.read<double>("/sh/coeffs", &dims);
-  const auto volume = truth.read<double>("/grains/volume");
-  const auto centroid = truth.read<double>("/grains/centroid");
+  const auto coeffs = truth.read<double>(sg::sh_coeffs, &dims);
+  const auto volume = truth.read<double>(sg::grain_volume);
+  const auto centroid = truth.read<double>(sg::grain_centroid);
   const auto table = segment::grain_table(labels);
   std::vector<std::pair<std::uint32_t, std::array<std::size_t, 6>>> boxes;
   for (const auto& g : table) boxes.push_back({g.label, g.bbox});
@@ -257,8 +259,8 @@ int main(int argc, char** argv) {
   {
     const fs::path dir = fs::path(kSource) / "sample_volumes/sand_small";
     const io::H5File truth = io::H5File::open(dir / "truth_000.h5");
-    const auto exact_labels = io::read_image_as<std::uint32_t>(truth, "/labels");
-    const auto scan = io::read_image_as<std::uint16_t>(io::H5File::open(dir / "scan_000.h5"), "/volume");
+    const auto exact_labels = io::read_image_as<std::uint32_t>(truth, schema::path::labels);
+    const auto scan = io::read_image_as<std::uint16_t>(io::H5File::open(dir / "scan_000.h5"), schema::path::volume);
     const segment::LabelsFile ct = segment::read_labels_file(work / "sand_small_labels.h5");
     for (const auto& [labels_name, labels] :
          std::vector<std::pair<std::string, const Volume<std::uint32_t>*>>{{"exact labels", &exact_labels}, {"ct2labels", &ct.labels}}) {

@@ -15,8 +15,10 @@
 
 #include <fmt/format.h>
 
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
 #include "graintwin/mesh/grain_surface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -46,7 +48,7 @@ shape::GrainShape test_grain(double radius, bool rough) {
       degree, 4000);
   const shape::ShMoments mom = shape::sh_moments(g.coeffs, degree);
   g.volume = mom.volume;
-  g.equivalent_diameter = std::cbrt(6 * g.volume / M_PI);
+  g.equivalent_diameter = equivalent_diameter(g.volume);
   g.surface_area = 4 * M_PI * radius * radius * 1.05;
   g.semi_axes = Eigen::Vector3d::Constant(radius);
   return g;
@@ -185,9 +187,9 @@ int main(int argc, char** argv) {
       const double cpu = children_cpu_seconds() - cpu_before;
       models.push_back(fdem::read_model_file(model));
       const io::H5File f = io::H5File::open(model);
-      const auto path = f.read<std::uint8_t>("/mesh/path");
-      const auto seconds = f.read<double>("/mesh/seconds");
-      const auto overran = f.read<std::uint8_t>("/mesh/overran_budget");
+      const auto path = f.read<std::uint8_t>(schema::fdem_model::mesh::path);
+      const auto seconds = f.read<double>(schema::fdem_model::mesh::seconds);
+      const auto overran = f.read<std::uint8_t>(schema::fdem_model::mesh::overran_budget);
       std::size_t on[3] = {0, 0, 0}, overruns = 0;
       double path_seconds[3] = {0, 0, 0}, slowest = 0;
       for (std::size_t g = 0; g < path.size(); ++g) {

@@ -29,6 +29,7 @@
 #include <unordered_map>
 
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/labels_file.hpp"
@@ -88,7 +89,7 @@ void labels2shapes(const fs::path& labels, const fs::path& scan, const fs::path&
 }
 
 Volume<std::uint32_t> read_labels_image(const fs::path& p) {
-  return io::read_image_as<std::uint32_t>(io::H5File::open(p), "/labels");
+  return io::read_image_as<std::uint32_t>(io::H5File::open(p), schema::path::labels);
 }
 
 /// What every row of a shapes file is, by the scoring of ct2labels_accuracy_bench
@@ -247,7 +248,7 @@ Outcome evaluate(const Identity& ref, const Identity& def, const Matching& m, co
 }
 
 std::vector<Eigen::Quaterniond> read_orientations(const fs::path& truth) {
-  const auto q = io::H5File::open(truth).read<double>("/grains/orientation");
+  const auto q = io::H5File::open(truth).read<double>(schema::ground_truth::grain_orientation);
   std::vector<Eigen::Quaterniond> out;
   for (std::size_t i = 0; i + 3 < q.size(); i += 4) out.emplace_back(q[i], q[i + 1], q[i + 2], q[i + 3]);
   return out;

@@ -14,6 +14,7 @@
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/shapes_file.hpp"
 #include "support/cli_contract.hpp"
 #include "support/phantoms.hpp"

@@ -108,17 +108,14 @@ SeriesParams series_params(const Options& o) {
            o.psd_sigma};
   p.psd.validate();
   p.voxel_size = parse_length_m(o.voxel_size, "--voxel-size");
-  if (o.container == "cylinder") {
-    p.container.kind = Container::Kind::cylinder;
+  p.container.kind = parse_container_kind(o.container);
+  if (p.container.kind == Container::Kind::cylinder) {
     p.container.radius = 0.5 * parse_length_m(o.diameter, "--diameter");
     p.container.height = parse_length_m(o.height, "--height");
-  } else if (o.container == "box") {
-    p.container.kind = Container::Kind::box;
+  } else {
     const auto parts = split(o.box, ',');
     if (parts.size() != 3) throw UsageError("--box needs three lengths X,Y,Z, e.g. 4mm,4mm,6mm");
     for (int a = 0; a < 3; ++a) p.container.box_size[a] = cli::parse_length_in(parts[a], "--box", 10e-6, 1.0);
-  } else {
-    throw UsageError("--container '" + o.container + "' is not cylinder or box");
   }
   p.solid_fraction = o.solid_fraction;
   p.packing.contact_tolerance = o.contact_tolerance;

@@ -5,11 +5,13 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <optional>
 #include <set>
 
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/fdem/model_file.hpp"
@@ -56,13 +58,27 @@ constexpr const char* kDescription =
     "--aspect) at --solid-fraction, by ctsynth's packer; the PSD is the library's (exactly, or in expectation) and "
     "the solid fraction holds by construction of the cylinder.";
 
-/// The command line: the files, the meshing options and the equivalent packing's.
+/// --curving: whether 10-node grains on the gmsh path are snapped onto the SH surface
+/// (GrainMeshOptions::snap_to_sh) or curved by gmsh.
+constexpr std::array<EnumName<bool>, 2> kCurvingNames{{{true, "snap"}, {false, "gmsh"}}};
+/// --packing: the scan's grains where they are (the twin), or a statistically equivalent sample.
+enum class Packing { scan, equivalent };
+constexpr std::array<EnumName<Packing>, 2> kPackingNames{{{Packing::scan, "scan"}, {Packing::equivalent, "equivalent"}}};
+/// --sample-cylinder: ct2labels' cylinder or the one around the grains, or the scan's inscribed one.
+enum class SampleChoice { automatic, inscribed };
+constexpr std::array<EnumName<SampleChoice>, 2> kSampleChoiceNames{
+    {{SampleChoice::automatic, "auto"}, {SampleChoice::inscribed, "inscribed"}}};
+
+/// The command line: the files, the meshing options and the equivalent packing's; the names of the
+/// choices as given (the run's parameters record them) and as parsed.
 struct Options {
   fs::path shapes, labels, model, vtu, msh, tracks;
   mesh::GrainMeshOptions mesh;
   int subdivisions = 4;
   double rigid_below_d50 = 0.3, platen_friction = 0.0, size_cap_d50 = 2.0;
   std::string membrane_thickness = "0.3mm", curving = "snap", packing = "scan", sh_meshing = "kept", sample_choice = "auto";
+  Packing packing_choice = Packing::scan;
+  SampleChoice sample_cylinder = SampleChoice::automatic;
   mesh::EquivalentPackingOptions equivalent;
 };
 
@@ -106,7 +122,7 @@ void add_options(cli::Tool& tool, Options& o) {
                  "Grains with a usable SH surface: kept (the surface remeshed to the element size and kept as the mesh "
                  "boundary, gmsh fills it; fast on rough grains) or gmsh (gmsh reparametrises and remeshes the surface, "
                  "within --grain-budget)")
-      ->check(CLI::IsMember({"kept", "gmsh"}))->capture_default_str();
+      ->check(CLI::IsMember(enum_names(mesh::kShMeshingNames)))->capture_default_str();
   app.add_option("--grain-budget", o.mesh.budget_seconds,
                  "Seconds gmsh may spend on one grain (0: no limit); on overrun its gmsh worker is stopped and the grain "
                  "falls back (gmsh remeshing to the kept surface, which then gets at least 10 s; the kept surface to the "
@@ -117,7 +133,7 @@ void add_options(cli::Tool& tool, Options& o) {
                  "nodes moved onto the exact SH surface, inverted "
                  "elements pulled back) or gmsh (gmsh curves onto the triangulated surface, optimize(HighOrder) when "
                  "an element is inverted; slower)")
-      ->check(CLI::IsMember({"snap", "gmsh"}))->capture_default_str();
+      ->check(CLI::IsMember(enum_names(kCurvingNames)))->capture_default_str();
   app.add_option("--membrane-thickness", o.membrane_thickness, "Latex membrane thickness")
       ->check(cli::length_in(1e-6, 0.01))->capture_default_str();
   app.add_option("--platen-friction", o.platen_friction, "Coulomb friction of the platens (smooth: 0)")
@@ -126,13 +142,13 @@ void add_options(cli::Tool& tool, Options& o) {
                  "The twin's sample: auto (ct2labels' cylinder from LABELS when it is bounded, else the cylinder around "
                  "the meshed grains) or inscribed (for a crop from inside a sample: the largest vertical cylinder inside "
                  "the scan's box, with only the grains it holds whole, a voxel to spare; needs LABELS)")
-      ->check(CLI::IsMember({"auto", "inscribed"}))->capture_default_str();
+      ->check(CLI::IsMember(enum_names(kSampleChoiceNames)))->capture_default_str();
   app.add_option("--tracked-only", o.tracks, "Keep only grains tracked from the first scan to the last in this kind=tracks file")
       ->check(CLI::ExistingFile);
   app.add_option("--packing", o.packing,
                  "scan: every grain at its CT position (the twin); equivalent: a statistically equivalent sample packed "
                  "from the grains of SHAPES")
-      ->check(CLI::IsMember({"scan", "equivalent"}))->capture_default_str();
+      ->check(CLI::IsMember(enum_names(kPackingNames)))->capture_default_str();
   app.add_option("--grains", o.equivalent.grains,
                  "--packing equivalent: grains drawn from the library with replacement (0: every library grain once)")
       ->check(whole_number_in(0, 50000))->capture_default_str();
@@ -157,9 +173,11 @@ double check_options(Options& o) {
   if (!o.vtu.empty() && o.vtu.extension() != ".vtu") throw UsageError("--vtu " + o.vtu.string() + " must end in .vtu");
   if (!o.msh.empty() && o.msh.extension() != ".msh") throw UsageError("--msh " + o.msh.string() + " must end in .msh");
   const double thickness = parse_length_m(o.membrane_thickness, "--membrane-thickness");
-  o.mesh.snap_to_sh = o.curving == "snap";
-  o.mesh.sh_path = o.sh_meshing == "gmsh" ? mesh::MeshPath::gmsh_surface : mesh::MeshPath::kept_surface;
-  if (o.packing == "equivalent" && o.equivalent.solid_fraction == 0.0 && o.labels.empty())
+  o.mesh.snap_to_sh = parse_enum(kCurvingNames, o.curving, "--curving");
+  o.mesh.sh_path = parse_enum(mesh::kShMeshingNames, o.sh_meshing, "--sh-meshing");
+  o.packing_choice = parse_enum(kPackingNames, o.packing, "--packing");
+  o.sample_cylinder = parse_enum(kSampleChoiceNames, o.sample_choice, "--sample-cylinder");
+  if (o.packing_choice == Packing::equivalent && o.equivalent.solid_fraction == 0.0 && o.labels.empty())
     throw UsageError("--packing equivalent needs --solid-fraction, or LABELS whose sample cylinder gives the scan's");
   return thickness;
 }
@@ -169,9 +187,9 @@ double check_options(Options& o) {
 std::size_t open_inputs(cli::RunContext& ctx, const Options& o) {
   const io::H5File sf = io::open_kind(o.shapes, schema::kind::shapes, "pass the output of labels2shapes");
   ctx.add_input_history(sf);
-  const auto dims = sf.info("/grains/label").dims;
+  const auto dims = sf.info(schema::shapes::grain_label).dims;
   std::size_t meshes = dims.empty() ? 0 : dims[0];
-  if (o.packing == "equivalent") meshes = std::max<std::size_t>(meshes, o.equivalent.grains);
+  if (o.packing_choice == Packing::equivalent) meshes = std::max<std::size_t>(meshes, o.equivalent.grains);
   if (!o.labels.empty()) ctx.add_input_history(io::open_kind(o.labels, schema::kind::labels, "pass the output of ct2labels"));
   if (!o.tracks.empty()) io::open_kind(o.tracks, schema::kind::tracks, "pass the output of shapes2tracks");
   return meshes;
@@ -206,7 +224,7 @@ std::vector<const shape::GrainShape*> selected_grains(const shape::ShapesFile& s
                                                       const Options& o, double thickness,
                                                       std::optional<fdem::SampleCylinder>& inscribed) {
   std::vector<const shape::GrainShape*> grains;
-  if (o.sample_choice == "inscribed") {
+  if (o.sample_cylinder == SampleChoice::inscribed) {
     mesh::InscribedGrains in = mesh::inscribed_grains(shapes.grains, labels->labels, thickness);
     inscribed = in.cylinder;
     grains = std::move(in.grains);
@@ -312,7 +330,7 @@ int main(int argc, char** argv) {
 
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     const double thickness = check_options(o);
-    const bool equivalent = o.packing == "equivalent";
+    const bool equivalent = o.packing_choice == Packing::equivalent;
     io::AtomicOutput out(o.model, ctx.force());
     std::optional<io::AtomicOutput> vtu_out, msh_out;
     if (!o.vtu.empty()) vtu_out.emplace(o.vtu, ctx.force());
@@ -326,7 +344,7 @@ int main(int argc, char** argv) {
     std::optional<segment::LabelsFile> labels;
     std::optional<mesh::ScanLabels> scan;
     if (!o.labels.empty()) scan = scan_labels(labels.emplace(segment::read_labels_file(o.labels)), shapes, o);
-    if (o.sample_choice == "inscribed" && (!labels || equivalent))
+    if (o.sample_cylinder == SampleChoice::inscribed && (!labels || equivalent))
       throw UsageError("--sample-cylinder inscribed needs LABELS and the scan's packing; pass the labels file, or leave it at auto");
     std::optional<fdem::SampleCylinder> inscribed;
     const std::vector<const shape::GrainShape*> grains = selected_grains(shapes, labels ? &*labels : nullptr, o, thickness, inscribed);

@@ -97,8 +97,8 @@ int main(int argc, char** argv) {
     if (kind.empty())
       throw UsageError(input.string() + " is an HDF5 file without a GrainTwin 'kind' attribute; import images with volconvert");
     info["kind"] = kind;
-    info["schema_version"] = f.attr_int("/", schema::attr::schema_version).value_or(0);
-    info["creator"] = f.attr_string("/", schema::attr::creator).value_or("");
+    info["schema_version"] = f.attr_int(schema::path::root, schema::attr::schema_version).value_or(0);
+    info["creator"] = f.attr_string(schema::path::root, schema::attr::creator).value_or("");
     info["datasets"] = json::array();
     list_datasets(f, "/", info["datasets"]);
     info["images"] = json::array();

@@ -28,6 +28,11 @@ TEST(EnumNames, AnUnknownNameIsAUsageErrorListingTheKnownOnes) {
   EXPECT_THROW(parse_enum(kColours, "Red", "--colour"), UsageError);  // names are exact
 }
 
+TEST(EnumNames, AnOptionListsTheNamesItsParsingTakes) {
+  EXPECT_EQ(enum_names(kColours), (std::vector<std::string>{"red", "green", "blue"}));
+  for (const std::string& name : enum_names(kColours)) EXPECT_STREQ(enum_name(kColours, parse_enum(kColours, name, "colour")), name.c_str());
+}
+
 TEST(EnumNames, FindEnumIsExactAndMayFindNothing) {
   EXPECT_EQ(find_enum(kColours, "green"), Colour::green);
   EXPECT_FALSE(find_enum(kColours, "Green").has_value());

@@ -7,12 +7,14 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <set>
 
 #include <omp.h>
 #include <signal.h>
 #include <sys/wait.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/mesh/equivalent_packing.hpp"
 #include "graintwin/mesh/gmsh_adapter.hpp"
@@ -251,6 +253,25 @@ TEST(Sizing, LargeGrainsAreCappedAtTheSizeOfGrainsOfTheD50) {
   EXPECT_DOUBLE_EQ(mesh::expected_elements_per_grain(2, t), mesh::expected_elements_per_grain(2, mesh::SizeTargets{.max_per_diameter = 2.0}));
 }
 
+// The names the logs and notes print: one table per enum, every value named once.
+TEST(GrainMesher, EveryRuleOriginAndPathHasItsOwnName) {
+  std::set<std::string> names;
+  for (auto r : {mesh::SizeRule::contact, mesh::SizeRule::accuracy, mesh::SizeRule::coarsest, mesh::SizeRule::finest,
+                 mesh::SizeRule::given, mesh::SizeRule::neighbours})
+    EXPECT_TRUE(names.insert(mesh::size_rule_name(r)).second) << mesh::size_rule_name(r);
+  EXPECT_EQ(names.count("?"), 0u);
+  names.clear();
+  for (auto o : {mesh::SurfaceOrigin::sh, mesh::SurfaceOrigin::voxels, mesh::SurfaceOrigin::ellipsoid})
+    EXPECT_TRUE(names.insert(mesh::surface_origin_name(o)).second) << mesh::surface_origin_name(o);
+  EXPECT_EQ(names.count("?"), 0u);
+  EXPECT_STREQ(mesh::mesh_path_name(mesh::MeshPath::gmsh_surface), "gmsh surface");
+  EXPECT_STREQ(mesh::mesh_path_name(mesh::MeshPath::kept_surface), "kept surface");
+  EXPECT_STREQ(mesh::mesh_path_name(mesh::MeshPath::ellipsoid), "ellipsoid");
+  EXPECT_EQ(parse_enum(mesh::kShMeshingNames, "gmsh", "--sh-meshing"), mesh::MeshPath::gmsh_surface);
+  EXPECT_EQ(parse_enum(mesh::kShMeshingNames, "kept", "--sh-meshing"), mesh::MeshPath::kept_surface);
+  EXPECT_THROW(parse_enum(mesh::kShMeshingNames, "ellipsoid", "--sh-meshing"), UsageError);
+}
+
 TEST(GrainMesher, SphereGrainMeetsTheContactTargetAndItsVolume) {
   const mesh::ShSurfaceBasis basis(4, 4);
   const double r0 = 0.3e-3, exact = 4.0 / 3.0 * M_PI * r0 * r0 * r0;
@@ -319,7 +340,7 @@ TEST(GrainMesher, Bumpy4NodeGrainMeetsTheVolumeTarget) {
   g.coeffs[6] = 0.2 * r0, g.coeffs[15] = 0.15 * r0, g.coeffs[22] = -0.12 * r0;
   g.coeffs[33] = 0.15 * r0, g.coeffs[44] = 0.12 * r0, g.coeffs[57] = 0.09 * r0, g.coeffs[74] = 0.075 * r0;
   const double exact = shape::sh_moments(g.coeffs, degree).volume;
-  g.equivalent_diameter = std::cbrt(6.0 * exact / M_PI);
+  g.equivalent_diameter = equivalent_diameter(exact);
   const mesh::ShSurfaceBasis basis(4, degree);
   mesh::GrainMeshOptions o;
   o.order = 1;
@@ -454,8 +475,8 @@ struct UGrain {
     grain.centroid = sum / double(voxels);
     grain.flags = shape::shape_flag::not_star_shaped | shape::shape_flag::unreliable_fit;
     grain.coeffs = Eigen::VectorXd::Zero(25);
-    grain.coeffs[0] = std::cbrt(3.0 * volume / (4.0 * M_PI)) * std::sqrt(4.0 * M_PI);
-    grain.equivalent_diameter = std::cbrt(6.0 * volume / M_PI);
+    grain.coeffs[0] = equivalent_radius(volume) * std::sqrt(4.0 * M_PI);
+    grain.equivalent_diameter = equivalent_diameter(volume);
     grain.surface_area = 2.0 * (8 * 16 + 8 * 16 + 16 * 16) * h * h + 2.0 * 10 * 6 * h * h;
     grain.semi_axes = Vector3d(4, 8, 8) * h;
   }

@@ -129,6 +129,17 @@ void pair_check(const GrainSet& g, const std::vector<PackedGrain>& p, double tol
 // ---------------------------------------------------------------------------------------------
 // Pair geometry
 
+TEST(Container, KindsAreNamedAndParsedByOneTable) {
+  for (auto kind : {synth::Container::Kind::cylinder, synth::Container::Kind::box})
+    EXPECT_EQ(synth::parse_container_kind(synth::container_kind_name(kind)), kind);
+  try {
+    synth::parse_container_kind("sphere");
+    FAIL() << "sphere parsed";
+  } catch (const UsageError& e) {
+    EXPECT_EQ(e.message(), "--container 'sphere' is not cylinder or box");
+  }
+}
+
 TEST(PairContact, TwoSpheresGiveTheExactOverlapNormalAndPoint) {
   const double ra = 0.3e-3, rb = 0.2e-3;
   const RadialTable a = sphere(ra), b = sphere(rb);

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/shape/sand_shape.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/synth/angular_grains.hpp"
@@ -38,9 +39,7 @@ AngularGrain cube(double edge) {
   return g;
 }
 
-double volume_equivalent_radius(const shape::RadialTable& t) {
-  return std::cbrt(3.0 * t.volume() / (4.0 * std::numbers::pi));
-}
+double volume_equivalent_radius(const shape::RadialTable& t) { return equivalent_radius(t.volume()); }
 
 }  // namespace
 

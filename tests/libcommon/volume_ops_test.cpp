@@ -105,6 +105,12 @@ TEST(Strings, LengthsWithUnits) {
   EXPECT_THROW(parse_length_m("-1um", "x"), UsageError);
   EXPECT_THROW(parse_length_m("3 furlongs", "x"), UsageError);
   EXPECT_THROW(parse_length_m("nan", "x"), UsageError);
+  // The options and ImageJ's TIFF headers read one unit table.
+  EXPECT_DOUBLE_EQ(parse_length_m("3 micron", "x"), 3e-6);
+  EXPECT_DOUBLE_EQ(parse_length_m("2cm", "x"), 2e-2);
+  EXPECT_EQ(length_unit_m("\\u00b5m"), 1e-6);
+  EXPECT_EQ(length_unit_m("nm"), 1e-9);
+  EXPECT_FALSE(length_unit_m("furlongs"));
 }
 
 TEST(Strings, ShellQuoting) {

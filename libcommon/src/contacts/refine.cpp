@@ -14,6 +14,7 @@
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/core/volume_ops.hpp"
 
@@ -337,7 +338,7 @@ std::vector<Refinement> refine_contacts(const Volume<T>& grey, const Volume<std:
                                      [](const segment::GrainRecord& g, std::uint32_t l) { return g.label < l; });
     if (it == grains.end() || it->label != label)
       throw DataError("label " + std::to_string(label) + " has a contact but no row in the grain table");
-    return std::cbrt(3.0 * it->volume_m3 / (4.0 * std::numbers::pi));
+    return equivalent_radius(it->volume_m3);
   };
   std::vector<std::array<double, 2>> radii(contacts.size());
   for (std::size_t k = 0; k < contacts.size(); ++k) radii[k] = {radius_of(contacts[k].low), radius_of(contacts[k].high)};

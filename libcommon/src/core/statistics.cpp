@@ -5,6 +5,8 @@
 #include <numbers>
 #include <numeric>
 
+#include "graintwin/core/geometry.hpp"
+
 namespace graintwin {
 
 double d50_of_curve(const std::vector<double>& diameter, const std::vector<double>& percent_passing) {
@@ -25,7 +27,7 @@ double d50_of_volumes(std::vector<double> volumes) {
   double passing = 0.0;
   for (double v : volumes) {
     passing += v;
-    diameter.push_back(std::cbrt(6.0 * v / std::numbers::pi));
+    diameter.push_back(equivalent_diameter(v));
     percent.push_back(100.0 * passing / total);
   }
   return d50_of_curve(diameter, percent);

@@ -72,6 +72,19 @@ bool natural_less(const std::string& a, const std::string& b) {
   return a.size() - i < b.size() - j;
 }
 
+std::optional<double> length_unit_m(const std::string& unit) {
+  struct LengthUnit {
+    const char* name;
+    double metres;
+  };
+  static constexpr LengthUnit kLengthUnits[] = {{"m", 1.0},     {"meter", 1.0},     {"cm", 1e-2},
+                                                {"mm", 1e-3},   {"um", 1e-6},       {"micron", 1e-6},
+                                                {"µm", 1e-6},   {"\\u00b5m", 1e-6}, {"nm", 1e-9}};
+  for (const LengthUnit& u : kLengthUnits)
+    if (unit == u.name) return u.metres;
+  return std::nullopt;
+}
+
 double parse_signed_length_m(const std::string& text, const std::string& what) {
   const std::string t = lower(trim(text));
   std::size_t used = 0;
@@ -84,14 +97,9 @@ double parse_signed_length_m(const std::string& text, const std::string& what) {
     throw UsageError(what + " '" + text + "' is not a number; give a length such as 27.5um or 2.75e-5");
   }
   const std::string unit = trim(t.substr(used));
-  double scale = 1.0;
-  if (unit.empty() || unit == "m") scale = 1.0;
-  else if (unit == "mm") scale = 1e-3;
-  else if (unit == "um" || unit == "µm" || unit == "micron") scale = 1e-6;
-  else if (unit == "nm") scale = 1e-9;
-  else
-    throw UsageError(what + " '" + text + "' has unknown unit '" + unit + "'; use m, mm, um or nm");
-  const double m = value * scale;
+  const std::optional<double> scale = unit.empty() ? 1.0 : length_unit_m(unit);
+  if (!scale) throw UsageError(what + " '" + text + "' has unknown unit '" + unit + "'; use m, mm, um or nm");
+  const double m = value * *scale;
   if (!std::isfinite(m)) throw UsageError(what + " '" + text + "' must be a finite length");
   return m;
 }

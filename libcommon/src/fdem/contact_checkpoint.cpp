@@ -5,24 +5,26 @@
 #include "contact_state.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 
 namespace graintwin::fdem {
+namespace ck = schema::fdem_checkpoint;
 
 void ContactModel::save(io::H5File& file, const std::string& group) const {
   const State& s = *state_;
   file.ensure_group(group);
-  file.set_attr(group, "entries", static_cast<long long>(s.history.size()));
-  file.set_attr(group, "ball_entries", static_cast<long long>(s.ball_history.size()));
-  file.set_attr(group, "record_entries", static_cast<long long>(s.records.size()));
-  file.set_attr(group, "deep_pair_entries", static_cast<long long>(s.deep_pairs.size()));
+  file.set_attr(group, ck::history_entries, static_cast<long long>(s.history.size()));
+  file.set_attr(group, ck::ball_entries, static_cast<long long>(s.ball_history.size()));
+  file.set_attr(group, ck::record_entries, static_cast<long long>(s.records.size()));
+  file.set_attr(group, ck::deep_pair_entries, static_cast<long long>(s.deep_pairs.size()));
   if (!s.deep_pairs.empty()) {  // the pairs whose kept initial overlaps the search reaches
     std::vector<std::uint32_t> pair(2 * s.deep_pairs.size());
     std::vector<double> depth(s.deep_pairs.size());
     for (std::size_t i = 0; i < s.deep_pairs.size(); ++i)
       pair[2 * i] = s.deep_pairs[i].a, pair[2 * i + 1] = s.deep_pairs[i].b, depth[i] = s.deep_pairs[i].depth;
     const hsize_t n = s.deep_pairs.size();
-    file.write(group + "/deep_pair", pair.data(), {n, 2});
-    file.write(group + "/deep_pair_depth", depth.data(), {n}, io::units("m"));
+    file.write(group + "/" + ck::deep_pair, pair.data(), {n, 2});
+    file.write(group + "/" + ck::deep_pair_depth, depth.data(), {n}, io::units("m"));
   }
   if (!s.records.empty()) {  // the last step's contacts, for a frame written before the next step
     std::vector<std::uint32_t> pair(2 * s.records.size());
@@ -38,8 +40,8 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
     const hsize_t n = s.records.size();
     io::DatasetOptions exact;
     exact.compress = false;
-    file.write(group + "/record_pair", pair.data(), {n, 2});
-    file.write(group + "/record_values", values.data(), {n, 10}, exact);
+    file.write(group + "/" + ck::record_pair, pair.data(), {n, 2});
+    file.write(group + "/" + ck::record_values, values.data(), {n, 10}, exact);
   }
   if (!s.history.empty()) {
     std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
@@ -53,10 +55,10 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
       offset[i] = h.offset;
     }
     const hsize_t n = s.history.size();
-    file.write(group + "/pair", pair.data(), {n, 2});
-    file.write(group + "/node", node.data(), {n});
-    file.write(group + "/spring", spring.data(), {n, 3}, io::units("N"));
-    file.write(group + "/offset", offset.data(), {n}, io::units("m"));
+    file.write(group + "/" + ck::history_pair, pair.data(), {n, 2});
+    file.write(group + "/" + ck::history_node, node.data(), {n});
+    file.write(group + "/" + ck::history_spring, spring.data(), {n, 3}, io::units("N"));
+    file.write(group + "/" + ck::history_offset, offset.data(), {n}, io::units("m"));
   }
   if (!s.ball_history.empty()) {  // membrane balls' friction springs
     std::vector<std::uint32_t> ball_grain(2 * s.ball_history.size());
@@ -68,8 +70,8 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
       for (int k = 0; k < 3; ++k) spring[3 * i + k] = h.spring[k];
     }
     const hsize_t n = s.ball_history.size();
-    file.write(group + "/ball_grain", ball_grain.data(), {n, 2});
-    file.write(group + "/ball_spring", spring.data(), {n, 3}, io::units("N"));
+    file.write(group + "/" + ck::ball_grain, ball_grain.data(), {n, 2});
+    file.write(group + "/" + ck::ball_spring, spring.data(), {n, 3}, io::units("N"));
   }
 }
 
@@ -79,25 +81,25 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
     return DataError(fmt::format("{}: the contact history in {} {}; write the checkpoint with this model.",
                                  file.path().string(), group, why));
   };
-  const auto entries = file.attr_int(group, "entries");
+  const auto entries = file.attr_int(group, ck::history_entries);
   if (!entries || *entries < 0) throw bad("has no 'entries' count");
   // Each count is checked against its tables before it sizes anything: a damaged count must
   // not allocate (a record_entries of 2^32 asked for 377 GB).
   std::vector<HistoryEntry> history;
   if (*entries > 0) {
     std::vector<hsize_t> pair_dims, node_dims, spring_dims;
-    const auto pair = file.read<std::uint32_t>(group + "/pair", &pair_dims);
-    const auto node = file.read<std::uint32_t>(group + "/node", &node_dims);
-    const auto spring = file.read<double>(group + "/spring", &spring_dims);
+    const auto pair = file.read<std::uint32_t>(group + "/" + ck::history_pair, &pair_dims);
+    const auto node = file.read<std::uint32_t>(group + "/" + ck::history_node, &node_dims);
+    const auto spring = file.read<double>(group + "/" + ck::history_spring, &spring_dims);
     const auto n = static_cast<hsize_t>(*entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || node_dims != std::vector<hsize_t>{n} ||
         spring_dims != std::vector<hsize_t>{n, 3})
       throw bad(fmt::format("does not hold {} entries in pair (n x 2), node (n) and spring (n x 3)", n));
     // Checkpoints written before initial overlaps could be kept have no offsets: none were kept.
     std::vector<double> offset(n, 0.0);
-    if (file.exists(group + "/offset")) {
+    if (file.exists(group + "/" + ck::history_offset)) {
       std::vector<hsize_t> offset_dims;
-      offset = file.read<double>(group + "/offset", &offset_dims);
+      offset = file.read<double>(group + "/" + ck::history_offset, &offset_dims);
       if (offset_dims != std::vector<hsize_t>{n}) throw bad(fmt::format("does not hold {} entries in offset (n)", n));
     }
     history.resize(n);
@@ -111,13 +113,13 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
                             h.b, h.node, s.grains.size(), s.node_count));
     if (i > 0 && !key_less(history[i - 1], h.a, h.b, h.node)) throw bad("is not sorted by pair and node");
   }
-  const auto ball_entries = file.attr_int(group, "ball_entries").value_or(0);
+  const auto ball_entries = file.attr_int(group, ck::ball_entries).value_or(0);
   if (ball_entries < 0) throw bad("has a negative 'ball_entries' count");
   std::vector<BallHistoryEntry> ball_history;
   if (ball_entries > 0) {
     std::vector<hsize_t> pair_dims, spring_dims;
-    const auto ball_grain = file.read<std::uint32_t>(group + "/ball_grain", &pair_dims);
-    const auto spring = file.read<double>(group + "/ball_spring", &spring_dims);
+    const auto ball_grain = file.read<std::uint32_t>(group + "/" + ck::ball_grain, &pair_dims);
+    const auto spring = file.read<double>(group + "/" + ck::ball_spring, &spring_dims);
     const auto n = static_cast<hsize_t>(ball_entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || spring_dims != std::vector<hsize_t>{n, 3})
       throw bad(fmt::format("does not hold {} ball entries in ball_grain (n x 2) and ball_spring (n x 3)", n));
@@ -130,13 +132,13 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
         throw bad("is not sorted by ball and grain");
     }
   }
-  const auto record_entries = file.attr_int(group, "record_entries").value_or(0);
+  const auto record_entries = file.attr_int(group, ck::record_entries).value_or(0);
   if (record_entries < 0) throw bad("has a negative 'record_entries' count");
   std::vector<ContactRecord> records;
   if (record_entries > 0) {
     std::vector<hsize_t> pair_dims, value_dims;
-    const auto pair = file.read<std::uint32_t>(group + "/record_pair", &pair_dims);
-    const auto values = file.read<double>(group + "/record_values", &value_dims);
+    const auto pair = file.read<std::uint32_t>(group + "/" + ck::record_pair, &pair_dims);
+    const auto values = file.read<double>(group + "/" + ck::record_values, &value_dims);
     const auto n = static_cast<hsize_t>(record_entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || value_dims != std::vector<hsize_t>{n, 10})
       throw bad(fmt::format("does not hold {} contact records in record_pair (n x 2) and record_values (n x 10)", n));
@@ -147,13 +149,13 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
     }
   }
   // Checkpoints written before initial overlaps could be kept have none.
-  const auto deep_entries = file.attr_int(group, "deep_pair_entries").value_or(0);
+  const auto deep_entries = file.attr_int(group, ck::deep_pair_entries).value_or(0);
   if (deep_entries < 0) throw bad("has a negative 'deep_pair_entries' count");
   std::vector<DeepPair> deep_pairs;
   if (deep_entries > 0) {
     std::vector<hsize_t> pair_dims, depth_dims;
-    const auto pair = file.read<std::uint32_t>(group + "/deep_pair", &pair_dims);
-    const auto depth = file.read<double>(group + "/deep_pair_depth", &depth_dims);
+    const auto pair = file.read<std::uint32_t>(group + "/" + ck::deep_pair, &pair_dims);
+    const auto depth = file.read<double>(group + "/" + ck::deep_pair_depth, &depth_dims);
     const auto n = static_cast<hsize_t>(deep_entries);
     if (pair_dims != std::vector<hsize_t>{n, 2} || depth_dims != std::vector<hsize_t>{n})
       throw bad(fmt::format("does not hold {} deep pairs in deep_pair (n x 2) and deep_pair_depth (n)", n));

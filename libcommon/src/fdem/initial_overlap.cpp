@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/fdem/contact.hpp"
 
 namespace graintwin::fdem {
@@ -33,7 +34,7 @@ class OverlapJudge {
  public:
   OverlapJudge(const Solver& solver, double fraction) : model_(solver.model()), fraction_(fraction) {
     for (std::size_t g = 0; g < model_.grains.size(); ++g)
-      size_.push_back(std::cbrt(6 * solver.body(g).volume / std::numbers::pi));
+      size_.push_back(equivalent_diameter(solver.body(g).volume));
   }
 
   bool platen(const Overlap& o) const { return o.b >= model_.grains.size(); }

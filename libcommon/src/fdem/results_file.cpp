@@ -12,6 +12,7 @@
 #include "graintwin/io/volume_io.hpp"
 
 namespace graintwin::fdem {
+namespace ck = schema::fdem_checkpoint;
 namespace sr = schema::fdem_results;
 using io::units;
 
@@ -78,9 +79,9 @@ void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std:
 void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boundary, std::optional<double> axial_strain) {
   const std::string group = frame_group(frames_++);
   file_.ensure_group(group);
-  file_.set_attr(group, "time", solver.time());
-  file_.set_attr(group, "step", static_cast<long long>(solver.step_count()));
-  if (axial_strain) file_.set_attr(group, "axial_strain", *axial_strain);
+  file_.set_attr(group, sr::frame_time, solver.time());
+  file_.set_attr(group, sr::frame_step, static_cast<long long>(solver.step_count()));
+  if (axial_strain) file_.set_attr(group, sr::frame_axial_strain, *axial_strain);
   if (boundary && boundary->membrane_state()) {
     std::vector<double> position;
     for (const Eigen::Vector3d& x : boundary->membrane_state()->x) push(position, x);
@@ -236,8 +237,8 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   if (!f.exists(g)) throw DataError(path.string() + " has no frame " + std::to_string(k) + "; it holds " +
                                     std::to_string(f.list(sr::frames).size()));
   ResultsFrame r;
-  r.time = f.attr_double(g, "time");
-  r.step = static_cast<std::uint64_t>(f.attr_int(g, "step").value_or(0));
+  r.time = f.attr_double(g, sr::frame_time);
+  r.step = static_cast<std::uint64_t>(f.attr_int(g, sr::frame_step).value_or(0));
   const auto at = [&](const char* member) { return g + "/" + member; };
   r.centroid = f.read<double>(at(sr::frame_centroid));
   r.rotation = f.read<double>(at(sr::frame_rotation));
@@ -249,7 +250,7 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   r.normal = f.read<double>(at(sr::contact_normal));
   r.force = f.read<double>(at(sr::contact_force));
   r.overlap = f.read<double>(at(sr::contact_overlap));
-  if (f.has_attr(g, "axial_strain")) r.axial_strain = f.attr_double(g, "axial_strain");
+  if (f.has_attr(g, sr::frame_axial_strain)) r.axial_strain = f.attr_double(g, sr::frame_axial_strain);
   if (f.exists(at(sr::frame_membrane_position))) r.membrane_position = f.read<double>(at(sr::frame_membrane_position));
   // fdemrun stops before a state goes non-finite (its health checks), so such a frame is damage.
   io::require_finite(f, at(sr::frame_centroid), r.centroid, 3, "rerun fdemrun");
@@ -261,17 +262,17 @@ void write_checkpoint(const std::filesystem::path& path, const Solver& solver, c
                       const std::function<void(io::H5File&)>& also) {
   io::H5File f = io::H5File::create(path);
   io::write_root_attrs(f, sr::checkpoint_kind);
-  f.set_attr("/", "scene_digest", scene_digest);
-  solver.save(f, "/state");
+  f.set_attr(schema::path::root, ck::scene_digest, scene_digest);
+  solver.save(f, ck::state);
   if (also) also(f);
 }
 
 void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest,
                      const std::function<void(const io::H5File&)>& also) {
   const io::H5File f = io::open_kind(path, sr::checkpoint_kind, "pass a checkpoint written by fdemrun --checkpoint");
-  if (f.attr_string("/", "scene_digest").value_or("") != scene_digest)
+  if (f.attr_string(schema::path::root, ck::scene_digest).value_or("") != scene_digest)
     throw UsageError("checkpoint " + path.string() + " was written for another scene or model; restart with the scene that wrote it");
-  solver.load(f, "/state");
+  solver.load(f, ck::state);
   if (also) also(f);
 }
 

@@ -12,8 +12,10 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 
 namespace graintwin::fdem {
+namespace ck = schema::fdem_checkpoint;
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
@@ -354,15 +356,15 @@ Eigen::Vector3d Solver::platen_force(std::size_t p) const { return platen_force_
 void Solver::save(io::H5File& f, const std::string& group) const {
   place_rigid_nodes();  // the file's node positions are the placed ones
   f.ensure_group(group);
-  f.set_attr(group, "step", static_cast<long long>(state_.step));
-  f.set_attr(group, "time", state_.time);
-  f.set_attr(group, "dissipated", state_.dissipated);
-  f.set_attr(group, "external_work", state_.external_work);
-  f.set_attr(group, "energy_input", state_.energy_input);
+  f.set_attr(group, ck::step, static_cast<long long>(state_.step));
+  f.set_attr(group, ck::time, state_.time);
+  f.set_attr(group, ck::dissipated, state_.dissipated);
+  f.set_attr(group, ck::external_work, state_.external_work);
+  f.set_attr(group, ck::energy_input, state_.energy_input);
   io::DatasetOptions exact;
   exact.compress = false;
-  write_vectors(f, group + "/x", state_.x);
-  write_vectors(f, group + "/v", state_.v);
+  write_vectors(f, group + "/" + ck::node_position, state_.x);
+  write_vectors(f, group + "/" + ck::node_velocity, state_.v);
   std::vector<double> bodies;
   for (const RigidBodyState& b : state_.bodies) {
     const auto& q = b.orientation.coeffs();  // x, y, z, w
@@ -370,23 +372,23 @@ void Solver::save(io::H5File& f, const std::string& group) const {
                                  b.velocity[1], b.velocity[2], b.angular_momentum[0], b.angular_momentum[1],
                                  b.angular_momentum[2]});
   }
-  f.write(group + "/bodies", bodies.data(), {state_.bodies.size(), 13}, exact);
+  f.write(group + "/" + ck::bodies, bodies.data(), {state_.bodies.size(), 13}, exact);
   std::vector<double> platens;
   for (const PlatenState& p : state_.platens)
     platens.insert(platens.end(), {p.point[0], p.point[1], p.point[2], p.normal[0], p.normal[1], p.normal[2], p.velocity[0],
                                    p.velocity[1], p.velocity[2], p.friction});
-  f.write(group + "/platens", platens.data(), {state_.platens.size(), 10}, exact);
+  f.write(group + "/" + ck::platens, platens.data(), {state_.platens.size(), 10}, exact);
   // A servo reads the last step's platen forces before the next step, and a frame written then
   // reads the rigid grains' loads (their Love-Weber stress).
-  write_vectors(f, group + "/platen_force", platen_force_);
+  write_vectors(f, group + "/" + ck::platen_force, platen_force_);
   std::vector<double> loads;
   for (const RigidLoad& l : rigid_loads_) {
     loads.insert(loads.end(), {l.force[0], l.force[1], l.force[2]});
     for (int r = 0; r < 3; ++r) loads.insert(loads.end(), {l.moment(r, 0), l.moment(r, 1), l.moment(r, 2)});
   }
-  f.write(group + "/rigid_loads", loads.data(), {rigid_loads_.size(), 12}, exact);
-  if (contact_) contact_->save(f, group + "/contact");
-  if (boundary_) boundary_->save(f, group + "/boundary");
+  f.write(group + "/" + ck::rigid_loads, loads.data(), {rigid_loads_.size(), 12}, exact);
+  if (contact_) contact_->save(f, group + "/" + ck::contact);
+  if (boundary_) boundary_->save(f, group + "/" + ck::boundary);
 }
 
 void Solver::load(const io::H5File& f, const std::string& group) {
@@ -398,43 +400,43 @@ void Solver::load(const io::H5File& f, const std::string& group) {
     return v;
   };
   SolverState s;
-  s.step = static_cast<std::uint64_t>(f.attr_int(group, "step").value_or(0));
-  s.time = f.attr_double(group, "time");
-  s.dissipated = f.attr_double(group, "dissipated");
-  s.external_work = f.attr_double(group, "external_work");
-  s.energy_input = f.attr_double(group, "energy_input");
-  s.x = read_vectors(f, group + "/x", state_.x.size());
-  s.v = read_vectors(f, group + "/v", state_.v.size());
-  const auto bodies = need("bodies", 13 * state_.bodies.size());
+  s.step = static_cast<std::uint64_t>(f.attr_int(group, ck::step).value_or(0));
+  s.time = f.attr_double(group, ck::time);
+  s.dissipated = f.attr_double(group, ck::dissipated);
+  s.external_work = f.attr_double(group, ck::external_work);
+  s.energy_input = f.attr_double(group, ck::energy_input);
+  s.x = read_vectors(f, group + "/" + ck::node_position, state_.x.size());
+  s.v = read_vectors(f, group + "/" + ck::node_velocity, state_.v.size());
+  const auto bodies = need(ck::bodies, 13 * state_.bodies.size());
   for (std::size_t g = 0; g < state_.bodies.size(); ++g) {
     const double* d = bodies.data() + 13 * g;
     s.bodies.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Quaterniond(d[3], d[4], d[5], d[6]),
                         Eigen::Vector3d(d[7], d[8], d[9]), Eigen::Vector3d(d[10], d[11], d[12])});
   }
-  const auto platens = need("platens", 10 * state_.platens.size());
+  const auto platens = need(ck::platens, 10 * state_.platens.size());
   for (std::size_t p = 0; p < state_.platens.size(); ++p) {
     const double* d = platens.data() + 10 * p;
     s.platens.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Vector3d(d[3], d[4], d[5]), Eigen::Vector3d(d[6], d[7], d[8]), d[9]});
   }
-  const bool has_boundary = f.exists(group + "/boundary");
+  const bool has_boundary = f.exists(group + "/" + ck::boundary);
   if (has_boundary != (boundary_ != nullptr))
     throw DataError(f.path().string() + ": checkpoint " + group + (has_boundary ? " holds a sample boundary (wall, membrane)"
                                                                                 : " holds no sample boundary") +
                     " and this run " + (boundary_ ? "has one" : "has none") + "; restart with the scene that wrote it");
-  const auto platen_force = f.exists(group + "/platen_force")
-                                ? read_vectors(f, group + "/platen_force", platen_force_.size())
+  const auto platen_force = f.exists(group + "/" + ck::platen_force)
+                                ? read_vectors(f, group + "/" + ck::platen_force, platen_force_.size())
                                 : std::vector<Eigen::Vector3d>(platen_force_.size(), Eigen::Vector3d::Zero());
   std::vector<RigidLoad> rigid_loads(rigid_loads_.size());
-  if (f.exists(group + "/rigid_loads")) {
-    const auto loads = need("rigid_loads", 12 * rigid_loads_.size());
+  if (f.exists(group + "/" + ck::rigid_loads)) {
+    const auto loads = need(ck::rigid_loads, 12 * rigid_loads_.size());
     for (std::size_t g = 0; g < rigid_loads.size(); ++g) {
       const double* d = loads.data() + 12 * g;
       rigid_loads[g].force = Eigen::Vector3d(d[0], d[1], d[2]);
       rigid_loads[g].moment = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d + 3);
     }
   }
-  if (contact_) contact_->load(f, group + "/contact");
-  if (boundary_) boundary_->load(f, group + "/boundary");
+  if (contact_) contact_->load(f, group + "/" + ck::contact);
+  if (boundary_) boundary_->load(f, group + "/" + ck::boundary);
   state_ = std::move(s);
   platen_force_ = platen_force;
   rigid_loads_ = std::move(rigid_loads);

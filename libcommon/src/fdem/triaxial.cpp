@@ -10,8 +10,10 @@
 #include "graintwin/core/statistics.hpp"
 #include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 
 namespace graintwin::fdem {
+namespace ck = schema::fdem_checkpoint;
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -172,21 +174,21 @@ double TriaxialBoundary::stable_time_step(const ContactModel& contact) const {
 
 void TriaxialBoundary::save(io::H5File& file, const std::string& group) const {
   file.ensure_group(group);
-  file.set_attr(group, "wall", std::vector<double>{wall_.radius, wall_.radial_velocity, wall_force_});
-  file.set_attr(group, "platens", std::vector<double>{z_bottom_, z_top_, v_bottom_, v_top_});
-  file.set_attr(group, "pressure", pressure_);
-  file.set_attr(group, "ball_radius", ball_radius_);
+  file.set_attr(group, ck::wall, std::vector<double>{wall_.radius, wall_.radial_velocity, wall_force_});
+  file.set_attr(group, ck::boundary_platens, std::vector<double>{z_bottom_, z_top_, v_bottom_, v_top_});
+  file.set_attr(group, ck::pressure, pressure_);
+  file.set_attr(group, ck::ball_radius, ball_radius_);
   if (!membrane_) return;
-  file.set_attr(group, "membrane_frame", std::vector<double>{membrane_frame_[0], membrane_frame_[1], membrane_frame_[2],
+  file.set_attr(group, ck::membrane_frame, std::vector<double>{membrane_frame_[0], membrane_frame_[1], membrane_frame_[2],
                                                              density_scaling_, membrane_started_ ? 1.0 : 0.0});
-  write_vectors(file, group + "/ball_x", membrane_state_.x);
-  write_vectors(file, group + "/ball_v", membrane_state_.v);
-  write_vectors(file, group + "/ball_spin", membrane_state_.spin);
-  write_vectors(file, group + "/bond_shear", membrane_state_.shear);
+  write_vectors(file, group + "/" + ck::ball_position, membrane_state_.x);
+  write_vectors(file, group + "/" + ck::ball_velocity, membrane_state_.v);
+  write_vectors(file, group + "/" + ck::ball_spin, membrane_state_.spin);
+  write_vectors(file, group + "/" + ck::bond_shear, membrane_state_.shear);
   std::vector<std::uint8_t> motion(motion_.size());
   for (std::size_t b = 0; b < motion_.size(); ++b) motion[b] = static_cast<std::uint8_t>(motion_[b]);
-  file.write(group + "/ball_motion", motion);
-  file.write(group + "/ball_clamp_group", clamp_group_);
+  file.write(group + "/" + ck::ball_motion, motion);
+  file.write(group + "/" + ck::ball_clamp_group, clamp_group_);
 }
 
 void TriaxialBoundary::load(const io::H5File& file, const std::string& group) {
@@ -197,28 +199,28 @@ void TriaxialBoundary::load(const io::H5File& file, const std::string& group) {
                       "' of the sample boundary; restart with the scene that wrote it");
     return v;
   };
-  if (values("ball_radius", 1)[0] != ball_radius_)
+  if (values(ck::ball_radius, 1)[0] != ball_radius_)
     throw DataError(file.path().string() + ": checkpoint " + group + " was written with another membrane ball radius; " +
                     "restart with the scene that wrote it");
-  const auto wall = values("wall", 3), platens = values("platens", 4);
+  const auto wall = values(ck::wall, 3), platens = values(ck::boundary_platens, 4);
   wall_.radius = wall[0];
   wall_.radial_velocity = wall[1];
   wall_force_ = wall[2];
   set_platens(platens[0], platens[1], platens[2], platens[3]);
-  pressure_ = values("pressure", 1)[0];
+  pressure_ = values(ck::pressure, 1)[0];
   membrane_.reset();
   last_contact_ = {};
-  if (!file.has_attr(group, "membrane_frame")) return;
-  const auto frame = values("membrane_frame", 5);
+  if (!file.has_attr(group, ck::membrane_frame)) return;
+  const auto frame = values(ck::membrane_frame, 5);
   build_membrane_lattice(frame[0], frame[1], frame[2], frame[3]);
   membrane_started_ = frame[4] != 0;
   const std::size_t balls = membrane_->balls();
-  membrane_state_.x = read_vectors(file, group + "/ball_x", balls);
-  membrane_state_.v = read_vectors(file, group + "/ball_v", balls);
-  membrane_state_.spin = read_vectors(file, group + "/ball_spin", balls);
-  membrane_state_.shear = read_vectors(file, group + "/bond_shear", membrane_->bonds.size());
-  const auto motion = file.read<std::uint8_t>(group + "/ball_motion");
-  clamp_group_ = file.read<std::uint8_t>(group + "/ball_clamp_group");
+  membrane_state_.x = read_vectors(file, group + "/" + ck::ball_position, balls);
+  membrane_state_.v = read_vectors(file, group + "/" + ck::ball_velocity, balls);
+  membrane_state_.spin = read_vectors(file, group + "/" + ck::ball_spin, balls);
+  membrane_state_.shear = read_vectors(file, group + "/" + ck::bond_shear, membrane_->bonds.size());
+  const auto motion = file.read<std::uint8_t>(group + "/" + ck::ball_motion);
+  clamp_group_ = file.read<std::uint8_t>(group + "/" + ck::ball_clamp_group);
   if (motion.size() != balls || clamp_group_.size() != balls)
     throw DataError(file.path().string() + ": checkpoint " + group + " does not hold the clamps of " + std::to_string(balls) +
                     " membrane balls; restart with the scene that wrote it");

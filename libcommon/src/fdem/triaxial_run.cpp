@@ -7,11 +7,12 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 
 namespace graintwin::fdem {
+namespace ck = schema::fdem_checkpoint;
 namespace {
 
-constexpr const char* kProgressGroup = "/triaxial";
 
 std::vector<double> measure_values(const TriaxialMeasure& m) {
   return {m.axial_stress, m.lateral_stress, m.height, m.volume, m.volume_radial};
@@ -66,31 +67,31 @@ void check_step_ceiling(const StepEstimate& estimate, double max_steps, const Sc
 }
 
 void save_progress(io::H5File& file, const TriaxialRunProgress& p) {
-  file.ensure_group(kProgressGroup);
+  file.ensure_group(ck::triaxial);
   const TriaxialProgress& q = p.procedure;
   // Counters as doubles: exact below 2^53 steps.
-  file.set_attr(kProgressGroup, "procedure",
+  file.set_attr(ck::triaxial, ck::procedure,
                 std::vector<double>{static_cast<double>(q.phase), static_cast<double>(q.step), static_cast<double>(q.settled),
                                     static_cast<double>(q.released), q.h0});
-  file.set_attr(kProgressGroup, "run",
+  file.set_attr(ck::triaxial, ck::run,
                 std::vector<double>{static_cast<double>(p.consolidation_steps), static_cast<double>(p.membrane_steps),
                                     static_cast<double>(p.next_frame), p.max_kinetic_ratio});
-  file.set_attr(kProgressGroup, "start", measure_values(p.start));
+  file.set_attr(ck::triaxial, ck::start, measure_values(p.start));
 }
 
 TriaxialRunProgress load_progress(const io::H5File& file) {
   const auto values = [&](const char* name, std::size_t count) {
-    std::vector<double> v = file.exists(kProgressGroup) ? file.attr_doubles(kProgressGroup, name) : std::vector<double>{};
+    std::vector<double> v = file.exists(ck::triaxial) ? file.attr_doubles(ck::triaxial, name) : std::vector<double>{};
     if (v.size() != count)
-      throw DataError(file.path().string() + " holds no triaxial test's progress (" + kProgressGroup + " " + name +
+      throw DataError(file.path().string() + " holds no triaxial test's progress (" + ck::triaxial + " " + name +
                       "); restart a triaxial scene from a checkpoint that fdemrun wrote for it");
     return v;
   };
-  const auto q = values("procedure", 5), r = values("run", 4), s = values("start", 5);
+  const auto q = values(ck::procedure, 5), r = values(ck::run, 4), s = values(ck::start, 5);
   const auto count = [](double v) { return v >= 0 && v < 9007199254740992.0 && v == std::floor(v); };  // below 2^53
   if (!(q[0] >= 0 && q[0] <= static_cast<double>(TriaxialProgress::Phase::shearing)) || !count(q[0]) || !count(q[1]) ||
       !count(q[2]) || !count(q[3]) || !count(r[0]) || !count(r[1]) || !count(r[2]))
-    throw DataError(file.path().string() + ": " + kProgressGroup +
+    throw DataError(file.path().string() + ": " + ck::triaxial +
                     " holds a phase or step count that is not a whole number in range; the checkpoint is damaged, "
                     "restart from an earlier one");
   TriaxialRunProgress p;

@@ -121,12 +121,7 @@ void parse_description(const std::string& desc, std::optional<Vec3>& voxel, std:
     else if (key == "spacing") {
       try { imagej_spacing = std::stod(val); } catch (...) {}
     } else if (key == "unit") {
-      const std::string u = lower(val);
-      if (u == "micron" || u == "um" || u == "\\u00b5m" || u == "µm") imagej_unit_m = 1e-6;
-      else if (u == "mm") imagej_unit_m = 1e-3;
-      else if (u == "nm") imagej_unit_m = 1e-9;
-      else if (u == "cm") imagej_unit_m = 1e-2;
-      else if (u == "m" || u == "meter") imagej_unit_m = 1.0;
+      if (const std::optional<double> unit_m = length_unit_m(lower(val))) imagej_unit_m = *unit_m;
     }
   }
 }

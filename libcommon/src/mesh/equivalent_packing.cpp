@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
@@ -67,7 +68,7 @@ EquivalentSample pack_equivalent_sample(const std::vector<const shape::GrainShap
     const double v = tables.back()[k].volume();
     total += v;
     volumes.push_back(v);
-    diameters.push_back(std::cbrt(6.0 * v / M_PI));
+    diameters.push_back(equivalent_diameter(v));
   }
   s.psd = shape::size_distribution(diameters, volumes);
 

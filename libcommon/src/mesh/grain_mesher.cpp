@@ -49,41 +49,26 @@ constexpr double kRemeshVolumeError = 0.05;
 constexpr double kSourceSpacingPerSize = 0.4;
 constexpr int kMaxSourceStride = 2;
 
+constexpr std::array<EnumName<SizeRule>, 6> kSizeRuleNames{{{SizeRule::contact, "contact"},
+                                                             {SizeRule::accuracy, "accuracy"},
+                                                             {SizeRule::coarsest, "coarsest"},
+                                                             {SizeRule::finest, "finest"},
+                                                             {SizeRule::given, "given"},
+                                                             {SizeRule::neighbours, "neighbours"}}};
+constexpr std::array<EnumName<SurfaceOrigin>, 3> kSurfaceOriginNames{
+    {{SurfaceOrigin::sh, "sh"}, {SurfaceOrigin::voxels, "voxels"}, {SurfaceOrigin::ellipsoid, "ellipsoid"}}};
+constexpr std::array<EnumName<MeshPath>, 3> kMeshPathNames{
+    {{MeshPath::gmsh_surface, "gmsh surface"}, {MeshPath::kept_surface, "kept surface"}, {MeshPath::ellipsoid, "ellipsoid"}}};
+
 bool worse(const MeshQuality& a, const MeshQuality& b) {
   return a.inverted + a.below_floor > b.inverted + b.below_floor;
 }
 
 }  // namespace
 
-const char* size_rule_name(SizeRule rule) {
-  switch (rule) {
-    case SizeRule::contact: return "contact";
-    case SizeRule::accuracy: return "accuracy";
-    case SizeRule::coarsest: return "coarsest";
-    case SizeRule::finest: return "finest";
-    case SizeRule::given: return "given";
-    case SizeRule::neighbours: return "neighbours";
-  }
-  return "?";
-}
-
-const char* surface_origin_name(SurfaceOrigin origin) {
-  switch (origin) {
-    case SurfaceOrigin::sh: return "sh";
-    case SurfaceOrigin::voxels: return "voxels";
-    case SurfaceOrigin::ellipsoid: return "ellipsoid";
-  }
-  return "?";
-}
-
-const char* mesh_path_name(MeshPath path) {
-  switch (path) {
-    case MeshPath::gmsh_surface: return "gmsh surface";
-    case MeshPath::kept_surface: return "kept surface";
-    case MeshPath::ellipsoid: return "ellipsoid";
-  }
-  return "?";
-}
+const char* size_rule_name(SizeRule rule) { return enum_name(kSizeRuleNames, rule); }
+const char* surface_origin_name(SurfaceOrigin origin) { return enum_name(kSurfaceOriginNames, origin); }
+const char* mesh_path_name(MeshPath path) { return enum_name(kMeshPathNames, path); }
 
 ElementSize choose_element_size(double area, double diameter, double curvature_per_volume, int order, const SizeTargets& t) {
   if (!(diameter > 0.0)) throw DataError("choose_element_size: a grain without a positive diameter");

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 
 namespace graintwin::micro {
 
@@ -70,7 +71,7 @@ StateResult analyse_state(const SeriesStates& s, std::size_t t, const MicroOptio
   } else {
     const auto v = state_volumes(s, t);
     std::vector<double> radii(s.grains);
-    for (std::size_t i = 0; i < s.grains; ++i) radii[i] = v[i] > 0.0 ? std::cbrt(3.0 * v[i] / (4.0 * std::numbers::pi)) : 0.0;
+    for (std::size_t i = 0; i < s.grains; ++i) radii[i] = v[i] > 0.0 ? equivalent_radius(v[i]) : 0.0;
     r.coordination = coordination_by_distance(p, radii, o.contact_factor);
   }
   std::vector<std::uint32_t> present;

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/point_grid.hpp"
 
 namespace graintwin::micro {
@@ -98,7 +99,7 @@ ClusterStatistics cluster_statistics(const std::vector<double>& score, const std
   st.threshold = std::numeric_limits<double>::infinity();
   for (std::size_t i : top) st.threshold = std::min(st.threshold, score[i]);
   std::vector<double> radii(n);
-  for (std::size_t i = 0; i < n; ++i) radii[i] = std::cbrt(3.0 * volumes[i] / (4.0 * std::numbers::pi));
+  for (std::size_t i = 0; i < n; ++i) radii[i] = equivalent_radius(volumes[i]);
   // Links in member numbering, for the components.
   std::vector<std::size_t> member_of(n, 0);
   for (std::size_t a = 0; a < top.size(); ++a) member_of[top[a]] = a;

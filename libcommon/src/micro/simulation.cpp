@@ -5,6 +5,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 
@@ -27,7 +28,7 @@ SimulationGrains read_simulation_grains(const std::filesystem::path& path) {
       throw DataError(path.string() + ": grain " + std::to_string(g.label[i]) + " has no positive volume; rerun fdemrun");
     if (!g.row.emplace(g.label[i], i).second)
       throw DataError(path.string() + ": label " + std::to_string(g.label[i]) + " names two grains; rerun fdemrun");
-    diameter.push_back(std::cbrt(6.0 * g.volume[i] / std::numbers::pi));
+    diameter.push_back(equivalent_diameter(g.volume[i]));
   }
   g.psd = shape::size_distribution(diameter, g.volume);
   return g;

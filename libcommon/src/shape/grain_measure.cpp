@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "graintwin/core/filters.hpp"
 #include "graintwin/core/volume_sample.hpp"
@@ -259,7 +260,7 @@ GrainShape measure_grain(const Volume<std::uint32_t>& labels, const Volume<T>* g
   g.label = label;
   g.voxels = m.n;
   g.volume = static_cast<double>(m.n) * vs[0] * vs[1] * vs[2];
-  g.equivalent_diameter = std::cbrt(6.0 * g.volume / std::numbers::pi);
+  g.equivalent_diameter = equivalent_diameter(g.volume);
 
   // Centroid and covariance (x, y, z order); each voxel is a cube, which adds d^2/12 per axis.
   const double n = static_cast<double>(m.n);
@@ -302,7 +303,7 @@ GrainShape measure_grain(const Volume<std::uint32_t>& labels, const Volume<T>* g
   const Volume<float>& star_field = own_star_field ? star_box.field : box.field;
   g.surface_area = isosurface(box.field, kIso).area;
   if (!(g.surface_area > 0.0)) g.surface_area = voxel_face_area(labels, label, bbox);
-  g.sphericity = std::cbrt(std::numbers::pi) * std::pow(6.0 * g.volume, 2.0 / 3.0) / g.surface_area;
+  g.sphericity = sphericity(g.volume, g.surface_area);
 
   const Eigen::Vector3d start(static_cast<double>(bbox[0] - box.z0) + mean_zyx[0], static_cast<double>(bbox[1] - box.y0) + mean_zyx[1],
                               static_cast<double>(bbox[2] - box.x0) + mean_zyx[2]);

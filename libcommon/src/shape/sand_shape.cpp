@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::shape {
@@ -127,7 +128,7 @@ bool centre_and_normalise(Eigen::VectorXd& coeffs, int degree, const FitBasis& b
   for (int step = 0; step < kMaxCentringSteps; ++step) {
     const ShMoments m = sh_moments(coeffs, degree);
     if (!(m.volume > 0.0)) return false;  // r mostly negative: not a body at all
-    const double r_eq = std::cbrt(3.0 * m.volume / (4.0 * std::numbers::pi));
+    const double r_eq = equivalent_radius(m.volume);
     if (m.centroid.norm() <= kCentroidTolerance * r_eq) {
       coeffs /= r_eq;
       return true;
@@ -226,8 +227,8 @@ ShapeStats shape_stats(const RadialTable& table) {
   ShapeStats s;
   s.volume = table.volume();
   s.surface_area = table.surface_area();
-  s.equivalent_diameter = std::cbrt(6.0 * s.volume / std::numbers::pi);
-  s.sphericity = std::cbrt(std::numbers::pi) * std::pow(6.0 * s.volume, 2.0 / 3.0) / s.surface_area;
+  s.equivalent_diameter = equivalent_diameter(s.volume);
+  s.sphericity = sphericity(s.volume, s.surface_area);
   // J = tr(M) I - M, so M = tr(J)/2 I - J.
   const Eigen::Matrix3d j = table.inertia_tensor();
   const Eigen::Matrix3d m = 0.5 * j.trace() * Eigen::Matrix3d::Identity() - j;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::synth {
@@ -128,7 +129,7 @@ constexpr int kPocketTries = 100;
 constexpr int kRimPoints = 24;
 bool add_undercut(const AngularShapeParams& p, const shape::RadialTable& t, std::mt19937_64& rng, AngularGrain& g) {
   std::uniform_real_distribution<double> spread(0.85, 1.15), tilt_spread(-5.0, 5.0);
-  const double r_eq = std::cbrt(3.0 * t.volume() / (4.0 * std::numbers::pi));
+  const double r_eq = equivalent_radius(t.volume());
   const auto inside = [&](const Eigen::Vector3d& x) { return x.norm() < t.radius(x); };
   for (int k = 0; k < kPocketTries; ++k) {
     const Eigen::Vector3d u = random_direction(rng);
@@ -310,7 +311,7 @@ AngularGrain random_angular_grain(const AngularShapeParams& p, std::mt19937_64& 
         t = g.table(n, &modulation);
         const Moments body = body_moments(t, g.pockets);
         const Eigen::Vector3d centroid = body.first / body.volume;
-        const double r_eq = std::cbrt(3.0 * body.volume / (4.0 * std::numbers::pi));
+        const double r_eq = equivalent_radius(body.volume);
         const double tolerance = g.pockets.empty() ? kCentroidTolerance : kPocketedCentroidTolerance;
         if (centroid.norm() > tolerance * r_eq) {
           g.move_origin(centroid);
@@ -324,7 +325,7 @@ AngularGrain random_angular_grain(const AngularShapeParams& p, std::mt19937_64& 
       continue;  // an unbounded direction the spike test missed, or the origin left the body: redraw
     }
     if (!centred) continue;
-    const double s = 1.0 / std::cbrt(3.0 * body_moments(t, g.pockets).volume / (4.0 * std::numbers::pi));
+    const double s = 1.0 / equivalent_radius(body_moments(t, g.pockets).volume);
     g.scale(s);
     if (table) *table = t.scaled(s);
     return g;

@@ -11,6 +11,7 @@
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/sh_fitter.hpp"
@@ -41,7 +42,7 @@ std::vector<const GrainSolid*> GrainSet::solid_pointers() const {
 SolidGrainRecord solid_grain_record(const GrainSolid& solid, shape::RadialTable hull, const shape::ShFitter& fitter,
                                     double resolution) {
   SolidGrainRecord out;
-  const double r_hull = std::cbrt(3.0 * hull.volume() / (4.0 * std::numbers::pi));
+  const double r_hull = equivalent_radius(hull.volume());
   out.stats = solid_stats(solid, std::min(r_hull / 30.0, 2.0 * resolution));
   const double r_eq = 0.5 * out.stats.equivalent_diameter;
   const double step = std::min(r_eq / 100.0, resolution);

@@ -8,6 +8,7 @@
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "graintwin/shape/sh_basis.hpp"
 
 namespace graintwin::synth {
 
@@ -125,8 +126,7 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
             with_units("m"));
   }
   f.set_attr(sg::sh_coeffs, schema::attr::sh_degree, static_cast<long long>(t.sh_degree));
-  f.set_attr(sg::sh_coeffs, schema::attr::sh_basis,
-             std::string("real orthonormal, index n*n+n+m, no Condon-Shortley phase (graintwin/shape/sh_basis.hpp)"));
+  f.set_attr(sg::sh_coeffs, schema::attr::sh_basis, std::string(shape::kShBasisDescription));
 
   const std::size_t m = t.contacts.size();
   std::vector<std::uint32_t> pair(2 * m);

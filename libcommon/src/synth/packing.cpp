@@ -32,13 +32,16 @@
 #include "graintwin/synth/packing.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <string>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "packing_geometry.hpp"
 #include "packing_pairs.hpp"
@@ -50,6 +53,15 @@ double Container::volume() const {
   if (kind == Kind::cylinder) return M_PI * radius * radius * height;
   return box_size.x() * box_size.y() * box_size.z();
 }
+
+namespace {
+constexpr std::array<EnumName<Container::Kind>, 2> kContainerKindNames{
+    {{Container::Kind::cylinder, "cylinder"}, {Container::Kind::box, "box"}}};
+}  // namespace
+
+const char* container_kind_name(Container::Kind kind) { return enum_name(kContainerKindNames, kind); }
+
+Container::Kind parse_container_kind(const std::string& name) { return parse_enum(kContainerKindNames, name, "--container"); }
 
 namespace {
 
@@ -97,10 +109,6 @@ std::string fmt_num(double v, int digits = 2) {
 
 std::string fmt_um(double metres) { return fmt_num(metres * 1e6, 2) + " um"; }
 
-const char* kind_name(const Container& c) {
-  return c.kind == Container::Kind::cylinder ? "cylinder" : "box";
-}
-
 class Packer {
  public:
   Packer(const std::vector<const shape::RadialTable*>& shapes, const Container& c,
@@ -116,7 +124,7 @@ class Packer {
       const ShapeData& d = shape_data_[grain_shape_[i]];
       rmax_[i] = d.max_radius;
       vol_[i] = d.volume;
-      req_[i] = std::cbrt(3.0 * d.volume / (4.0 * M_PI));
+      req_[i] = equivalent_radius(d.volume);
       vsum += d.volume;
       rmin_eq = std::min(rmin_eq, req_[i]);
       req_sum += req_[i];
@@ -193,7 +201,7 @@ class Packer {
                            c_.radius > 0.0 && c_.height > 0.0)
                         : (c_.box_size.allFinite() && c_.box_size.minCoeff() > 0.0);
     if (!ok) {
-      throw UsageError(std::string("pack_grains: the ") + kind_name(c_) +
+      throw UsageError(std::string("pack_grains: the ") + container_kind_name(c_.kind) +
                        " needs finite, positive dimensions (metres)");
     }
     if (!std::isfinite(p_.contact_tolerance) || p_.contact_tolerance <= 0.0 ||
@@ -209,7 +217,7 @@ class Packer {
 
   void check_fit() const {
     if (fill_ > kTune.max_fill) {
-      throw DataError("scene: grains fill " + fmt_num(fill_) + " of the " + kind_name(c_) +
+      throw DataError("scene: grains fill " + fmt_num(fill_) + " of the " + container_kind_name(c_.kind) +
                       ", above the " + fmt_num(kDensestPacking) + " that any packing allows; enlarge the container or lower "
                       "the grain count");
     }
@@ -220,7 +228,7 @@ class Packer {
       const double rmin = shape_data_[grain_shape_[i]].table->min_radius();
       if (2.0 * rmin >= room) {
         throw DataError("scene: grain " + std::to_string(i) + " is at least " +
-                        fmt_num(2e3 * rmin, 3) + " mm wide but the " + kind_name(c_) +
+                        fmt_num(2e3 * rmin, 3) + " mm wide but the " + container_kind_name(c_.kind) +
                         " is only " + fmt_num(1e3 * room, 3) +
                         " mm across; enlarge the container or use smaller grains");
       }
@@ -240,7 +248,7 @@ class Packer {
     const detail::RandomStart start = detail::random_start(c_, rmax_, p_.initial_scale, p_.seed, x_, q_);
     if (!start.placed) {
       throw DataError("scene: could not place the grains even at " + fmt_num(start.scale) +
-                      " of their size in the " + kind_name(c_) +
+                      " of their size in the " + container_kind_name(c_.kind) +
                       "; enlarge the container or lower the grain count");
     }
     s_ = s0_ = start.scale;
@@ -513,12 +521,12 @@ class Packer {
     if (s_ < 1.0) {
       throw DataError("scene: the grains jam at solid fraction " + fmt_num(fill_ * s_ * s_ * s_, 3) +
                       " (" + fmt_num(100.0 * s_, 1) + " % of full size), below the requested " +
-                      fmt_num(fill_, 3) + " in the " + kind_name(c_) +
+                      fmt_num(fill_, 3) + " in the " + container_kind_name(c_.kind) +
                       "; enlarge the container or lower the grain count");
     }
     throw DataError("scene: the grains jam at full size: overlaps stop decreasing at " +
                     fmt_um(last_worst_) + " (tolerance " + fmt_um(tol_) +
-                    ") at solid fraction " + fmt_num(fill_, 3) + " in the " + kind_name(c_) +
+                    ") at solid fraction " + fmt_num(fill_, 3) + " in the " + container_kind_name(c_.kind) +
                     "; enlarge the container, lower the grain count or raise contact_tolerance");
   }
 

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <vector>
 
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/synth/packing.hpp"
 
 namespace graintwin::synth {
@@ -72,7 +73,7 @@ Eigen::Vector3d minimise_on_sphere(const G& g, Eigen::Vector3d n, const Eigen::V
 PairContact separating_contact(const shape::RadialTable& a, const PackedGrain& ga, const shape::RadialTable& b,
                                const PackedGrain& gb, const PairContact& first, double reach) {
   if (!(reach > 0.0)) {
-    const auto radius = [](const shape::RadialTable& t) { return std::cbrt(3.0 * t.volume() / (4.0 * std::numbers::pi)); };
+    const auto radius = [](const shape::RadialTable& t) { return equivalent_radius(t.volume()); };
     reach = 0.25 * std::min(radius(a), radius(b));
   }
   const std::vector<Eigen::Vector3d> pa = surface_patch(a, ga, first.point, reach);

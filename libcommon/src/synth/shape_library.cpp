@@ -9,6 +9,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/filters.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/segment/labels_file.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -91,7 +92,7 @@ GrainSet make_library_grains(const ShapeLibrary& library, const std::vector<std:
   std::atomic<std::size_t> done{0};
   parallel_for_each_index(distinct.size(), [&](std::size_t k) {
     auto solid = std::make_shared<const VoxelGrain>(library_grain(library, distinct[k]));
-    const double r = std::cbrt(3.0 * library.grains[distinct[k]].volume / (4.0 * std::numbers::pi));
+    const double r = equivalent_radius(library.grains[distinct[k]].volume);
     // Table nodes: a node spacing of about a third of the finer voxel at the grain's surface.
     const int nodes = std::clamp(static_cast<int>(std::ceil(2.0 * r / (resolution * 4.0 / 3.0))), 16, 160);
     records[k] = solid_grain_record(*solid, last_exit_table(*solid, nodes, resolution), fitter, resolution);

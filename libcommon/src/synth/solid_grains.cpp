@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/volume_sample.hpp"
 #include "graintwin/shape/isosurface.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -236,8 +237,8 @@ shape::ShapeStats solid_stats(const GrainSolid& solid, double h) {
   shape::ShapeStats s;
   s.volume = iso.volume;
   s.surface_area = iso.area;
-  s.equivalent_diameter = std::cbrt(6.0 * s.volume / std::numbers::pi);
-  s.sphericity = std::cbrt(std::numbers::pi) * std::pow(6.0 * s.volume, 2.0 / 3.0) / s.surface_area;
+  s.equivalent_diameter = equivalent_diameter(s.volume);
+  s.sphericity = sphericity(s.volume, s.surface_area);
   shape::set_equivalent_ellipsoid(s, m);
   return s;
 }

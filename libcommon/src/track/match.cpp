@@ -10,6 +10,7 @@
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/point_grid.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "graintwin/track/assignment.hpp"
@@ -248,8 +249,6 @@ Predictor build_predictor(const Anchors& an, double d50, const MatchOptions& o) 
   p.scales.position = terms[2].spread;
   return p;
 }
-
-double equivalent_diameter(double volume) { return std::cbrt(6.0 * volume / std::numbers::pi); }
 
 /// The standardised volume residual of a label of volume v_def for a grain (or grains) of v_ref.
 double volume_z(double v_def, double v_ref, const Scales& k) { return (std::log(v_def / v_ref) - k.volume_mean) / k.volume; }

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/point_grid.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/shape/sh_fitter.hpp"
@@ -65,8 +66,6 @@ struct Label {
   std::array<int, 2> source{-1, -1};
 };
 
-double ball_radius(double volume) { return std::cbrt(3.0 * volume / (4.0 * std::numbers::pi)); }
-
 /// Distance from p along the unit vector u to where the ray leaves the ball (centre c, radius r),
 /// or 0 when it never meets the ball ahead of p.
 double ball_exit(const Eigen::Vector3d& p, const Eigen::Vector3d& u, const Eigen::Vector3d& c, double r) {
@@ -88,7 +87,7 @@ Eigen::VectorXd body_invariants(const shape::ShFitter& fitter, const std::functi
 /// joint centroid (inside the larger ball); the outermost surface along each direction, as a
 /// radial fit sees it.
 Label merged_label(const Label& a, const Label& b, const shape::ShFitter& fitter) {
-  const double ra = ball_radius(a.volume), rb = ball_radius(b.volume), v = a.volume + b.volume;
+  const double ra = equivalent_radius(a.volume), rb = equivalent_radius(b.volume), v = a.volume + b.volume;
   const Eigen::Vector3d cb(0.0, 0.0, ra + rb), p = b.volume / v * cb;
   Label m;
   m.volume = v;
@@ -104,7 +103,7 @@ Label merged_label(const Label& a, const Label& b, const shape::ShFitter& fitter
 /// its centre across the unit normal n: the cap beyond the plane and the rest, each with its volume,
 /// centroid and the invariants of its piece of the ball seen from its own centroid.
 std::array<Label, 2> cut_labels(const Label& g, const Eigen::Vector3d& n, double offset, const shape::ShFitter& fitter) {
-  const double r = ball_radius(g.volume), h = offset * r, t = r - h;
+  const double r = equivalent_radius(g.volume), h = offset * r, t = r - h;
   const double cap_share = t * t * (3.0 * r - t) / (4.0 * r * r * r);          // cap volume / ball volume
   const double cap_at = 3.0 * (2.0 * r - t) * (2.0 * r - t) / (4.0 * (3.0 * r - t));  // cap centroid from the centre
   std::array<Label, 2> piece;

@@ -19,7 +19,7 @@ namespace {
 
 /// Per-step figures, one column each under /steps (entry t: the step into scan t).
 struct StepColumn {
-  const char* name;
+  const char* path;
   const char* unit;  ///< nullptr: an integer count
   std::uint64_t (*count)(const Tracks&, std::size_t t);
   double (*value)(const Tracks&, std::size_t t);
@@ -30,28 +30,26 @@ double diag_value(const Tracks& tr, std::size_t t, double MatchDiagnostics::*fie
 }
 
 const StepColumn kStepColumns[] = {
-    {"grains", nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].grains; }, nullptr},
-    {"matched", nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].matched; }, nullptr},
-    {"lost", nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].lost; }, nullptr},
-    {"found", nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].found; }, nullptr},
-    {"started", nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].started; }, nullptr},
-    {"mean_confidence", "1", nullptr, [](const Tracks& tr, std::size_t t) { return tr.steps[t].mean_confidence; }},
-    {"mean_candidates", "1", nullptr,
+    {st::step_grains, nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].grains; }, nullptr},
+    {st::step_matched, nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].matched; }, nullptr},
+    {st::step_lost, nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].lost; }, nullptr},
+    {st::step_found, nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].found; }, nullptr},
+    {st::step_started, nullptr, [](const Tracks& tr, std::size_t t) -> std::uint64_t { return tr.steps[t].started; }, nullptr},
+    {st::step_mean_confidence, "1", nullptr, [](const Tracks& tr, std::size_t t) { return tr.steps[t].mean_confidence; }},
+    {st::step_mean_candidates, "1", nullptr,
      [](const Tracks& tr, std::size_t t) { return diag_value(tr, t, &MatchDiagnostics::mean_candidates); }},
-    {"sigma_position", "m", nullptr,
+    {st::step_sigma_position, "m", nullptr,
      [](const Tracks& tr, std::size_t t) { return diag_value(tr, t, &MatchDiagnostics::sigma_position); }},
-    {"sigma_shape", "1", nullptr,
+    {st::step_sigma_shape, "1", nullptr,
      [](const Tracks& tr, std::size_t t) { return diag_value(tr, t, &MatchDiagnostics::sigma_shape); }},
-    {"sigma_volume", "1", nullptr,
+    {st::step_sigma_volume, "1", nullptr,
      [](const Tracks& tr, std::size_t t) { return diag_value(tr, t, &MatchDiagnostics::sigma_volume); }},
-    {"anchors", nullptr,
+    {st::step_anchors, nullptr,
      [](const Tracks& tr, std::size_t t) -> std::uint64_t { return t == 0 ? 0 : tr.diagnostics.at(t - 1).anchors; }, nullptr},
-    {"backward_disagreements", nullptr,
+    {st::step_backward_disagreements, nullptr,
      [](const Tracks& tr, std::size_t t) -> std::uint64_t { return t == 0 ? 0 : tr.diagnostics.at(t - 1).backward_disagreements; },
      nullptr},
 };
-
-std::string step_path(const char* name) { return std::string(st::steps) + "/" + name; }
 
 }  // namespace
 
@@ -86,11 +84,11 @@ void write_tracks_file(const std::filesystem::path& path, const TracksFile& c, c
     if (col.count) {
       std::vector<std::uint64_t> v(t);
       for (std::size_t s = 0; s < t; ++s) v[s] = col.count(tr, s);
-      f.write(step_path(col.name), v);
+      f.write(col.path, v);
     } else {
       std::vector<double> v(t);
       for (std::size_t s = 0; s < t; ++s) v[s] = col.value(tr, s);
-      f.write(step_path(col.name), v, col.unit ? units(col.unit) : io::DatasetOptions{});
+      f.write(col.path, v, col.unit ? units(col.unit) : io::DatasetOptions{});
     }
   }
   f.write_strings(st::scan_file, c.scans);
@@ -103,13 +101,13 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
   TracksTable r;
   std::vector<hsize_t> dims;
   r.label = f.read<std::uint32_t>(st::label, &dims);
-  if (dims.size() != 2) throw DataError(path.string() + ": /tracks/label is not a 2-D table; rewrite it with shapes2tracks");
+  if (dims.size() != 2) throw DataError(path.string() + ": " + st::label + " is not a 2-D table; rewrite it with shapes2tracks");
   r.tracks = dims[0], r.scans = dims[1];
   const std::size_t cells = r.tracks * r.scans;
   const auto need = [&](const char* name, std::size_t per) {
     auto v = f.read<double>(name);
     if (v.size() != cells * per)
-      throw DataError(path.string() + ": " + name + " does not match /tracks/label; rewrite it with shapes2tracks");
+      throw DataError(path.string() + ": " + name + " does not match " + st::label + "; rewrite it with shapes2tracks");
     return v;
   };
   r.centroid = need(st::centroid, 3);
@@ -120,16 +118,16 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
   r.confidence = need(st::confidence, 1);
   r.rotation_defined = f.read<std::uint8_t>(st::rotation_defined);
   // NaN is a track's "not in this scan"; infinity is no value any tool writes.
-  io::require_finite_table(f, "/tracks", {}, "rewrite it with shapes2tracks");
-  for (auto [out, name] : {std::pair{&r.grains, "grains"}, {&r.matched, "matched"}, {&r.lost, "lost"},
-                           {&r.found, "found"}, {&r.started, "started"}}) {
-    *out = f.read<std::uint64_t>(step_path(name));
-    if (out->size() != r.scans) throw DataError(path.string() + ": /steps/" + name + " does not have one entry per scan");
+  io::require_finite_table(f, st::group, {}, "rewrite it with shapes2tracks");
+  for (auto [out, column] : {std::pair{&r.grains, st::step_grains}, {&r.matched, st::step_matched}, {&r.lost, st::step_lost},
+                             {&r.found, st::step_found}, {&r.started, st::step_started}}) {
+    *out = f.read<std::uint64_t>(column);
+    if (out->size() != r.scans) throw DataError(path.string() + ": " + column + " does not have one entry per scan");
   }
   r.scan_files = f.read_strings(st::scan_file);
   r.scan_d50 = f.read<double>(st::scan_d50);
   if (r.scan_d50.size() != r.scans)
-    throw DataError(path.string() + ": /scans/d50 does not have one entry per scan; rewrite it with shapes2tracks");
+    throw DataError(path.string() + ": " + st::scan_d50 + " does not have one entry per scan; rewrite it with shapes2tracks");
   r.parameters_json = f.read_string(st::parameters);
   if (r.rotation_defined.size() != cells || r.scan_files.size() != r.scans)
     throw DataError(path.string() + " has tables of different sizes; rewrite it with shapes2tracks");

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "graintwin/core/error.hpp"
 
@@ -23,6 +24,15 @@ const char* enum_name(const std::array<EnumName<E>, N>& table, E value) {
   for (const EnumName<E>& e : table)
     if (e.value == value) return e.name;
   return "?";
+}
+
+/// The table's names in its order: a command-line option's choices (CLI::IsMember), so that the
+/// option lists exactly the names its parsing takes.
+template <class E, std::size_t N>
+std::vector<std::string> enum_names(const std::array<EnumName<E>, N>& table) {
+  std::vector<std::string> names;
+  for (const EnumName<E>& e : table) names.emplace_back(e.name);
+  return names;
 }
 
 /// The value named `text` (exactly), or nothing: for names read from files, whose errors say more.

@@ -1,6 +1,7 @@
 #pragma once
 // Small text helpers shared by readers and tools.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,10 @@ std::string lower(std::string text);
 std::string excerpt(const std::string& text, std::size_t max = 60);
 /// Natural ("human") order: "slice2" < "slice10".
 bool natural_less(const std::string& a, const std::string& b);
+/// The length in metres of one `unit` (lower case): m, meter, cm, mm, um, micron, µm (also as
+/// ImageJ escapes it, \u00b5m) or nm; nothing for any other name. The one unit table of the
+/// length options and the image headers that name their unit.
+std::optional<double> length_unit_m(const std::string& unit);
 /// Parses a length with an optional unit suffix: "27.5um", "0.0607mm", "6e-5" (metres when bare).
 /// Throws UsageError naming `what` when it is not a positive finite length.
 double parse_length_m(const std::string& text, const std::string& what);

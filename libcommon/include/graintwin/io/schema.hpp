@@ -107,7 +107,19 @@ inline constexpr const char* rotation_misfit = "/tracks/rotation_misfit";    ///
 inline constexpr const char* confidence = "/tracks/confidence";        ///< (N x T) of the match into scan t
 inline constexpr const char* parameters = "/tracks/parameters";        ///< string (1), JSON
 inline constexpr const char* group = "/tracks";                        ///< group: the per-track tables above
-inline constexpr const char* steps = "/steps";                         ///< group: per-scan counts (T)
+inline constexpr const char* steps = "/steps";                         ///< group: per-scan counts (T), entry t the step into scan t
+inline constexpr const char* step_grains = "/steps/grains";            ///< uint64 (T) grains in scan t
+inline constexpr const char* step_matched = "/steps/matched";          ///< uint64 (T)
+inline constexpr const char* step_lost = "/steps/lost";                ///< uint64 (T)
+inline constexpr const char* step_found = "/steps/found";              ///< uint64 (T)
+inline constexpr const char* step_started = "/steps/started";          ///< uint64 (T)
+inline constexpr const char* step_mean_confidence = "/steps/mean_confidence";  ///< (T)
+inline constexpr const char* step_mean_candidates = "/steps/mean_candidates";  ///< (T), NaN for scan 0
+inline constexpr const char* step_sigma_position = "/steps/sigma_position";    ///< (T) m, NaN for scan 0
+inline constexpr const char* step_sigma_shape = "/steps/sigma_shape";          ///< (T), NaN for scan 0
+inline constexpr const char* step_sigma_volume = "/steps/sigma_volume";        ///< (T), NaN for scan 0
+inline constexpr const char* step_anchors = "/steps/anchors";                  ///< uint64 (T)
+inline constexpr const char* step_backward_disagreements = "/steps/backward_disagreements";  ///< uint64 (T)
 inline constexpr const char* scans = "/scans";                         ///< group: per-scan files and d50 (T)
 inline constexpr const char* scan_file = "/scans/file";                ///< string (T)
 inline constexpr const char* scan_d50 = "/scans/d50";                  ///< (T) m
@@ -269,6 +281,10 @@ inline constexpr const char* stage_name = "/stages/name";             ///< strin
 inline constexpr const char* stage_start = "/stages/start";           ///< (S) s
 inline constexpr const char* parameters = "/run/parameters";          ///< string (1), JSON
 inline constexpr const char* frames = "/frames";                      ///< group; attrs time, step per frame group
+// Attributes of each frame group.
+inline constexpr const char* frame_time = "time";                     ///< s
+inline constexpr const char* frame_step = "step";                     ///< the solver's step count
+inline constexpr const char* frame_axial_strain = "axial_strain";     ///< triaxial scenes: eps_1 from the start of shearing
 // Members of each frame group.
 inline constexpr const char* frame_grains = "grains";                 ///< group of the frame's (G) columns below
 inline constexpr const char* frame_centroid = "grains/centroid";      ///< (G x 3) m
@@ -282,6 +298,61 @@ inline constexpr const char* contact_normal = "contacts/normal";      ///< (M x 
 inline constexpr const char* contact_force = "contacts/force";        ///< (M x 3) N, on the second (the platen)
 inline constexpr const char* contact_overlap = "contacts/overlap";    ///< (M) m
 }  // namespace graintwin::schema::fdem_results
+
+// fdemrun's checkpoints (kind schema::fdem_results::checkpoint_kind), layout in docs/formats.md: the
+// solver's state under /state, the contact history and the sample boundary in its groups, a
+// triaxial test's progress under /triaxial. Member names are relative to their group.
+namespace graintwin::schema::fdem_checkpoint {
+inline constexpr const char* scene_digest = "scene_digest";  ///< root attribute: the scene and model it was written for
+inline constexpr const char* state = "/state";               ///< group: the solver's state
+// Attributes of /state.
+inline constexpr const char* step = "step";
+inline constexpr const char* time = "time";                        ///< s
+inline constexpr const char* dissipated = "dissipated";            ///< J
+inline constexpr const char* external_work = "external_work";      ///< J
+inline constexpr const char* energy_input = "energy_input";        ///< J
+// Members of /state.
+inline constexpr const char* node_position = "x";                  ///< (nodes x 3) m
+inline constexpr const char* node_velocity = "v";                  ///< (nodes x 3) m/s, at the half step
+inline constexpr const char* bodies = "bodies";                    ///< (G x 13) rigid bodies
+inline constexpr const char* platens = "platens";                  ///< (P x 10) point, normal, velocity, friction
+inline constexpr const char* platen_force = "platen_force";        ///< (P x 3) N, the last step's
+inline constexpr const char* rigid_loads = "rigid_loads";          ///< (G x 12) force and moment sum of rigid grains
+inline constexpr const char* contact = "contact";                  ///< group: the contact history, members below
+inline constexpr const char* boundary = "boundary";                ///< group: the sample boundary, members below
+// Attributes and members of /state/contact.
+inline constexpr const char* history_entries = "entries";                ///< attribute: rows of pair, node, spring
+inline constexpr const char* ball_entries = "ball_entries";              ///< attribute: rows of ball_grain, ball_spring
+inline constexpr const char* record_entries = "record_entries";          ///< attribute: rows of record_pair, record_values
+inline constexpr const char* deep_pair_entries = "deep_pair_entries";    ///< attribute: rows of deep_pair, deep_pair_depth
+inline constexpr const char* history_pair = "pair";                      ///< uint32 (n x 2) grains
+inline constexpr const char* history_node = "node";                      ///< uint32 (n)
+inline constexpr const char* history_spring = "spring";                  ///< (n x 3) N
+inline constexpr const char* history_offset = "offset";                  ///< (n) m, kept initial overlap
+inline constexpr const char* ball_grain = "ball_grain";                  ///< uint32 (n x 2) membrane ball, grain
+inline constexpr const char* ball_spring = "ball_spring";                ///< (n x 3) N
+inline constexpr const char* record_pair = "record_pair";                ///< uint32 (n x 2), the last step's contacts
+inline constexpr const char* record_values = "record_values";            ///< (n x 10) point, normal, force, overlap
+inline constexpr const char* deep_pair = "deep_pair";                    ///< uint32 (n x 2)
+inline constexpr const char* deep_pair_depth = "deep_pair_depth";        ///< (n) m
+// Attributes and members of /state/boundary.
+inline constexpr const char* wall = "wall";                        ///< attribute: radius, radial velocity, radial force
+inline constexpr const char* boundary_platens = "platens";         ///< attribute: z bottom, z top, their velocities
+inline constexpr const char* pressure = "pressure";                ///< attribute, Pa
+inline constexpr const char* ball_radius = "ball_radius";          ///< attribute, m
+inline constexpr const char* membrane_frame = "membrane_frame";    ///< attribute: centre radius, z min, z max, density scaling, started
+inline constexpr const char* ball_position = "ball_x";             ///< (balls x 3) m
+inline constexpr const char* ball_velocity = "ball_v";             ///< (balls x 3) m/s
+inline constexpr const char* ball_spin = "ball_spin";              ///< (balls x 3)
+inline constexpr const char* bond_shear = "bond_shear";            ///< (bonds x 3)
+inline constexpr const char* ball_motion = "ball_motion";          ///< uint8 (balls)
+inline constexpr const char* ball_clamp_group = "ball_clamp_group";  ///< uint8 (balls)
+// A triaxial test's progress.
+inline constexpr const char* triaxial = "/triaxial";               ///< group, attributes below
+inline constexpr const char* procedure = "procedure";              ///< phase, step, settled, released, h0
+inline constexpr const char* run = "run";                          ///< consolidation steps, membrane steps, next frame, max kinetic ratio
+inline constexpr const char* start = "start";                      ///< the measurements at the start of shearing
+}  // namespace graintwin::schema::fdem_checkpoint
 
 // kind=forces (fdem2forces), layout in docs/formats.md. G grains, F analysed frames, W strain
 // windows; per-frame groups /frames/<f>/pdf and /frames/<f>/rose (f = 0..F-1, row of /frames/index).

@@ -3,12 +3,14 @@
 // else the inertia ellipsoid), check it, choose the element size, mesh it with gmsh (within a time
 // budget), measure the quality and remesh finer once when it misses the floor. Tiny grains get a coarse
 // linear mesh and are marked rigid.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/volume.hpp"
 #include "graintwin/fdem/model.hpp"
 #include "graintwin/mesh/gmsh_adapter.hpp"
@@ -75,6 +77,10 @@ const char* surface_origin_name(SurfaceOrigin origin);
 /// genus. ellipsoid: the inertia ellipsoid from gmsh's exact sphere, where no usable surface remains.
 enum class MeshPath : std::uint8_t { gmsh_surface = 0, kept_surface = 1, ellipsoid = 2 };
 const char* mesh_path_name(MeshPath path);
+
+/// shapes2mesh's --sh-meshing names of the two paths a usable SH surface can take (GrainMeshOptions::sh_path).
+inline constexpr std::array<EnumName<MeshPath>, 2> kShMeshingNames{
+    {{MeshPath::kept_surface, "kept"}, {MeshPath::gmsh_surface, "gmsh"}}};
 
 struct GrainMeshOptions {
   int order = 2;

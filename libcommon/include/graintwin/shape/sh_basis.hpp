@@ -21,6 +21,11 @@
 
 namespace graintwin::shape {
 
+/// The basis description stored beside every coefficient table (attribute `basis`) of the shapes
+/// and ground truth files.
+inline constexpr const char* kShBasisDescription =
+    "real orthonormal, index n*n+n+m, no Condon-Shortley phase (graintwin/shape/sh_basis.hpp)";
+
 /// Number of real SH of degree 0..degree: (degree+1)^2. Throws UsageError for degree < 0.
 int sh_count(int degree);
 

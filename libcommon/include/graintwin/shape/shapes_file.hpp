@@ -17,10 +17,6 @@ struct ShapesFile {
   std::string parameters_json;     ///< what the run used (free-form JSON object)
 };
 
-/// The basis description stored beside every coefficient table (attribute `basis`).
-inline constexpr const char* kShBasisDescription =
-    "real orthonormal, index n*n+n+m, no Condon-Shortley phase (graintwin/shape/sh_basis.hpp)";
-
 void write_shapes_file(const std::filesystem::path& path, const ShapesFile& content,
                        const std::vector<std::string>& history);
 /// UsageError naming the file if it is not a shapes file; DataError if its tables disagree.

@@ -37,6 +37,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "graintwin/shape/radial_table.hpp"
@@ -54,6 +55,11 @@ struct Container {
   /// Inner volume (m^3).
   double volume() const;
 };
+
+/// The container kinds' names (ctsynth's --container, the packer's messages).
+const char* container_kind_name(Container::Kind kind);
+/// The kind named `name`; UsageError naming --container and listing the kinds otherwise.
+Container::Kind parse_container_kind(const std::string& name);
 
 /// The densest packing of equal spheres, pi / sqrt(18) = 0.7405, rounded down: no container is
 /// filled beyond it (random packings of sand stop near 0.64, rough grains in narrow cylinders
