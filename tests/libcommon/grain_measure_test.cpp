@@ -369,7 +369,9 @@ TEST(StarShape, BlurredNoisyEllipsoidKeepsItsInvariantRatio) {
       }
       EXPECT_EQ(g.flags & (shape_flag::not_star_shaped | shape_flag::unreliable_fit), 0);
       // The edge width seen: the point spread and the voxel's own box (1/12 voxel^2), plus noise.
-      if (grey) EXPECT_NEAR(g.edge_sigma / kVoxel, std::sqrt(0.64 + 1.0 / 12.0), 0.2);
+      if (grey) {
+        EXPECT_NEAR(g.edge_sigma / kVoxel, std::sqrt(0.64 + 1.0 / 12.0), 0.2);
+      }
     }
   }
 }

@@ -115,7 +115,9 @@ TEST(SolidGrains, DiscCavityLevelIsABoundOnTheDistance) {
       for (double r = 0; r <= 0.5; r += 0.01)
         for (double h = -0.1; h <= 0.1; h += 0.01)
           nearest = std::min(nearest, (p - disc.centre - h * disc.axis - r * (std::cos(a) * e1 + std::sin(a) * e2)).norm());
-    if (!disc.contains(p)) EXPECT_LE(disc.outside_level(p), nearest + 0.01) << p.transpose();
+    if (!disc.contains(p)) {
+      EXPECT_LE(disc.outside_level(p), nearest + 0.01) << p.transpose();
+    }
   }
 }
 

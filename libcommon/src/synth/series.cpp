@@ -13,6 +13,7 @@
 #include <random>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/resources.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -218,7 +219,6 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
                           const std::vector<std::string>& history,
                           const std::function<std::function<void(double)>(const std::string&)>& progress) {
   if (p.strains.empty()) throw UsageError("--strains needs at least one value (0 for an unloaded scan)");
-  const bool cyl = p.container.kind == Container::Kind::cylinder;
   check_grey_levels(p.scanner, p.membrane_thickness > 0.0);
   const bool from_library = p.grains.shape == GrainShape::library;
   std::unique_ptr<ShapeLibrary> library;
@@ -235,7 +235,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   double mean_grain_volume = 0.0, typical_d = p.psd.d50;
   if (library) {
     for (const auto& g : library->grains) mean_grain_volume += g.volume / static_cast<double>(library->grains.size());
-    typical_d = std::cbrt(6.0 * mean_grain_volume / std::numbers::pi);
+    typical_d = equivalent_diameter(mean_grain_volume);
   }
   const double grains_expected = library ? target / mean_grain_volume : expected_grain_count(p.psd, target);
   const double scan_bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel;
@@ -268,7 +268,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   double grain_volume = 0.0;
   for (const auto& st : grains.stats) grain_volume += st.volume;
   spdlog::info("the grains' exact volume fills {:.4f} of the {}", grain_volume / p.container.volume(),
-               cyl ? "cylinder" : "box");
+               container_kind_name(p.container.kind));
 
   // --- packing (state 0) ---
   PackingParams pp = p.packing;
