@@ -255,6 +255,8 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
     const fdem::RunStart start = fdem::start_run(scene, model, where);
     fdem::Solver& solver = *start.solver;
     const fdem::RunSchedule schedule = fdem::schedule_run(scene, solver, where);
+    // The step a replicate perturbs ([run] time_step a little below it): the results may be dropped.
+    spdlog::info("simulated loading: time step {:.6g} s", schedule.dt);
     std::vector<Eigen::Vector3d> reference_centroid(n);
     std::vector<Eigen::Quaterniond> reference_rotation(n);
     for (std::size_t g = 0; g < n; ++g)
