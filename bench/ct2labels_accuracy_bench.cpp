@@ -29,8 +29,8 @@
 #include "graintwin/io/metaimage.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "graintwin/validate/label_match.hpp"
 #include "harness.hpp"
-#include "label_match.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
@@ -39,10 +39,10 @@ using nlohmann::json;
 namespace {
 
 const std::string kSource = GRAINTWIN_SOURCE_DIR;
-using Outcome = bench::LabelOutcome;
-using bench::match_labels;
-using bench::MatchResult;
-using bench::TruthGrain;
+using Outcome = validate::LabelOutcome;
+using validate::match_labels;
+using validate::MatchResult;
+using validate::TruthGrain;
 
 Volume<std::uint32_t> read_truth_labels(const fs::path& truth) {
   return io::read_image_as<std::uint32_t>(io::open_kind(truth, "ground_truth"), "/labels");
