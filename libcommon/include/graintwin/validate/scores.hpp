@@ -109,12 +109,12 @@ TrackingScore score_tracking(const track::TracksTable& tracks, std::size_t from,
                              const synth::GroundTruth& truth_to);
 
 /// The parameters of the run's micro-mechanics (its /micro/parameters) that the truth's are
-/// computed with.
+/// computed with; no defaults of their own (micro::MicroOptions holds those).
 struct MicroParameters {
-  double radius_d50 = 1.5;
-  std::size_t min_neighbours = 3;
-  double top_fraction = 0.10;
-  double contact_factor = 1.1;  ///< tracks2micro links clusters by the same factor
+  double radius_d50 = 0.0;
+  std::size_t min_neighbours = 0;
+  double top_fraction = 0.0;
+  double contact_factor = 0.0;  ///< tracks2micro links clusters by the same factor
 };
 /// DataError naming `name` when the JSON lacks one of them.
 MicroParameters micro_parameters(const std::string& parameters_json, const std::string& name);
