@@ -30,8 +30,9 @@
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "graintwin/validate/label_match.hpp"
+#include "graintwin/validate/scores.hpp"
 #include "harness.hpp"
-#include "label_match.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
@@ -41,10 +42,10 @@ using nlohmann::json;
 namespace {
 
 const std::string kSource = GRAINTWIN_SOURCE_DIR;
-using Outcome = bench::LabelOutcome;
-using bench::match_labels;
-using bench::MatchResult;
-using bench::TruthGrain;
+using Outcome = validate::LabelOutcome;
+using validate::match_labels;
+using validate::MatchResult;
+using validate::TruthGrain;
 
 Volume<std::uint32_t> read_truth_labels(const fs::path& truth) {
   return io::read_image_as<std::uint32_t>(io::open_kind(truth, schema::kind::ground_truth), schema::path::labels);
@@ -110,17 +111,6 @@ Truth read_truth(const fs::path& path) {
   return t;
 }
 
-/// Void ratio of the truth (voxel centres inside a grain = solid) in the region ct2labels used.
-double true_void_ratio(const Volume<std::uint32_t>& truth, const segment::Cylinder& region) {
-  std::uint64_t solid = 0, voids = 0;
-  const Shape3& s = truth.shape();
-  for (std::size_t z = 0; z < s[0]; ++z)
-    for (std::size_t y = 0; y < s[1]; ++y)
-      for (std::size_t x = 0; x < s[2]; ++x)
-        if (region.contains(truth, z, y, x)) (truth(z, y, x) ? solid : voids) += 1;
-  return static_cast<double>(voids) / static_cast<double>(solid);
-}
-
 struct CaseResult {
   int vox_per_d50 = 0;
   double noise = 0.0;
@@ -144,7 +134,7 @@ CaseResult run_case(const fs::path& scene_dir, int k, double noise, const std::v
   const segment::LabelsFile lf = segment::read_labels_file(out);
   c.match = match_labels(truth.labels, lf.labels);
   c.e_seg = lf.sample.void_ratio.e;
-  c.e_true = true_void_ratio(truth.labels, lf.sample.region);
+  c.e_true = validate::true_void_ratio(truth.labels, lf.sample.region);  // the region ct2labels used
   const json p = json::parse(lf.parameters_json);
   c.h = p.value("h_vox", 0.0);
   c.solid_seg = p.value("solid_fraction", 0.0);

@@ -4,7 +4,7 @@
 //     by the improved default, the paper's Algorithm 1, nearest centroid and volume-only matching,
 //     on shapes measured (labels2shapes, grey surfaces) from (a) ct2labels' segmentation and (b) the
 //     true labels with 1 % of the deformed scans' grains deliberately merged in pairs or split in
-//     two. Identities by ct2labels_accuracy_bench's scoring (IoU >= 0.8, bench/label_match.hpp):
+//     two. Identities by ct2labels_accuracy_bench's scoring (IoU >= 0.8, validate/label_match.hpp):
 //     correct / wrong / lost among the grains faithful in both scans (the targets), and the
 //     segmentation-damaged grains apart (lost is right for them).
 //     Also rotations of the matched grains against the truth, and the improved mode's lost cost.
@@ -37,8 +37,8 @@
 #include "graintwin/track/match.hpp"
 #include "graintwin/track/rotation.hpp"
 #include "graintwin/track/synthetic.hpp"
+#include "graintwin/validate/label_match.hpp"
 #include "harness.hpp"
-#include "label_match.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
@@ -93,14 +93,14 @@ Volume<std::uint32_t> read_labels_image(const fs::path& p) {
 }
 
 /// What every row of a shapes file is, by the scoring of ct2labels_accuracy_bench
-/// (bench/label_match.hpp): the true grain (index = true label - 1) it reproduces faithfully
+/// (validate/label_match.hpp): the true grain (index = true label - 1) it reproduces faithfully
 /// (IoU >= 0.8), else -1; and its home grain (the true grain holding most of its voxels), -1 for
 /// the background.
 struct Identity {
   std::vector<long> faithful, home;
 };
 Identity identify(const Volume<std::uint32_t>& labels, const Volume<std::uint32_t>& truth, const shape::ShapesFile& shapes) {
-  const bench::MatchResult r = bench::match_labels(truth, labels);
+  const validate::MatchResult r = validate::match_labels(truth, labels);
   const std::vector<std::uint32_t> faithful = r.faithful_grain();
   Identity id;
   for (const auto& g : shapes.grains) {

@@ -3,8 +3,9 @@
 // simulation written by the real solver and ResultsWriter with chosen contacts, stresses and
 // triaxial series through tracks2micro and fdem2forces) rendered into one page that names every
 // panel, embeds every chart, keeps the PNGs and the exact numbers; the page rendered in headless
-// Chromium with every image decoded; a run without simulation saying so per panel; the chart
-// helpers against exact answers; bad inputs failing cleanly.
+// Chromium with every image decoded; the error budget of a validation.json, one line per item with
+// its number and chart, and one sentence without it; a run without simulation saying so per panel;
+// the chart helpers against exact answers; bad inputs failing cleanly.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -25,9 +26,11 @@
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/report/charts.hpp"
+#include "graintwin/report/error_budget.hpp"
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/run_data.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "graintwin/validate/validation_file.hpp"
 #include "support/cli_contract.hpp"
 #include "support/cube_sample.hpp"
 #include "support/processes.hpp"
@@ -115,6 +118,47 @@ void write_simulation(const fs::path& path) {
   test::replace_dataset(path, sr::series_stress_ratio, ratio, {kRows});
 }
 
+/// An error budget with every line filled: three scans, two increments, a simulated truth's twin.
+void write_budget(const fs::path& path) {
+  validate::Validation v;
+  v.run = "full", v.series = "phantom";
+  for (int t = 0; t < kScans; ++t) {
+    validate::ScanValidation sc;
+    sc.name = "scan_00" + std::to_string(t);
+    sc.segmentation.true_grains = 64, sc.segmentation.right = 62 + t % 2, sc.segmentation.merged = 2 - 2 * (t % 2);
+    sc.segmentation.void_ratio = 0.7 + 0.01 * t, sc.segmentation.void_ratio_true = 0.69 + 0.01 * t;
+    sc.has_contacts = sc.has_shapes = true;
+    sc.contacts.true_touching = 144, sc.contacts.found = 140, sc.contacts.missed = 4, sc.contacts.false_found = 1;
+    sc.contacts.normal_error_deg = {1.0, 2.0, 4.0, 8.0};
+    sc.contacts.anisotropy = 0.1 * t, sc.contacts.anisotropy_true = 0.1 * t + 0.02;
+    sc.shapes.invariant_error_by_degree = {0.01, 0.5, 0.05, 0.08};
+    sc.shapes.invariant_error_median = 0.06;
+    sc.shapes.volume_error = {-0.03, -0.01, 0.02};
+    v.scans.push_back(sc);
+  }
+  for (std::size_t k = 1; k < std::size_t(kScans); ++k) {
+    validate::TrackingScore t;
+    t.from = k - 1, t.to = k, t.targets = 62, t.right = 61, t.wrong = 1;
+    t.displacement_error_m = {1e-6, 2e-6, 3e-6}, t.rotation_error_deg = {1.0, 5.0};
+    v.tracking.push_back(t);
+    validate::DeformationScore d;
+    d.from = k - 1, d.to = k, d.d2min = {0.01, 0.02, 0.05}, d.d2min_true = {0.012, 0.018, 0.06};
+    d.d2min_spearman = 1.0, d.cluster_members = 6, d.cluster_members_true = 7, d.cluster_common = 5, d.cluster_jaccard = 5.0 / 8.0;
+    v.deformation.push_back(d);
+  }
+  v.has_simulation = true;
+  v.twin.simulated = true;
+  v.twin.axial_strain = {0.0, 0.01, 0.02}, v.twin.stress_ratio_true = {1.0, 2.0, 2.5}, v.twin.stress_ratio = {1.0, 2.2, 2.6};
+  v.twin.volumetric_strain_true = v.twin.volumetric_strain = {0.0, 0.0, 0.0};
+  v.twin.stress_ratio_rms_rel = 0.06;
+  v.history = {"validate of the phantom run"};
+  validate::write_validation(path, v);
+}
+
+/// The lines of the error budget, in page order.
+const std::vector<std::string> kBudgetLines{"segmentation", "void_ratio", "contacts", "normals", "fabric", "invariants", "volume",
+                                            "tracking", "displacement", "rotation", "d2min", "clusters", "twin"};
+
 void run_ok(const std::string& tool, const std::vector<std::string>& args) {
   const auto r = run_tool(tool, args);
   ASSERT_EQ(r.exit_code, 0) << tool << ": " << r.err;
@@ -155,6 +199,7 @@ void make_runs() {
   run_ok("tracks2micro", micro_args);
   fs::copy(r.full, r.experiment, fs::copy_options::recursive);
   write_simulation(r.full / "simulation.h5");
+  write_budget(r.full / "validation.json");
   // The boxes sit 1.5 mm apart with equivalent radii of 0.62 mm: link neighbours into clusters.
   run_ok("tracks2micro", {(r.full / "simulation.h5").string(), (r.full / "simulation_micro.h5").string(), "--contact-factor", "1.3"});
   run_ok("fdem2forces", {(r.full / "simulation.h5").string(), (r.full / "forces.h5").string()});
@@ -276,10 +321,21 @@ TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   EXPECT_NE(html.find("Accuracy against time per stage"), std::string::npos);
   EXPECT_NE(html.find("<details id=\"provenance\">"), std::string::npos);
   EXPECT_NE(html.find("phantom labels of scan 2"), std::string::npos) << "the files' histories belong in the provenance section";
+  EXPECT_NE(html.find("validate of the phantom run"), std::string::npos) << "validation.json's history belongs there too";
+  // The error budget: every line with its number and its chart.
+  EXPECT_NE(html.find("<section id=\"budget\">"), std::string::npos);
+  for (const std::string& id : kBudgetLines) EXPECT_NE(html.find("id=\"budget_" + id + "\""), std::string::npos) << id;
+  EXPECT_NE(html.find("<span class=\"value\">97.4 %</span>"), std::string::npos) << "(62 + 63 + 62) of 192 true grains right";
+  EXPECT_NE(html.find("<span class=\"value\">122 right, 2 wrong, 0 lost</span>"), std::string::npos);
+  EXPECT_EQ(count_of(html, "class=\"budget\""), kBudgetLines.size());
   // Every side with data has its chart; CT has no forces or stresses, so exactly those four
   // experiment sides (stress ratio, force rose, force PDF, volatility) say so instead.
   const nlohmann::json spec = nlohmann::json::parse(slurp(out / "report_img/charts.json"));
-  EXPECT_EQ(spec["charts"].size(), 2 * kPanels.size() - 4);
+  EXPECT_EQ(spec["charts"].size(), 2 * kPanels.size() - 4 + kBudgetLines.size());
+  const auto* twin = find_chart(spec, "budget_twin.png");
+  ASSERT_NE(twin, nullptr);
+  ASSERT_NE(find_series(*twin, "twin"), nullptr);
+  EXPECT_EQ((*find_series(*twin, "twin"))["y"][1].get<double>(), 2.2);
   std::string sides_missing;
   for (const std::string& id : kPanels) {
     const std::size_t at = html.find("id=\"" + id + "\""), end = html.find("</section>", at);
@@ -341,6 +397,9 @@ TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
   EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size());
   EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4);
   EXPECT_NE(html.find("No benchmark charts were found"), std::string::npos);
+  // No validation.json: the error budget is one sentence.
+  EXPECT_NE(html.find(report::kNoValidation), std::string::npos);
+  EXPECT_EQ(count_of(html, "class=\"budget\""), 0u);
   EXPECT_FALSE(fs::exists(out / "page_img/bench"));
 }
 
@@ -481,6 +540,12 @@ TEST(ReportCharts, DistributionsAndFitCurves) {
   // The strong fit is the exponential tail scaled by its share: at f = 1 it is share / scale.
   EXPECT_NEAR(report::strong_force_fit(0.5, 0.25, 10.0, "s").y[0], 0.5, 1e-12);
   EXPECT_NEAR(report::weak_force_fit(0.5, 0.25, 0.01, "w").y.back(), 0.75 * 1.5, 1e-12);
+}
+
+TEST(ReportCharts, CdfOfTheErrorBudget) {
+  const report::Series c = report::cdf_series({3, 1, std::nan(""), 2, 4}, "e", 10.0);
+  EXPECT_EQ(c.x, (std::vector<double>{10, 20, 30, 40}));
+  EXPECT_EQ(c.y, (std::vector<double>{0.25, 0.5, 0.75, 1.0}));
 }
 
 TEST(ReportCharts, LogAxesDropWhatTheyCannotShow) {

@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
       "scans' strains as points), PSD, coordination numbers, roses of contact normals, branch vectors and mean normal "
       "force, g(r), incremental displacement distributions, PDFs of D2min and eps_q, cluster size distribution with its "
       "power-law fit, R_g against s with d_f, force PDF with its strong and weak fits, volatility of grain stress against "
-      "D2min with Pearson's r; then each stage's accuracy-against-time charts from --bench-img, and the files' "
+      "D2min with Pearson's r; then the error budget against the series' ground truth (validation.json of the validate stage; "
+      "a series without truth says so), each stage's accuracy-against-time charts from --bench-img, and the files' "
       "provenance. Where a side has no data (CT measures no forces; a stage has not run) the panel says so in one "
       "sentence. Charts are drawn by --chart-script with Debian's python3-matplotlib.");
   fs::path run_dir, output;
@@ -49,6 +50,8 @@ int main(int argc, char** argv) {
   app.add_option("--scan-strains", given.scan_strains,
                  "JSON with the scans' applied axial strains, {\"scans\": [{\"axial_strain\": ...}, ...]} (ctsynth's series.json); "
                  "without it the scans' axial strains are measured from the tracks only");
+  app.add_option("--validation", given.validation,
+                 "Error budget against the series' ground truth (validate's validation.json) in place of RUNDIR/validation.json");
   app.add_option("--bench-img", ro.bench_img, "Folder of the benchmark charts (<tool>_<measure>.png); default: docs/img of the source tree this build came from");
   app.add_option("--max-series", ro.panels.max_series, "Scans, increments or frames drawn per chart (evenly spread, first and last always)")
       ->check(cli::whole_number_in(1, 20))->capture_default_str();
@@ -78,8 +81,8 @@ int main(int argc, char** argv) {
     const ReportPage page = build_report(run_dir, files, provenance, ro, img_out.temp_path(), ctx.history_line(),
                                          ctx.progress_callback("reading and drawing"));
     std::ofstream(html_out.temp_path(), std::ios::binary) << page.html;
-    spdlog::info("{} panels: {} charts drawn, {} sides without data (the page says why); {} benchmark charts", page.panels,
-                 page.charts, page.sides_without, page.bench_charts);
+    spdlog::info("{} panels: {} charts drawn, {} sides without data (the page says why); error budget: {} lines, {} charts; {} benchmark charts",
+                 page.panels, page.charts, page.sides_without, page.budget_lines, page.budget_charts, page.bench_charts);
     io::commit_outputs({&html_out, &img_out});
   });
 }

@@ -1,8 +1,9 @@
-// Fuzz target: kind=ground_truth files (ctsynth's truth_NNN.h5). No tool reads them; the benches
-// (bench/ct2labels_accuracy_bench.cpp, bench/labels2contacts_bench.cpp) read them through these
-// library calls, which are fuzzed here, structure-aware (h5_mutator.hpp).
+// Fuzz target: kind=ground_truth files (ctsynth's truth_NNN.h5): their reader, synth::read_ground_truth
+// (validate), and what the benches (bench/ct2labels_accuracy_bench.cpp, bench/labels2contacts_bench.cpp)
+// read through these library calls, structure-aware (h5_mutator.hpp).
 #include "fuzz_support.hpp"
 #include "graintwin/io/volume_io.hpp"
+#include "graintwin/synth/ground_truth.hpp"
 #include "h5_mutator.hpp"
 
 GRAINTWIN_FUZZ_TARGET(ground_truth) {
@@ -17,5 +18,6 @@ GRAINTWIN_FUZZ_TARGET(ground_truth) {
                                     f.read<double>("/contacts/normal");
                                     f.read<double>("/contacts/overlap");
                                     f.read<std::uint8_t>("/contacts/touching");
+                                    graintwin::synth::read_ground_truth(p);
                                   });
 }

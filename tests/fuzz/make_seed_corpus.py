@@ -6,6 +6,7 @@ own volconvert when a build is given, PNG and MetaImage made here, the bundled f
 the structure-aware HDF5 targets get short edit programs (h5_mutator.cpp: op, object, parameter).
     python3 tests/fuzz/make_seed_corpus.py [BIN_DIR]     (default build/bin)
 """
+import json
 import pathlib
 import shutil
 import struct
@@ -32,6 +33,34 @@ def png(width, height, depth, pixels):
     rows = b"".join(b"\0" + pixels[y * width * depth // 8:(y + 1) * width * depth // 8] for y in range(height))
     return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, depth, 0, 0, 0, 0)) +
             chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def validation_seed():
+    """A small validation.json as validate writes it (validate/validation_file.cpp)."""
+    seg = {"name": "scan_000", "true_grains": 3, "right": 2, "split": 0, "merged": 1, "missed": 0, "boundary": 0, "labels": 2,
+           "spurious": 0, "right_share": 0.67, "void_ratio": 0.7, "void_ratio_true": None}
+    con = {"name": "scan_000", "present": True, "true_touching": 2, "found": 1, "missed": 1, "false": 0, "found_share": 0.5,
+           "normal_error_median_deg": 4.0, "normal_error_p90_deg": 4.0, "anisotropy": 0.1, "anisotropy_true": 0.2,
+           "normal_error_deg": [4.0]}
+    sha = {"name": "scan_000", "present": True, "grains": 2, "invariant_error_by_degree": [0.01, None, 0.1],
+           "invariant_error_median": 0.1, "volume_error_median": -0.01, "diameter_error_median": -0.003, "volume_error": [-0.01, 0.0]}
+    trk = {"from": 0, "to": 1, "targets": 2, "right": 1, "wrong": 1, "lost": 0, "displacement_error_median_m": 1e-6,
+           "displacement_error_p90_m": 1e-6, "displacement_error_rel_median": 0.1, "rotation_error_median_deg": None,
+           "rotation_error_p90_deg": None, "displacement_error_m": [1e-6], "rotation_error_deg": []}
+    d2 = {"from": 0, "to": 1, "grains": 2, "d2min_spearman": None, "eps_q_spearman": None, "cluster_members": 1,
+          "cluster_members_true": 1, "cluster_common": 1, "cluster_jaccard": 1.0, "d2min": [0.1, 0.2], "d2min_true": [0.1, 0.3]}
+    twin = {"simulated": True, "simulation": True, "stress_ratio_rms_rel": 0.1, "volumetric_strain_max_abs": 0.001,
+            "axial_strain_max": 0.01, "axial_strain": [0.0, 0.01], "stress_ratio_true": [1.0, 2.0], "stress_ratio": [1.0, 2.2],
+            "volumetric_strain_true": [0.0, 0.0], "volumetric_strain": [0.0, 0.001]}
+    return {"kind": "validation", "schema_version": 1, "run": "runs/x", "series": "sample_volumes/x",
+            "segmentation": {"grains_right": 0.67, "void_ratio_error_max_abs": None, "scans": [seg, dict(seg, name="scan_001")]},
+            "contacts": {"found_share": 0.5, "false": 0, "normal_error_median_deg": 4.0, "anisotropy_error_max_abs": 0.1,
+                         "scans": [con, {"name": "scan_001", "present": False}]},
+            "shapes": {"invariant_error_median": 0.1, "volume_error_median": -0.01, "scans": [sha, dict(sha, name="scan_001")]},
+            "tracking": {"right": 1, "wrong": 1, "lost": 0, "displacement_error_median_m": 1e-6,
+                         "displacement_error_rel_median": 0.1, "rotation_error_median_deg": None, "increments": [trk]},
+            "d2min": {"spearman": None, "increments": [d2]}, "eps_q": {"spearman": None}, "clusters": {"jaccard": 1.0},
+            "twin": twin, "history": ["ctsynth ...", "validate ..."]}
 
 
 def main():
@@ -63,6 +92,13 @@ def main():
         put("scene", s.name, s.read_bytes())
     put("scene", "model_file.toml", '[run]\ngravity = [0, 0, -9.81]\n\n[model]\nfile = "model.h5"\nkind = "rigid"\n\n'
         '[[platens]]\nname = "bottom"\npoint = [0, 0, -1e-3]\nnormal = [0, 0, 1]\n\n[[stages]]\nname = "s"\nduration = 1e-6\n')
+    # validation.json: a two-scan budget with every line, and one with nulls and no scans.
+    put("validation", "two_scans.json", json.dumps(validation_seed()))
+    empty = validation_seed()
+    for section in ("segmentation", "contacts", "shapes"):
+        empty[section]["scans"] = []
+    empty["tracking"]["increments"], empty["d2min"]["increments"] = [], []
+    put("validation", "no_scans.json", json.dumps(empty))
     # TIFF stacks from the project's writer: uint16, uint8 and float32 crops of the base volume.
     volconvert = bin_dir / "volconvert"
     if volconvert.exists():

@@ -21,7 +21,7 @@ TEST(RunReport, TheSummaryNamesTheStageOfEveryMissingFile) {
   e.scans[0].grains = 12, e.scans[0].contacts = 30, e.scans[0].void_ratio = 0.61234;
   const SimulationData s;
   const auto rows = run_summary("runs/x", files, e, s);
-  ASSERT_EQ(rows.size(), 8u);
+  ASSERT_EQ(rows.size(), 9u);
   EXPECT_EQ(rows[0], (std::pair<std::string, std::string>{"run directory", "runs/x"}));
   EXPECT_EQ(rows[1], (std::pair<std::string, std::string>{"scan_000", "12 grains, 30 contacts, void ratio 0.6123"}));
   EXPECT_EQ(rows[2].second, "none (the track stage makes it)");
@@ -29,11 +29,14 @@ TEST(RunReport, TheSummaryNamesTheStageOfEveryMissingFile) {
   EXPECT_EQ(rows[5].second, "none (the simulate stage makes it)");
   EXPECT_EQ(rows[6].second, "none (tracks2micro on simulation.h5 makes it)");
   EXPECT_EQ(rows[7].second, "none (the forces stage makes it)");
+  EXPECT_EQ(rows[8].second, "none (the validate stage makes it)");
 
   files.tracks = "runs/x/tracks.h5";
   files.model = "runs/x/model.h5";
+  files.validation = "runs/x/validation.json";
   e.tracks = 10;
   const auto with = run_summary("runs/x", files, e, s);
   EXPECT_EQ(with[2].second, "10 tracks over 1 scans");
   EXPECT_EQ(with[4].second, "runs/x/model.h5");
+  EXPECT_EQ(with[8].second, "runs/x/validation.json");
 }

@@ -257,14 +257,18 @@ MicroTables read_micro_tables(const std::filesystem::path& path) {
       throw DataError(path.string() + ": " + c + "/size and /radius_of_gyration differ in length; rewrite it with tracks2micro");
     m.increments.push_back(std::move(inc));
   }
-  std::vector<hsize_t> label_dims, d2_dims;
+  std::vector<hsize_t> label_dims, d2_dims, eq_dims, cl_dims;
   m.grain_label = f.read<std::uint32_t>(sm::grain_label, &label_dims);
   m.grain_d2min = f.read<double>(sm::grain_d2min, &d2_dims);
+  m.grain_eps_q = f.read<double>(sm::grain_eps_q, &eq_dims);
+  m.grain_cluster = f.read<std::int32_t>(sm::grain_cluster, &cl_dims);
   m.grains = label_dims.empty() ? 0 : label_dims[0];
-  if (label_dims.size() != 2 || label_dims[1] != m.states.size() || d2_dims.size() != 2 || d2_dims[0] != m.grains ||
-      d2_dims[1] != m.increments.size())
-    throw DataError(path.string() + ": " + sm::grain_label + " is not grains x states or " + sm::grain_d2min +
-                    " not grains x increments; rewrite it with tracks2micro");
+  const std::vector<hsize_t> per_increment{m.grains, m.increments.size()};
+  if (label_dims.size() != 2 || label_dims[1] != m.states.size() || d2_dims != per_increment || eq_dims != per_increment ||
+      cl_dims != per_increment)
+    throw DataError(path.string() + ": " + sm::grain_label + " is not grains x states or " + sm::grain_d2min + ", " + sm::grain_eps_q +
+                    " or " + sm::grain_cluster + " not grains x increments; rewrite it with tracks2micro");
+  m.parameters_json = f.read_string(sm::parameters);
   return m;
 }
 

@@ -124,6 +124,7 @@ std::vector<BenchChart> find_bench_charts(const fs::path& dir) {
 std::string report_html(const PageContent& c) {
   std::size_t total_images = c.bench_charts.size();
   for (const Panel& p : c.panels) total_images += (p.experiment.chart ? 1 : 0) + (p.simulation.chart ? 1 : 0);
+  for (const BudgetLine& l : c.budget) total_images += l.chart ? 1 : 0;
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << html_escape(c.title) << "</title>\n"
     << "<style>\n"
@@ -135,6 +136,8 @@ std::string report_html(const PageContent& c) {
        ".missing{background:#fff6e0;border-left:4px solid #e0a000;padding:0.6em} .note{font-size:0.9em;color:#444}\n"
        ".what{color:#444} nav ol{columns:3} details{margin-top:2em} details li{font-family:monospace;font-size:0.85em}\n"
        ".bench{display:inline-block;width:48%;vertical-align:top;margin:0 1% 1em 0}\n"
+       ".budget{display:inline-block;width:48%;vertical-align:top;margin:0 1% 1em 0;border:1px solid #eee;padding:0.5em}\n"
+       ".budget img{max-width:100%} .budget .value{font-size:1.3em;font-weight:bold}\n"
        "</style>\n</head>\n";
   o << "<body data-images-total=\"" << total_images << "\" data-images-loaded=\"pending\">\n";
   o << "<h1>" << html_escape(c.title) << "</h1>\n"
@@ -145,7 +148,7 @@ std::string report_html(const PageContent& c) {
   for (const auto& [item, value] : c.summary) o << "<tr><td>" << html_escape(item) << "</td><td>" << html_escape(value) << "</td></tr>\n";
   o << "</table>\n<nav><ol>\n";
   for (const Panel& p : c.panels) o << "<li><a href=\"#" << p.id << "\">" << html_escape(p.title) << "</a></li>\n";
-  o << "<li><a href=\"#bench\">Accuracy against time per stage</a></li>\n<li><a href=\"#provenance\">Provenance</a></li>\n</ol></nav>\n";
+  o << "<li><a href=\"#budget\">Error budget</a></li>\n<li><a href=\"#bench\">Accuracy against time per stage</a></li>\n<li><a href=\"#provenance\">Provenance</a></li>\n</ol></nav>\n";
   for (const Panel& p : c.panels) {
     o << "<section class=\"panel\" id=\"" << p.id << "\">\n<h2>" << html_escape(p.title) << "</h2>\n<p class=\"what\">"
       << html_escape(p.description) << "</p>\n<div class=\"sides\">\n";
@@ -163,6 +166,24 @@ std::string report_html(const PageContent& c) {
     }
     o << "</div>\n</section>\n";
   }
+  o << "<section id=\"budget\">\n<h2>Error budget</h2>\n";
+  if (c.budget.empty()) o << "<p class=\"missing\">" << html_escape(kNoValidation) << "</p>\n";
+  else
+    o << "<p class=\"what\">Every stage of this run scored against the series' ground truth (validation.json, written by the validate "
+         "stage; docs/validate.md): one line per item, its number and its chart.</p>\n";
+  for (const BudgetLine& l : c.budget) {
+    o << "<figure class=\"budget\" id=\"budget_" << l.id << "\"><figcaption>" << html_escape(l.title) << ": <span class=\"value\">"
+      << html_escape(l.value) << "</span></figcaption>\n<p class=\"what\">" << html_escape(l.description) << "</p>\n";
+    if (l.chart) {
+      const auto it = c.images.find(l.chart->file);
+      if (it == c.images.end()) throw DataError("the chart " + l.chart->file + " of the error budget was not drawn; check the chart script");
+      image(o, it->second, l.title);
+    } else {
+      o << "<p class=\"missing\">" << html_escape(l.missing) << "</p>\n";
+    }
+    o << "</figure>\n";
+  }
+  o << "</section>\n";
   o << "<section id=\"bench\">\n<h2>Accuracy against time per stage</h2>\n"
        "<p class=\"what\">The benchmark charts of each stage's fidelity knob (bench/ programs, docs/benchmarks.md), grouped by "
        "the pipeline stage whose tool they measure.</p>\n";

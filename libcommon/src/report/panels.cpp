@@ -10,16 +10,10 @@ namespace graintwin::report {
 
 namespace {
 
-constexpr const char* kNoSimulation =
-    "This run has no simulation results (simulation.h5, kind=fdem_results): the pipeline's simulate stage (fdemrun) makes them.";
 constexpr const char* kNoSimulationMicro =
     "This run has no micro-mechanics of the simulation frames (simulation_micro.h5): tracks2micro on simulation.h5 makes it.";
 constexpr const char* kNoForces =
     "This run has no force statistics (forces.h5): the forces stage (fdem2forces on simulation.h5) makes them.";
-constexpr const char* kNoMicro =
-    "This run has no micro-mechanics of the scans (micro.h5): the micro stage (tracks2micro) makes it from two scans or more.";
-constexpr const char* kNoContacts = "This run has no contacts files (scan_*/contacts.h5): the contacts stage (labels2contacts) makes them.";
-constexpr const char* kNoShapes = "This run has no shapes files (scan_*/shapes.h5): the shapes stage (labels2shapes) makes them.";
 constexpr const char* kCtNoStress =
     "CT scans measure where grains are, not stresses: the experiment's stress ratio is the load cell's record, which the run's "
     "files do not hold. The scans' axial strains are marked on the simulation's curve.";

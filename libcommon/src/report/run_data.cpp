@@ -24,6 +24,7 @@
 #include "graintwin/segment/sample_region.hpp"
 #include "graintwin/shape/shapes_file.hpp"
 #include "graintwin/track/tracks_file.hpp"
+#include "graintwin/validate/validation_file.hpp"
 
 namespace graintwin::report {
 
@@ -190,6 +191,7 @@ RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given) {
   f.forces = given_or_found(given.forces, run_dir / layout::forces, "--forces");
   f.simulation_micro = given_or_found(given.simulation_micro, run_dir / layout::simulation_micro, "--simulation-micro");
   f.scan_strains = given_or_found(given.scan_strains, fs::path(), "--scan-strains");
+  f.validation = given_or_found(given.validation, run_dir / layout::validation, "--validation");
   return f;
 }
 
@@ -214,6 +216,7 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
   check(files.simulation, schema::kind::fdem_results);
   check(files.simulation_micro, schema::kind::micro);
   check(files.forces, schema::kind::forces);
+  if (!files.validation.empty()) history.emplace_back(files.validation.string(), validate::read_validation(files.validation).history);
   return history;
 }
 

@@ -44,6 +44,7 @@ std::vector<std::pair<std::string, std::string>> run_summary(const fs::path& run
                                                 fmt::format("{} frames, {} windows", s.forces ? s.forces->frames.size() : 0,
                                                             s.forces ? s.forces->windows.size() : 0),
                                                 "forces"));
+  rows.emplace_back("error budget against the truth", or_none(!f.validation.empty(), f.validation.string(), "validate"));
   return rows;
 }
 
@@ -67,13 +68,17 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
   PageContent page;
   page.title = report_title(run_dir, options.title);
   page.panels = build_panels(experiment, simulation, options.panels);
+  if (!files.validation.empty()) page.budget = error_budget(validate::read_validation(files.validation));
+  std::vector<const Chart*> charts = panel_charts(page.panels);
+  for (const BudgetLine& l : page.budget)
+    if (l.chart) charts.push_back(&*l.chart);
   fs::create_directories(img_dir);
   nlohmann::json spec = {{"charts", nlohmann::json::array()}};
-  for (const Chart* c : panel_charts(page.panels)) spec["charts"].push_back(to_json(*c));
+  for (const Chart* c : charts) spec["charts"].push_back(to_json(*c));
   const fs::path spec_path = img_dir / "charts.json";
   std::ofstream(spec_path) << spec.dump(1) << "\n";
   run_chart_script(options.python, options.script, spec_path, img_dir);
-  for (const Chart* c : panel_charts(page.panels)) page.images[c->file] = read_binary_file(img_dir / c->file);
+  for (const Chart* c : charts) page.images[c->file] = read_binary_file(img_dir / c->file);
   done(3);
 
   const auto bench = find_bench_charts(options.bench_img);
@@ -93,6 +98,8 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
   out.bench_charts = bench.size();
   for (const Panel& p : page.panels)
     for (const Side* side : {&p.experiment, &p.simulation}) (side->chart ? out.charts : out.sides_without) += 1;
+  out.budget_lines = page.budget.size();
+  for (const BudgetLine& l : page.budget) out.budget_charts += l.chart ? 1 : 0;
   return out;
 }
 

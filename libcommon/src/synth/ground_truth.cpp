@@ -7,6 +7,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/shape/sh_basis.hpp"
 
@@ -161,6 +162,102 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
     f.write(sg::curve_volumetric_strain, c.volumetric_strain, with_units("1"));
   }
   io::write_history(f, history);
+}
+
+namespace {
+constexpr const char* kRewrite = "rewrite the series with ctsynth";
+
+// A float table of `rows` x `width` from `f` (DataError naming it otherwise), every value finite.
+std::vector<double> finite_table(const io::H5File& f, const std::string& name, std::size_t rows, std::size_t width) {
+  std::vector<hsize_t> dims;
+  std::vector<double> v = f.read<double>(name, &dims);
+  if (v.size() != rows * width || dims.empty() || dims[0] != rows)
+    throw DataError(f.path().string() + ": " + name + " does not hold " + std::to_string(rows) + " rows of " +
+                    std::to_string(width) + "; " + kRewrite);
+  io::require_finite(f, name, v, width, kRewrite);
+  return v;
+}
+}  // namespace
+
+GroundTruth read_ground_truth(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::ground_truth, "pass a truth_NNN.h5 that ctsynth wrote beside its scan");
+  GroundTruth t;
+  const std::string root = schema::path::root;
+  t.scan_index = static_cast<int>(f.attr_int(root, sg::scan_index).value_or(0));
+  t.axial_strain = f.attr_double(root, sg::axial_strain);
+  t.sample_height = f.attr_double(root, sg::sample_height);
+  t.sample_radius = f.attr_double(root, sg::sample_radius);
+  t.solid_fraction = f.attr_double(root, sg::solid_fraction);
+  t.void_ratio = f.attr_double(root, sg::void_ratio);
+  t.contact_tolerance = f.attr_double(root, sg::contact_tolerance);
+  t.labels = io::read_image_as<std::uint32_t>(f, schema::path::labels);
+
+  const std::size_t n = io::table_rows(f, "/grains", kRewrite);
+  const std::vector<std::uint32_t> label = f.read<std::uint32_t>(sg::grain_label);
+  for (std::size_t i = 0; i < label.size(); ++i)
+    if (label[i] != i + 1)
+      throw DataError(path.string() + ": " + sg::grain_label + " must number the grains 1..N in order; " + kRewrite);
+  const auto centroid = finite_table(f, sg::grain_centroid, n, 3), orientation = finite_table(f, sg::grain_orientation, n, 4);
+  t.poses.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    t.poses[i].position = Eigen::Vector3d(centroid[3 * i], centroid[3 * i + 1], centroid[3 * i + 2]);
+    t.poses[i].orientation = Eigen::Quaterniond(orientation[4 * i], orientation[4 * i + 1], orientation[4 * i + 2],
+                                                orientation[4 * i + 3]);
+  }
+  t.volume = finite_table(f, sg::grain_volume, n, 1);
+  t.equivalent_diameter = finite_table(f, sg::grain_equivalent_diameter, n, 1);
+  t.sphericity = finite_table(f, sg::grain_sphericity, n, 1);
+  t.aspect_ratio = finite_table(f, sg::grain_aspect_ratio, n, 1);
+  if (f.exists(sg::grain_multi_exit_fraction)) {
+    const auto me = finite_table(f, sg::grain_multi_exit_fraction, n, 1), hv = finite_table(f, sg::grain_hidden_void_fraction, n, 1),
+               rd = finite_table(f, sg::grain_reentry_depth, n, 1);
+    t.non_star.resize(n);
+    for (std::size_t i = 0; i < n; ++i) t.non_star[i] = {me[i], hv[i], rd[i]};
+  }
+  t.sh_degree = static_cast<int>(f.attr_int(sg::sh_coeffs, schema::attr::sh_degree).value_or(-1));
+  if (t.sh_degree < 0) throw DataError(path.string() + ": " + sg::sh_coeffs + " has no whole-number degree attribute; " + kRewrite);
+  const std::size_t ncoef = static_cast<std::size_t>(t.sh_degree + 1) * (t.sh_degree + 1);
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const auto matrix = [&](const char* name, std::size_t width) {
+    const auto v = finite_table(f, name, n, width);
+    return Eigen::MatrixXd(Eigen::Map<const RowMajor>(v.data(), Eigen::Index(n), Eigen::Index(width)));
+  };
+  t.sh_coeffs = matrix(sg::sh_coeffs, ncoef);
+  t.sh_coeffs_body = matrix(sg::sh_coeffs_body, ncoef);
+  t.sh_invariants = matrix(sg::sh_invariants, static_cast<std::size_t>(t.sh_degree + 1));
+
+  const std::size_t m = io::table_rows(f, "/contacts", kRewrite);
+  const std::vector<std::uint32_t> pair = m ? f.read<std::uint32_t>(sg::contact_pair) : std::vector<std::uint32_t>{};
+  const auto normal = finite_table(f, sg::contact_normal, m, 3), point = finite_table(f, sg::contact_point, m, 3),
+             overlap = finite_table(f, sg::contact_overlap, m, 1);
+  const std::vector<std::uint8_t> touching = m ? f.read<std::uint8_t>(sg::contact_touching) : std::vector<std::uint8_t>{};
+  if (pair.size() != 2 * m || touching.size() != m)
+    throw DataError(path.string() + ": the /contacts columns differ in length; " + kRewrite);
+  t.contacts.resize(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    TrueContact& c = t.contacts[k];
+    c.low = pair[2 * k], c.high = pair[2 * k + 1];
+    if (c.low == 0 || c.low >= c.high || c.high > n)
+      throw DataError(path.string() + ": " + sg::contact_pair + " row " + std::to_string(k) + " is not two grain labels, low first; " +
+                      kRewrite);
+    c.overlap = overlap[k];
+    c.point = Eigen::Vector3d(point[3 * k], point[3 * k + 1], point[3 * k + 2]);
+    c.normal = Eigen::Vector3d(normal[3 * k], normal[3 * k + 1], normal[3 * k + 2]);
+    c.touching = touching[k] != 0;
+  }
+  t.simulated = f.attr_string(root, sg::loading).value_or("prescribed") == "simulated";
+  if (t.simulated) {
+    const auto force = finite_table(f, sg::contact_force, m, 3);
+    t.contact_force.resize(m);
+    for (std::size_t k = 0; k < m; ++k) t.contact_force[k] = Eigen::Vector3d(force[3 * k], force[3 * k + 1], force[3 * k + 2]);
+    t.stress_ratio = f.attr_double(root, sg::stress_ratio);
+    t.volumetric_strain = f.attr_double(root, sg::volumetric_strain);
+    const std::size_t k = io::table_rows(f, "/loading", kRewrite);
+    t.loading_curve.axial_strain = finite_table(f, sg::curve_axial_strain, k, 1);
+    t.loading_curve.stress_ratio = finite_table(f, sg::curve_stress_ratio, k, 1);
+    t.loading_curve.volumetric_strain = finite_table(f, sg::curve_volumetric_strain, k, 1);
+  }
+  return t;
 }
 
 }  // namespace graintwin::synth

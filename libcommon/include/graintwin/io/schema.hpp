@@ -504,3 +504,24 @@ inline constexpr const char* curve_axial_strain = "/loading/axial_strain";      
 inline constexpr const char* curve_stress_ratio = "/loading/stress_ratio";            ///< (K) sigma_1 / sigma_3
 inline constexpr const char* curve_volumetric_strain = "/loading/volumetric_strain";  ///< (K) ln(V0 / V)
 }  // namespace graintwin::schema::ground_truth
+
+// validation.json (validate; JSON, not HDF5), layout in docs/formats.md: the sections of a run's
+// error budget against ctsynth's ground truth. Each section holds its summary numbers and, under
+// `scans` or `increments`, the per-scan or per-increment lines (field names in docs/validate.md).
+namespace graintwin::schema::validation {
+inline constexpr const char* kind = "validation";  ///< value of the top-level key attr::kind
+inline constexpr int version = 1;                   ///< value of the top-level key attr::schema_version
+inline constexpr const char* run = "run";
+inline constexpr const char* series = "series";
+inline constexpr const char* segmentation = "segmentation";
+inline constexpr const char* contacts = "contacts";
+inline constexpr const char* shapes = "shapes";
+inline constexpr const char* tracking = "tracking";
+inline constexpr const char* d2min = "d2min";
+inline constexpr const char* eps_q = "eps_q";
+inline constexpr const char* clusters = "clusters";
+inline constexpr const char* twin = "twin";
+inline constexpr const char* scans = "scans";            ///< per-scan lines of segmentation, contacts, shapes
+inline constexpr const char* increments = "increments";  ///< per-increment lines of tracking and d2min
+inline constexpr const char* history = "history";        ///< the inputs' provenance lines, then validate's own
+}  // namespace graintwin::schema::validation

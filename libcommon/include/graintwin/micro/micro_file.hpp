@@ -69,7 +69,8 @@ struct MicroIncrementTables {
   std::size_t size_tail = 0;
   double fractal_dimension = 0.0, fractal_dimension_error = 0.0;
 };
-/// The per-state and per-increment tables of a kind=micro file and the grains' labels and D2min.
+/// The per-state and per-increment tables of a kind=micro file and the grains' labels, D2min, eps_q
+/// and clusters.
 struct MicroTables {
   std::string source;  ///< "tracks" or "fdem_results" (its /micro/parameters)
   std::vector<double> state_d50;  ///< T, m
@@ -78,6 +79,9 @@ struct MicroTables {
   std::size_t grains = 0;                        ///< N
   std::vector<std::uint32_t> grain_label;        ///< N x T, 0 = absent
   std::vector<double> grain_d2min;               ///< N x K, D2min / d50^2
+  std::vector<double> grain_eps_q;               ///< N x K
+  std::vector<std::int32_t> grain_cluster;       ///< N x K, cluster id, -1 = not among the top-fraction D2min grains
+  std::string parameters_json;                   ///< /micro/parameters: every option the run used
 };
 
 /// The checks read_micro_tables makes on the tables of an open kind=micro file (io/table_checks):

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "graintwin/report/error_budget.hpp"
 #include "graintwin/report/panels.hpp"
 
 namespace graintwin::report {
@@ -41,6 +42,9 @@ struct PageContent {
   std::string title;
   std::vector<std::pair<std::string, std::string>> summary;  ///< (item, value) rows of the run summary
   std::vector<Panel> panels;
+  /// The error budget's lines (error_budget); empty when the run has no validation.json, and then
+  /// the section says so (kNoValidation).
+  std::vector<BudgetLine> budget;
   std::map<std::string, std::string> images;  ///< chart file name -> PNG bytes
   std::vector<std::pair<BenchChart, std::string>> bench_charts;  ///< with their PNG bytes
   std::vector<std::pair<std::string, std::vector<std::string>>> provenance;  ///< file -> history lines
@@ -49,7 +53,7 @@ struct PageContent {
 
 /// The whole page. Every <img> is a data URI; a small script counts the images that decoded
 /// (naturalWidth > 0) into the body's data-images-loaded attribute beside data-images-total, so a
-/// headless browser can check the page. DataError when a panel's chart has no image.
+/// headless browser can check the page. DataError when a panel's or a budget line's chart has no image.
 std::string report_html(const PageContent& content);
 
 /// Runs `python` `script` `charts_json` `out_dir` as a child process (no shell) and waits; the

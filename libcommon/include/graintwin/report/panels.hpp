@@ -11,6 +11,15 @@
 
 namespace graintwin::report {
 
+/// Why a chart is missing when a stage has not run (panels and the error budget say the same).
+inline constexpr const char* kNoSimulation =
+    "This run has no simulation results (simulation.h5, kind=fdem_results): the pipeline's simulate stage (fdemrun) makes them.";
+inline constexpr const char* kNoMicro =
+    "This run has no micro-mechanics of the scans (micro.h5): the micro stage (tracks2micro) makes it from two scans or more.";
+inline constexpr const char* kNoContacts =
+    "This run has no contacts files (scan_*/contacts.h5): the contacts stage (labels2contacts) makes them.";
+inline constexpr const char* kNoShapes = "This run has no shapes files (scan_*/shapes.h5): the shapes stage (labels2shapes) makes them.";
+
 struct Side {
   std::optional<Chart> chart;
   std::string missing;  ///< why there is no chart (set exactly when chart is empty)

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "graintwin/fdem/results_file.hpp"
+#include "graintwin/io/run_layout.hpp"
 #include "graintwin/micro/distributions.hpp"
 #include "graintwin/micro/forces.hpp"
 #include "graintwin/micro/forces_file.hpp"
@@ -27,21 +28,11 @@ struct RunFiles {
   fs::path tracks, micro, model;
   fs::path simulation, forces, simulation_micro;
   fs::path scan_strains;  ///< JSON with the scans' applied axial strains (ctsynth's series.json)
+  fs::path validation;    ///< validate's error budget against the series' ground truth (validation.json)
 };
 
 /// The file names of Makefile.pipeline inside a run directory.
-namespace layout {
-inline constexpr const char* scan_prefix = "scan_";  ///< scan folders: scan_000, scan_001, ...
-inline constexpr const char* labels = "labels.h5";
-inline constexpr const char* contacts = "contacts.h5";
-inline constexpr const char* shapes = "shapes.h5";
-inline constexpr const char* tracks = "tracks.h5";
-inline constexpr const char* micro = "micro.h5";
-inline constexpr const char* model = "model.h5";
-inline constexpr const char* simulation = "simulation.h5";
-inline constexpr const char* forces = "forces.h5";
-inline constexpr const char* simulation_micro = "simulation_micro.h5";
-}  // namespace layout
+namespace layout = io::run_layout;
 
 /// UsageError "WHAT PATH does not exist; check the path" (or "is a folder, not a file; FIX", or "is
 /// not a regular file ...; FIX") unless `path` is a regular file or a link to one. `what` names the
@@ -59,7 +50,8 @@ void require_folder(const fs::path& path, const std::string& what, const std::st
 RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given);
 
 /// Opens every file of `files` and checks its kind (UsageError naming the file and the stage that
-/// writes it). Returns each file's provenance history, keyed by path, in reading order.
+/// writes it; validation.json is read whole by validate's reader). Returns each file's provenance
+/// history, keyed by path, in reading order.
 std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(const RunFiles& files);
 
 /// One scan: its void ratio (labels), size distribution (shapes), coordination numbers and roses

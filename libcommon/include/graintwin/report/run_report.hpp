@@ -38,11 +38,14 @@ struct ReportPage {
   std::size_t charts = 0;          ///< panel sides with a chart
   std::size_t sides_without = 0;   ///< panel sides without data (the page says why)
   std::size_t bench_charts = 0;
+  std::size_t budget_lines = 0;    ///< lines of the error budget (0 without validation.json)
+  std::size_t budget_charts = 0;   ///< of them, lines with a chart
 };
 
 /// The report of the run in `run_dir`: its `files` (located and checked; `provenance` is what
 /// check_run_files gave) read, the panels built, charts.json and every chart's PNG written into
-/// `img_dir` (created) by the chart script, the benchmark charts copied into `img_dir`/bench, and
+/// `img_dir` (created) by the chart script (with the error budget's, from validation.json when the
+/// run has one), the benchmark charts copied into `img_dir`/bench, and
 /// the self-contained page. `generated_by` is the report run's own history line. What was read is
 /// logged, and a missing set of benchmark charts warned about; `progress` (may be empty) gets the
 /// fraction done. DataError from the readers and the chart script.

@@ -85,4 +85,10 @@ struct GroundTruth {
 void write_ground_truth(const std::filesystem::path& path, const GroundTruth& truth,
                         const std::vector<std::string>& history);
 
+/// Reads a truth_NNN.h5 back into a GroundTruth (the non-star measures only when the file has them).
+/// UsageError naming the file when it is not kind=ground_truth; DataError naming the file and the
+/// dataset when its tables disagree in length or hold a value ctsynth never writes (NaN or infinity
+/// in a position, volume, coefficient, normal or the loading curve).
+GroundTruth read_ground_truth(const std::filesystem::path& path);
+
 }  // namespace graintwin::synth

@@ -1,13 +1,14 @@
 #pragma once
 // Label image against ctsynth ground truth: which true grains a segmentation reproduces. The one
-// scoring rule every benchmark uses (ct2labels_accuracy_bench, shapes2tracks_bench).
+// scoring rule of segmentation: validate's error budget and the benchmarks (ct2labels_accuracy_bench,
+// shapes2tracks_bench) use it.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "graintwin/core/volume.hpp"
 
-namespace graintwin::bench {
+namespace graintwin::validate {
 
 /// A true grain is matched when one label covers it with IoU >= 0.8 (above 0.5 a match is
 /// necessarily one-to-one).
@@ -43,7 +44,7 @@ struct MatchResult {
   std::vector<std::uint32_t> faithful_grain() const;
 };
 
-/// Scores `pred` against `truth` (same shape; std::runtime_error otherwise).
+/// Scores `pred` against `truth` (same shape; DataError otherwise).
 MatchResult match_labels(const Volume<std::uint32_t>& truth, const Volume<std::uint32_t>& pred);
 
-}  // namespace graintwin::bench
+}  // namespace graintwin::validate

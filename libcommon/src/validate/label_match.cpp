@@ -1,10 +1,11 @@
-#include "label_match.hpp"
+#include "graintwin/validate/label_match.hpp"
 
 #include <algorithm>
-#include <stdexcept>
 #include <unordered_map>
 
-namespace graintwin::bench {
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::validate {
 
 const char* name(LabelOutcome o) {
   switch (o) {
@@ -31,7 +32,7 @@ std::vector<std::uint32_t> MatchResult::faithful_grain() const {
 }
 
 MatchResult match_labels(const Volume<std::uint32_t>& truth, const Volume<std::uint32_t>& pred) {
-  if (truth.shape() != pred.shape()) throw std::runtime_error("truth and labels differ in shape");
+  if (truth.shape() != pred.shape()) throw DataError("the truth and the labels differ in shape: score a segmentation of the scan the truth was written with");
   const std::uint32_t* t = truth.data();
   const std::uint32_t* p = pred.data();
   const std::size_t n = truth.size();
@@ -100,4 +101,4 @@ MatchResult match_labels(const Volume<std::uint32_t>& truth, const Volume<std::u
   return r;
 }
 
-}  // namespace graintwin::bench
+}  // namespace graintwin::validate
