@@ -409,8 +409,12 @@ void expect_triaxial_results(const std::filesystem::path& out, const std::string
   const auto eps1 = f.read<double>(sr::series_axial_strain), epsv = f.read<double>(sr::series_volumetric_strain);
   const auto ratio = f.read<double>(sr::series_stress_ratio), lateral = f.read<double>(sr::series_lateral_stress);
   const auto volume = f.read<double>(sr::series_volume), radial = f.read<double>(sr::series_volume_radial);
-  const auto inertial = f.read<double>(sr::series_inertial_number);
+  const auto inertial = f.read<double>(sr::series_inertial_number), kinetic = f.read<double>(sr::series_kinetic_ratio);
   ASSERT_EQ(eps1.size(), stage.size());
+  ASSERT_EQ(kinetic.size(), stage.size());
+  // The cubes start apart: no stored energy, so no kinetic ratio (NaN), never an infinity.
+  EXPECT_TRUE(std::isnan(kinetic.front()));
+  EXPECT_TRUE(std::none_of(kinetic.begin(), kinetic.end(), [](double k) { return std::isinf(k); }));
   const std::uint32_t shearing = static_cast<std::uint32_t>(stages.size() - 1);
   double before = -1;
   for (std::size_t i = 0; i < stage.size(); ++i) {

@@ -178,10 +178,7 @@ void ResultsWriter::write_triaxial_columns() {
          [&](std::size_t i, const TriaxialMeasure& m) { return strained(i) ? std::log(reference_height_ / m.height) : nan; }, "1");
   column(sr::series_volumetric_strain,
          [&](std::size_t i, const TriaxialMeasure& m) { return strained(i) ? std::log(reference_volume_ / m.volume) : nan; }, "1");
-  column(sr::series_kinetic_ratio, [&](std::size_t i, const TriaxialMeasure&) {
-    const Energies& e = rows_[i].energies;
-    return e.kinetic / (e.strain + e.contact_elastic);
-  }, "1");
+  column(sr::series_kinetic_ratio, [&](std::size_t i, const TriaxialMeasure&) { return rows_[i].energies.kinetic_ratio(); }, "1");
   column(sr::series_inertial_number, [&](std::size_t i, const TriaxialMeasure&) { return rows_[i].triaxial->inertial_number; }, "1");
 }
 

@@ -187,8 +187,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   summary.shear_steps = shear(solver, boundary, options, ShearOptions{summary.strain_rate, spec.target_axial_strain, spec.shear_ramp_strain}, dt,
                               [&](const TriaxialMeasure& m, const StepReport& r) {
                                 book(m, r);
-                                const Energies& e = r.energies;
-                                run.max_kinetic_ratio = std::max(run.max_kinetic_ratio, e.kinetic / (e.strain + e.contact_elastic));
+                                run.max_kinetic_ratio = std::max(run.max_kinetic_ratio, r.energies.kinetic_ratio());
                                 const double strain = std::log(run.start.height / m.height);
                                 for (; run.next_frame < spec.frame_strains.size() && strain >= spec.frame_strains[run.next_frame]; ++run.next_frame)
                                   take_frame(strain);

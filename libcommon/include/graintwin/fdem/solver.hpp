@@ -69,6 +69,12 @@ struct Energies {
   double kinetic = 0, strain = 0, contact_elastic = 0;
   double dissipated = 0, external_work = 0;  ///< cumulative up to t_n
   double mechanical() const { return kinetic + strain + contact_elastic; }
+  /// Kinetic over stored elastic energy (quasi-static below about 0.05); NaN, never an infinity,
+  /// while nothing is stored (grains not yet in contact).
+  double kinetic_ratio() const {
+    const double stored = strain + contact_elastic;
+    return stored > 0 ? kinetic / stored : std::numeric_limits<double>::quiet_NaN();
+  }
 };
 
 /// The time-step limits, s; infinity where a limit does not apply.
