@@ -258,7 +258,7 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
 void write_checkpoint(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest,
                       const std::function<void(io::H5File&)>& also) {
   io::H5File f = io::H5File::create(path);
-  io::write_root_attrs(f, sr::checkpoint_kind);
+  io::write_root_attrs(f, schema::kind::fdem_checkpoint);
   f.set_attr(schema::path::root, ck::scene_digest, scene_digest);
   solver.save(f, ck::state);
   if (also) also(f);
@@ -266,7 +266,7 @@ void write_checkpoint(const std::filesystem::path& path, const Solver& solver, c
 
 void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest,
                      const std::function<void(const io::H5File&)>& also) {
-  const io::H5File f = io::open_kind(path, sr::checkpoint_kind, "pass a checkpoint written by fdemrun --checkpoint");
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_checkpoint, "pass a checkpoint written by fdemrun --checkpoint");
   if (f.attr_string(schema::path::root, ck::scene_digest).value_or("") != scene_digest)
     throw UsageError("checkpoint " + path.string() + " was written for another scene or model; restart with the scene that wrote it");
   solver.load(f, ck::state);

@@ -32,8 +32,8 @@ PlatenPair find_platens(const Model& model) {
   std::optional<std::size_t> bottom, top;
   for (std::size_t p = 0; p < model.platens.size(); ++p) {
     const Platen& platen = model.platens[p];
-    if (platen.name == "bottom" && platen.normal.normalized().z() > 0.999) bottom = p;
-    if (platen.name == "top" && platen.normal.normalized().z() < -0.999) top = p;
+    if (platen.name == kBottomPlaten && platen.normal.normalized().z() > 0.999) bottom = p;
+    if (platen.name == kTopPlaten && platen.normal.normalized().z() < -0.999) top = p;
   }
   if (!bottom || !top)
     throw UsageError("a triaxial test needs a platen named 'bottom' with normal +z and one named 'top' with normal -z; "

@@ -210,8 +210,8 @@ std::unordered_set<std::uint32_t> labels_within(const Volume<std::uint32_t>& lab
 
 std::vector<fdem::Platen> end_platens(const fdem::SampleCylinder& s, double friction) {
   const Vec centre(s.axis_xy.x(), s.axis_xy.y(), 0.0);
-  return {fdem::Platen{"bottom", centre + Vec(0, 0, s.z_min), Vec::UnitZ(), friction},
-          fdem::Platen{"top", centre + Vec(0, 0, s.z_max), -Vec::UnitZ(), friction}};
+  return {fdem::Platen{fdem::kBottomPlaten, centre + Vec(0, 0, s.z_min), Vec::UnitZ(), friction},
+          fdem::Platen{fdem::kTopPlaten, centre + Vec(0, 0, s.z_max), -Vec::UnitZ(), friction}};
 }
 
 }  // namespace graintwin::mesh

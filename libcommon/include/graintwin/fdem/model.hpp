@@ -38,9 +38,13 @@ struct Grain {
   std::uint32_t triangle_begin = 0, triangle_end = 0;
 };
 
+/// The names of a sample's end platens, by which the triaxial test finds them.
+inline constexpr const char* kBottomPlaten = "bottom";
+inline constexpr const char* kTopPlaten = "top";
+
 /// A rigid plane (platen): the half-space behind it is solid. Moved by the loading protocol.
 struct Platen {
-  std::string name;             ///< "bottom", "top"
+  std::string name;             ///< kBottomPlaten, kTopPlaten, or a scene's own
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< m, a point on the plane
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); ///< unit, pointing into the sample
   double friction = 0.0;        ///< smooth platens by default (docs/methods.md, FDEM)

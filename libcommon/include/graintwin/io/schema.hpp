@@ -14,6 +14,7 @@ inline constexpr const char* shapes = "shapes";
 inline constexpr const char* tracks = "tracks";
 inline constexpr const char* fdem_model = "fdem_model";
 inline constexpr const char* fdem_results = "fdem_results";
+inline constexpr const char* fdem_checkpoint = "fdem_checkpoint";  ///< fdemrun --checkpoint
 inline constexpr const char* ground_truth = "ground_truth";
 inline constexpr const char* micro = "micro";
 inline constexpr const char* forces = "forces";
@@ -257,7 +258,6 @@ inline constexpr const char* rg_fit_clusters = "rg_fit_clusters";      ///< attr
 // kind=fdem_results (fdemrun), layout in docs/formats.md. R series rows, P platens, G grains,
 // M contacts of a frame; frames are groups /frames/000000, /frames/000001, ...
 namespace graintwin::schema::fdem_results {
-inline constexpr const char* checkpoint_kind = "fdem_checkpoint";    ///< kind of fdemrun's checkpoint files
 inline constexpr const char* series = "/series";                      ///< group of (R) columns
 inline constexpr const char* series_time = "/series/time";            ///< (R) s
 inline constexpr const char* series_step = "/series/step";            ///< uint64 (R)
@@ -299,7 +299,7 @@ inline constexpr const char* contact_force = "contacts/force";        ///< (M x 
 inline constexpr const char* contact_overlap = "contacts/overlap";    ///< (M) m
 }  // namespace graintwin::schema::fdem_results
 
-// fdemrun's checkpoints (kind schema::fdem_results::checkpoint_kind), layout in docs/formats.md: the
+// fdemrun's checkpoints (kind schema::kind::fdem_checkpoint), layout in docs/formats.md: the
 // solver's state under /state, the contact history and the sample boundary in its groups, a
 // triaxial test's progress under /triaxial. Member names are relative to their group.
 namespace graintwin::schema::fdem_checkpoint {
