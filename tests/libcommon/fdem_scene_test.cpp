@@ -159,6 +159,15 @@ point = [0, 0, -2e-3]
   for (const Grain& g : o.grains) EXPECT_EQ(g.kind, GrainKind::rigid);
 }
 
+// The shapes' names are one table for the scene reader and its messages: each names one shape.
+TEST(FdemScene, PrimitiveShapeNamesReadBackAsTheirShapes) {
+  for (const auto& [shape, name] : kPrimitiveShapeNames) {
+    EXPECT_EQ(find_enum(kPrimitiveShapeNames, name), shape) << name;
+    EXPECT_STREQ(enum_name(kPrimitiveShapeNames, shape), name);
+  }
+  EXPECT_FALSE(find_enum(kPrimitiveShapeNames, "cone"));
+}
+
 TEST(FdemScene, BadModelAndShapeTablesFailWithTheFix) {
   test::TempDir dir;
   Model file_model;

@@ -34,7 +34,7 @@ TEST(FdemVerifyHertz, GradedSizeGrowsLinearlyFromTheNearestPointUpToTheCoarseSiz
 TEST(FdemVerifyHertz, GradedSphereIsFineAtItsPoleOnly) {
   const double R = 1e-3, fine = R / 40, coarse = R / 3;
   GrainSpec sphere;
-  sphere.shape = "sphere";
+  sphere.shape = PrimitiveShape::sphere;
   sphere.size = Eigen::Vector3d::Constant(R);
   sphere.kind = GrainKind::tet4;
   sphere.label = 1;
@@ -89,7 +89,7 @@ TEST(FdemVerifyHertz, HertzFiguresAndSlidingSolution) {
 
   Model m;
   GrainSpec sphere;
-  sphere.shape = "sphere";
+  sphere.shape = PrimitiveShape::sphere;
   sphere.size = Eigen::Vector3d::Constant(1e-3);
   sphere.element_size = 0.5e-3;
   sphere.label = 1;

@@ -228,7 +228,7 @@ TEST(FdemVerify, ElasticSphereReboundsOnItsContactNodesSpring) {
   Model m;
   m.materials[0] = Material{"glass", 2500, 48e9, 0.2, 0.0, 48e11, 48e11, 0.0};
   GrainSpec sphere;
-  sphere.shape = "sphere";
+  sphere.shape = PrimitiveShape::sphere;
   sphere.size = Eigen::Vector3d::Constant(1e-3);
   sphere.position = Eigen::Vector3d(0, 0, 1e-3 + 1e-7);
   sphere.element_size = 1e-3 / 3;

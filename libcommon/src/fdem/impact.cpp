@@ -66,7 +66,7 @@ ImpactOutcome run_impact(const ImpactSetup& setup, const GradedGrainMesher& mesh
   for (int k = 0; k < spheres; ++k) {
     const double side = k == 0 ? 1.0 : -1.0;  // upper sphere, then the lower one
     GrainSpec sphere;
-    sphere.shape = "sphere";
+    sphere.shape = PrimitiveShape::sphere;
     sphere.size = Eigen::Vector3d::Constant(R);
     sphere.position = Eigen::Vector3d(0, 0, side * (R + gap));
     sphere.element_size = setup.coarse;

@@ -330,35 +330,42 @@ void parse_grains(const toml::table& root, const std::string& file, const std::v
                   {"shape", "size", "radius", "semi_axes", "rotation", "position", "element_size", "kind", "material",
                    "label", "velocity", "angular_velocity", "refine_at", "fine_element_size", "size_growth"});
     GrainSpec spec;
-    spec.shape = t.text("shape", "box");
+    const std::string shape_name = t.text("shape", "box");
+    const std::optional<PrimitiveShape> shape = find_enum(kPrimitiveShapeNames, shape_name);
+    if (!shape) t.fail("shape '" + excerpt(shape_name) + "' is unknown; use box, sphere or ellipsoid");
+    spec.shape = *shape;
     // Each shape takes exactly its own size keys, so a box given a radius is an error, not ignored.
     const auto only = [&](const char* key, std::initializer_list<const char*> others) {
       for (const char* other : others)
-        if (t.has(other)) t.fail(std::string(other) + " does not apply to a " + spec.shape + "; give " + key);
-      if (!t.has(key)) t.fail(std::string(key) + " is missing for the " + spec.shape);
+        if (t.has(other)) t.fail(std::string(other) + " does not apply to a " + shape_name + "; give " + key);
+      if (!t.has(key)) t.fail(std::string(key) + " is missing for the " + shape_name);
     };
-    if (spec.shape == "box") {
-      only("size", {"radius", "semi_axes", "rotation"});
-      spec.size = t.vector("size", Eigen::Vector3d::Zero());
-    } else if (spec.shape == "sphere") {
-      only("radius", {"size", "semi_axes", "rotation"});
-      spec.size = Eigen::Vector3d::Constant(t.positive("radius", 0));
-    } else if (spec.shape == "ellipsoid") {
-      only("semi_axes", {"size", "radius"});
-      spec.size = t.vector("semi_axes", Eigen::Vector3d::Zero());
-      const Eigen::Vector3d r = t.vector("rotation", Eigen::Vector3d::Zero());
-      if (r.norm() > 0) spec.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()));
-    } else {
-      t.fail("shape '" + excerpt(spec.shape) + "' is unknown; use box, sphere or ellipsoid");
+    switch (spec.shape) {
+      case PrimitiveShape::box:
+        only("size", {"radius", "semi_axes", "rotation"});
+        spec.size = t.vector("size", Eigen::Vector3d::Zero());
+        break;
+      case PrimitiveShape::sphere:
+        only("radius", {"size", "semi_axes", "rotation"});
+        spec.size = Eigen::Vector3d::Constant(t.positive("radius", 0));
+        break;
+      case PrimitiveShape::ellipsoid: {
+        only("semi_axes", {"size", "radius"});
+        spec.size = t.vector("semi_axes", Eigen::Vector3d::Zero());
+        const Eigen::Vector3d r = t.vector("rotation", Eigen::Vector3d::Zero());
+        if (r.norm() > 0) spec.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(r.norm(), r.normalized()));
+        break;
+      }
     }
-    if (!(spec.size.minCoeff() > 0)) t.fail("the " + spec.shape + "'s size must be positive in every direction");
+    if (!(spec.size.minCoeff() > 0)) t.fail("the " + shape_name + "'s size must be positive in every direction");
     spec.position = t.vector("position", Eigen::Vector3d::Zero());
     // Boxes mesh exactly with one cell across; a curved surface needs a few elements per radius.
-    spec.element_size = t.positive("element_size", spec.shape == "box" ? spec.size.minCoeff() : spec.size.minCoeff() / 2);
+    const bool box = spec.shape == PrimitiveShape::box;
+    spec.element_size = t.positive("element_size", box ? spec.size.minCoeff() : spec.size.minCoeff() / 2);
     if (spec.size.maxCoeff() / spec.element_size > 200)
       t.fail("element_size is below 1/200 of the grain; give a larger element_size");
     if (t.has("refine_at")) {
-      if (spec.shape == "box") t.fail("refine_at applies to spheres and ellipsoids; a box is meshed on a regular grid");
+      if (box) t.fail("refine_at applies to spheres and ellipsoids; a box is meshed on a regular grid");
       SizeGrading grading;
       grading.points = t.vectors("refine_at");
       if (!t.has("fine_element_size")) t.fail("fine_element_size is missing for refine_at; give the size at the points, e.g. 2e-5");
@@ -555,11 +562,11 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
   m.materials = scene.materials;
   m.platens.clear();
   for (const GrainSpec& g : scene.grains) {
-    if (g.shape == "box") {
+    if (g.shape == PrimitiveShape::box) {
       add_grain(m, box_mesh(g.size, g.element_size), g.position, g.kind, g.material, g.label);
     } else {
       if (!mesh_curved)
-        throw UsageError("grain label " + std::to_string(g.label) + " is a " + g.shape +
+        throw UsageError("grain label " + std::to_string(g.label) + " is a " + enum_name(kPrimitiveShapeNames, g.shape) +
                          ", which this program cannot mesh (gmsh is in graintwin_mesh); use fdemrun");
       mesh_curved(m, g);
     }

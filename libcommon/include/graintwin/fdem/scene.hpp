@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/fdem/initial_overlap.hpp"
 #include "graintwin/fdem/model.hpp"
 #include "graintwin/fdem/size_grading.hpp"
@@ -20,9 +21,14 @@
 
 namespace graintwin::fdem {
 
+/// The shapes a scene's [[grains]] may take, by their scene names.
+enum class PrimitiveShape { box, sphere, ellipsoid };
+inline constexpr std::array<EnumName<PrimitiveShape>, 3> kPrimitiveShapeNames{
+    {{PrimitiveShape::box, "box"}, {PrimitiveShape::sphere, "sphere"}, {PrimitiveShape::ellipsoid, "ellipsoid"}}};
+
 /// A primitive grain of the scene.
 struct GrainSpec {
-  std::string shape = "box";                                 ///< box | sphere | ellipsoid
+  PrimitiveShape shape = PrimitiveShape::box;
   /// m: box edges (x, y, z); sphere and ellipsoid: the semi-axes (a sphere's are its radius).
   Eigen::Vector3d size = Eigen::Vector3d::Zero();
   Eigen::Vector3d position = Eigen::Vector3d::Zero();        ///< m, centre
