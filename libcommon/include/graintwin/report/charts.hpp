@@ -21,7 +21,7 @@ struct Series {
   std::string name;
   std::string style = "line";
   std::vector<double> x, y;
-  std::string group;  ///< series of one non-empty group share a colour (data and its fit)
+  std::string group = {};  ///< series of one non-empty group share a colour (data and its fit)
 };
 
 /// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
