@@ -239,6 +239,20 @@ TEST_F(Validate, BadInputsAreRefusedWithNothingWritten) {
   for (int t = 0; t < kScans; ++t)
     fs::copy_file(g_series->run / ("scan_00" + std::to_string(t)) / "labels.h5", wrong / ("truth_00" + std::to_string(t) + ".h5"));
   test::expect_clean_failure("validate", out, {g_series->run.string(), wrong.path().string(), json}, 2, "ground_truth");
+  // A truncated truth file, and one whose poses hold a NaN.
+  test::TempDir damaged;
+  for (int t = 0; t < kScans; ++t) {
+    const std::string name = "truth_00" + std::to_string(t) + ".h5";
+    fs::copy_file(g_series->prescribed / name, damaged / name);
+  }
+  const fs::path first = damaged / "truth_000.h5";
+  fs::resize_file(first, fs::file_size(first) / 2);
+  test::expect_clean_failure("validate", out, {g_series->run.string(), damaged.path().string(), json}, 1, "truncated");
+  fs::copy_file(g_series->prescribed / "truth_000.h5", first, fs::copy_options::overwrite_existing);
+  auto centroid = io::H5File::open(first).read<double>(schema::ground_truth::grain_centroid);
+  centroid[3] = std::nan("");
+  test::replace_dataset(first, schema::ground_truth::grain_centroid, centroid, {centroid.size() / 3, 3});
+  test::expect_clean_failure("validate", out, {g_series->run.string(), damaged.path().string(), json}, 1, "NaN");
   // An existing output without --force.
   std::ofstream(json) << "{}";
   test::expect_clean_failure("validate", out, {g_series->run.string(), g_series->prescribed.string(), json}, 2, "--force");
