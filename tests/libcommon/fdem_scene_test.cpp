@@ -228,7 +228,12 @@ TEST(FdemScene, MaterialsAndRunKeysOutOfTheirRangeAreRefusedWithTheRange) {
   EXPECT_NE(error_of(run("keep_initial_overlaps = 1\n")).find("keep_initial_overlaps must be true or false"), std::string::npos);
   EXPECT_NE(error_of(run("mass_scaled_share = 0.5\n")).find("mass_scaled_share must lie in [0, 0.2]"), std::string::npos);
   EXPECT_NE(error_of(run("mass_scaled_share = nan\n")).find("mass_scaled_share must"), std::string::npos);
+  EXPECT_NE(error_of(run("time_step_fraction = 1.5\n")).find("time_step_fraction must be at most 1"), std::string::npos);
+  EXPECT_NE(error_of(run("time_step_fraction = 0\n")).find("time_step_fraction must be"), std::string::npos);
+  EXPECT_NE(error_of(run("time_step = 1e-9\ntime_step_fraction = 0.5\n")).find("give time_step or time_step_fraction, not both"),
+            std::string::npos);
   const Scene defaults = read_scene(run(""));
+  EXPECT_EQ(defaults.time_step_fraction, 1.0);
   EXPECT_EQ(defaults.overlaps.tolerance, 0.1);
   EXPECT_FALSE(defaults.overlaps.relax);
   EXPECT_EQ(defaults.max_steps, 1e7);

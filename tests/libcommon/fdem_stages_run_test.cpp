@@ -77,6 +77,12 @@ TEST(FdemStagesRun, ScheduleCountsTheStagesStepsAndIntervals) {
   EXPECT_EQ(b.frame_every, b.total);
   EXPECT_EQ(b.row_every, 1u);
   EXPECT_EQ(b.checkpoint_every, 0u);
+
+  // time_step_fraction scales the automatic step, and the step counts with it.
+  const Scene shorter = read_scene(write_text(run.dir, "f.toml", replaced(checkpointed_scene(), "contact = false", "contact = false\ntime_step_fraction = 0.98")));
+  const RunSchedule f = schedule_run(shorter, run.solver, "f.toml");
+  EXPECT_DOUBLE_EQ(f.dt, 0.98 * s.limits.stable());
+  EXPECT_EQ(f.total, 2 * steps_of(2e-5, f.dt));
 }
 
 TEST(FdemStagesRun, AnUnstableOrUnboundedTimeStepIsRefusedNamingTheScene) {

@@ -235,11 +235,15 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
   double duration = 0;
   if (const toml::table* run = root["run"].as_table()) {
     const Table r(*run, file + ": [run]",
-                  {"duration", "time_step", "element_safety", "rigid_contact_nodes", "gravity", "damping", "contact",
+                  {"duration", "time_step", "time_step_fraction", "element_safety", "rigid_contact_nodes", "gravity", "damping", "contact",
                    "frame_interval", "series_interval", "checkpoint_interval", "overlap_tolerance", "relax_overlaps",
                    "keep_initial_overlaps", "mass_scaled_share", "max_steps"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
+    s.time_step_fraction = r.positive("time_step_fraction", 1.0);
+    if (s.time_step_fraction > 1) r.fail("time_step_fraction must be at most 1 (a fraction of the stable limit)");
+    if (s.time_step > 0 && s.time_step_fraction != 1.0)
+      r.fail("give time_step or time_step_fraction, not both (the fraction scales the automatic step)");
     s.element_safety = r.positive("element_safety", 0.8);
     if (s.element_safety > 1) r.fail("element_safety must be at most 1 (a fraction of the critical step)");
     s.rigid_contact_nodes = r.number("rigid_contact_nodes", s.rigid_contact_nodes);

@@ -56,7 +56,7 @@ RunSchedule schedule_run(const Scene& scene, const Solver& solver, const std::st
   if (s.dt > 0) {
     solver.check_time_step(s.dt);
   } else {
-    s.dt = s.limits.stable();
+    s.dt = scene.time_step_fraction * s.limits.stable();
     if (!std::isfinite(s.dt))
       throw UsageError(where + ": no element or contact limit bounds the time step (rigid grains without contact); set "
                                "[run] time_step");

@@ -103,7 +103,10 @@ struct Scene {
   std::optional<TriaxialSpec> triaxial;   ///< a triaxial test instead of [[stages]]
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
   double damping = 0;                     ///< mass-proportional alpha, 1/s
-  double time_step = 0;                   ///< s; 0 = the stable limit
+  double time_step = 0;                   ///< s; 0 = the stable limit times time_step_fraction
+  /// The automatic step's share of the stable limit, in (0, 1]: a few per cent less is the smallest
+  /// perturbation of a run, which shows how far its chaotic outcome scatters (docs/fdemrun.md).
+  double time_step_fraction = 1.0;
   double element_safety = 0.8;            ///< fraction of the element critical step
   double rigid_contact_nodes = 12;        ///< SolverOptions::rigid_contact_nodes
   bool contact = true;
