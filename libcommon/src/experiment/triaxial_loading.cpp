@@ -95,17 +95,8 @@ std::vector<shape::GrainShape> body_shapes(const synth::GrainSet& grains) {
   std::vector<shape::GrainShape> out(grains.tables.size());
   for (std::size_t i = 0; i < out.size(); ++i) {
     shape::GrainShape& g = out[i];
-    const shape::ShapeStats& st = grains.stats[i];
     g.label = static_cast<std::uint32_t>(i + 1);
-    g.volume = st.volume;
-    g.surface_area = st.surface_area;
-    g.equivalent_diameter = st.equivalent_diameter;
-    g.sphericity = st.sphericity;
-    g.semi_axes = st.semi_axes;
-    g.axes = st.axes;
-    g.aspect_ratio = st.aspect_ratio;
-    g.elongation = st.semi_axes[1] / st.semi_axes[0];
-    g.flatness = st.semi_axes[2] / st.semi_axes[1];
+    shape::set_form(g, grains.stats[i]);
     g.sh_degree = grains.sh_degree;
     g.coeffs = grains.coeffs_body.row(static_cast<Eigen::Index>(i)).transpose();
   }

@@ -493,6 +493,24 @@ SizeDistribution size_distribution(const std::vector<double>& diameters, const s
   return psd;
 }
 
+void set_form(GrainShape& g, const ShapeStats& stats) {
+  g.volume = stats.volume;
+  g.surface_area = stats.surface_area;
+  g.equivalent_diameter = stats.equivalent_diameter;
+  g.sphericity = stats.sphericity;
+  g.semi_axes = stats.semi_axes;
+  g.axes = stats.axes;
+  g.aspect_ratio = stats.aspect_ratio;
+  g.elongation = stats.semi_axes[1] / stats.semi_axes[0];
+  g.flatness = stats.semi_axes[2] / stats.semi_axes[1];
+}
+
+SizeDistribution size_distribution(const std::vector<GrainShape>& grains) {
+  std::vector<double> d(grains.size()), v(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) d[i] = grains[i].equivalent_diameter, v[i] = grains[i].volume;
+  return size_distribution(d, v);
+}
+
 #define GRAINTWIN_MEASURE_INSTANTIATE(T)                                                                        \
   template GrainShape measure_grain(const Volume<std::uint32_t>&, const Volume<T>*, std::uint32_t,                \
                                     const std::array<std::size_t, 6>&, const ShFitter&, const MeasureOptions&);  \

@@ -161,9 +161,7 @@ ShapesFile scan_shapes(const SegmentedScan& scan, const ShFitter& fitter, const 
   }
 
   content.degree = fitter.degree();
-  std::vector<double> d(content.grains.size()), v(content.grains.size());
-  for (std::size_t i = 0; i < content.grains.size(); ++i) d[i] = content.grains[i].equivalent_diameter, v[i] = content.grains[i].volume;
-  content.psd = size_distribution(d, v);
+  content.psd = size_distribution(content.grains);
   nlohmann::json p = {{"degree", fitter.degree()},
                       {"requested_degree", params.degree},
                       {"directions", fitter.directions().size()},

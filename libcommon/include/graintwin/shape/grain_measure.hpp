@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "graintwin/core/volume.hpp"
+#include "graintwin/shape/sand_shape.hpp"
 #include "graintwin/shape/sh_fitter.hpp"
 
 namespace graintwin::shape {
@@ -92,6 +93,10 @@ struct GrainShape {
   std::uint8_t flags = 0;
 };
 
+/// Sets g's size and form from the descriptors of its exact surface: volume, surface area, diameter,
+/// sphericity, inertia ellipsoid and its aspect, elongation and flatness.
+void set_form(GrainShape& g, const ShapeStats& stats);
+
 /// Measures the grain `label` whose voxels lie in the half-open box `bbox` (z0, y0, x0, z1, y1, x1)
 /// of `labels`. `grey` (same shape) is required for SurfaceSource::grey, else ignored (may be
 /// null). Thread-safe: call it for many grains in parallel. DataError if the box holds no voxel of
@@ -145,5 +150,7 @@ struct SizeDistribution {
   double d50 = 0.0;
 };
 SizeDistribution size_distribution(const std::vector<double>& diameters, const std::vector<double>& volumes);
+/// The same of the grains' equivalent diameters and volumes.
+SizeDistribution size_distribution(const std::vector<GrainShape>& grains);
 
 }  // namespace graintwin::shape
