@@ -134,7 +134,7 @@ CaseResult run_case(const fs::path& scene_dir, int k, double noise, const std::v
   const segment::LabelsFile lf = segment::read_labels_file(out);
   c.match = match_labels(truth.labels, lf.labels);
   c.e_seg = lf.sample.void_ratio.e;
-  c.e_true = validate::true_void_ratio(truth.labels, lf.sample.region);  // the region ct2labels used
+  c.e_true = validate::true_void_ratio(truth.labels, lf.sample.region).e;  // the region ct2labels used
   const json p = json::parse(lf.parameters_json);
   c.h = p.value("h_vox", 0.0);
   c.solid_seg = p.value("solid_fraction", 0.0);

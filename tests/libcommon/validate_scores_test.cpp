@@ -70,10 +70,10 @@ TEST(ValidateSegmentation, TrueVoidRatioCountsVoxelCentresInTheRegion) {
     for (std::size_t x = 0; x < 10; ++x) truth(z, 0, x) = 1, truth(z, 1, x) = 1;  // 2 of 10 rows solid
   segment::Cylinder all;
   all.radius = std::numeric_limits<double>::infinity();
-  EXPECT_DOUBLE_EQ(true_void_ratio(truth, all), 4.0);
+  EXPECT_DOUBLE_EQ(true_void_ratio(truth, all).e, 4.0);
   segment::Cylinder lower = all;
   lower.z_max = 1.0;  // slices 0 and 1 only: the same share
-  EXPECT_DOUBLE_EQ(true_void_ratio(truth, lower), 4.0);
+  EXPECT_DOUBLE_EQ(true_void_ratio(truth, lower).e, 4.0);
 }
 
 TEST(ValidateContacts, FoundMissedFalseAndTheNormalErrorOrientedByTrueLabels) {

@@ -90,7 +90,7 @@ Validation validate_run(const ValidationFiles& files, const ValidationOptions& o
                         " describes (their images differ in shape); pass the series the run was made from");
       const MatchResult match = match_labels(truths[k].labels, labels.labels);
       true_of_label[k] = match.faithful_grain();
-      sc.segmentation = score_segmentation(match, labels.sample.void_ratio.e, true_void_ratio(truths[k].labels, labels.sample.region));
+      sc.segmentation = score_segmentation(match, labels.sample.void_ratio.e, true_void_ratio(truths[k].labels, labels.sample.region).e);
     }
     truths[k].labels = Volume<std::uint32_t>();  // the label image is done with; keep the tables
     if (!files.contacts[k].empty()) {

@@ -79,11 +79,11 @@ double spearman(const std::vector<double>& x, const std::vector<double>& y) {
   return std::isfinite(r) ? r : kNaN;
 }
 
-double true_void_ratio(const Volume<std::uint32_t>& truth_labels, const segment::Cylinder& region) {
+segment::VoidRatio true_void_ratio(const Volume<std::uint32_t>& truth_labels, const segment::Cylinder& region) {
   Volume<std::uint8_t> solid(truth_labels.shape(), truth_labels.voxel_size(), truth_labels.origin());
   std::transform(truth_labels.data(), truth_labels.data() + truth_labels.size(), solid.data(),
                  [](std::uint32_t l) { return static_cast<std::uint8_t>(l != 0); });
-  return segment::void_ratio(solid, region).e;
+  return segment::void_ratio(solid, region);
 }
 
 SegmentationScore score_segmentation(const MatchResult& m, double void_ratio, double void_ratio_true) {

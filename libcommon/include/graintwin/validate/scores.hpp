@@ -42,9 +42,9 @@ struct SegmentationScore {
   double void_ratio = kNaN, void_ratio_true = kNaN;
 };
 
-/// e of the truth's label image (a voxel centre inside a grain is solid) in `region`, by
-/// segment::void_ratio: the same count ct2labels makes of its own mask.
-double true_void_ratio(const Volume<std::uint32_t>& truth_labels, const segment::Cylinder& region);
+/// The void ratio of the truth's label image (a voxel centre inside a grain is solid) in `region`,
+/// by segment::void_ratio: the same count ct2labels makes of its own mask.
+segment::VoidRatio true_void_ratio(const Volume<std::uint32_t>& truth_labels, const segment::Cylinder& region);
 
 /// The segmentation line from the label match and the two void ratios.
 SegmentationScore score_segmentation(const MatchResult& match, double void_ratio, double void_ratio_true);
