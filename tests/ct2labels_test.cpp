@@ -1,5 +1,5 @@
 // ct2labels: CLI contract, the labels file it writes, the preview picture, and every bad input the
-// issue lists (empty, all-solid, constant, NaN, one-voxel grains, wrong kind) failing cleanly.
+// requirements list (empty, all-solid, constant, NaN, one-voxel grains, wrong kind) failing cleanly.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
