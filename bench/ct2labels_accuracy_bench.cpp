@@ -25,6 +25,7 @@
 #include <map>
 #include <sstream>
 
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/metaimage.hpp"
 #include "graintwin/io/schema.hpp"
@@ -177,11 +178,6 @@ std::string diagnose(const CaseResult& c, const Truth& truth, double voxel) {
     iou_sum += g.best_iou;
     ++by[name(g.outcome)];
   }
-  const auto median = [](std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
   s << fmt::format("{} vox/d50, noise {:.0f} %: {} of {} grains not matched", c.vox_per_d50, 100 * c.noise,
                    d_bad.size(), d_all.size());
   if (d_bad.empty()) return s.str();

@@ -1,4 +1,4 @@
-// ctsynth_bench: (1) the speed target: a 256^3 scan of about 2 000 sand grains rendered on
+// ctsynth_bench: (1) the project's speed target: a 256^3 scan of about 2 000 sand grains rendered on
 // one core (and on all cores) with analytic partial volumes, against the former 4^3 point
 // samples, with the cost of the other stages for scale; (2) the fidelity knob: partial-volume
 // error of single sand grains against their exact volume, analytic and for each point-sampling

@@ -1,7 +1,7 @@
 // fdemrun_bench: solver throughput on a settled packing of 500 grains.
 // Grains: gmsh spheres of five sizes (radius 0.40-0.60 mm; element size 0.22 R for tet4, about 350
 // surface nodes, 0.44 R for tet10, about 400 with mid-edge nodes, 0.26 R for rigid, about 270: the
-// issue states its rigid target for about 250 surface nodes per grain).
+// project states its rigid target for about 250 surface nodes per grain).
 // The packing: synth::pack_grains places them at random in a cylinder (solid fraction 0.55, every
 // pair within 0.5 % of the smallest radius of touching); then, as rigid grains, they are
 // consolidated isotropically to sigma_3 = 300 kPa (the reference test's, docs/methods.md) between
@@ -16,7 +16,7 @@
 // rigid grains (a second each), the thread counts taking turns so that each sees the same phases of
 // the machine (the median run is reported with the range: on this virtual machine one binary's
 // rate drifts by up to a factor of two over minutes, other tenants sharing its memory);
-// element-steps/s/core (deformable) and grain-steps/s/core (rigid) against the issue's targets 1e7
+// element-steps/s/core (deformable) and grain-steps/s/core (rigid) against the project's targets 1e7
 // (4-node) and 1e5 (rigid).
 // `fdemrun_bench KIND [STEPS [THREADS]]` runs one kind without publishing, for profiling with perf
 // (more steps make the timed loop outweigh building the packing).
@@ -251,7 +251,7 @@ int run_bench(int argc, char** argv) {
       const double per_core_wall = work * steps / r.wall / threads, per_cpu = work * steps / r.cpu;
       const double fastest = work * steps / runs.front().cpu, slowest = work * steps / runs.back().cpu;
       const char* unit = kind == GrainKind::rigid ? "grain-steps" : "element-steps";
-      // The issue sets targets for 4-node elements and rigid grains only.
+      // The project sets targets for 4-node elements and rigid grains only.
       const double target = kind == GrainKind::rigid ? 1e5 : kind == GrainKind::tet4 ? 1e7 : 0;
       const std::string against =
           target > 0 ? fmt::format("target {:.0e} ({:.2g} x of it by CPU)", target, per_cpu / target) : "no target";

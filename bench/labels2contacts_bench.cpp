@@ -1,4 +1,4 @@
-// labels2contacts_bench: (1) the speed target: all contacts of a 512^3 label volume with
+// labels2contacts_bench: (1) the project's speed target: all contacts of a 512^3 label volume with
 // about 20 000 grains on one core (and on all cores), and the refinement cost per contact; (2) normal
 // accuracy against voxels per diameter on touching spheres (the spam protocol) for the PCA, vector-
 // area and refined normals, charted with the anchors' spam figures; (3) false contacts against the

@@ -21,6 +21,7 @@
 #include <numbers>
 
 #include "graintwin/core/geometry.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -72,12 +73,6 @@ struct Errors {
   double surface = 0.0, invariant = 0.0, ms_per_grain = 0.0, mean_degree = 0.0;
   std::size_t grains = 0;
 };
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 Errors measure(const Volume<std::uint32_t>& labels, const Volume<std::uint16_t>* grey, const Truth& truth, int degree,
                double tol, bool use_grey) {

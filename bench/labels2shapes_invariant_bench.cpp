@@ -20,6 +20,7 @@
 #include <iostream>
 #include <numbers>
 
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -119,11 +120,6 @@ std::vector<Result> run_scene(const Scene& scene, const std::vector<Method>& met
 struct PackedErrors {
   double volume = 0.0, i0 = 0.0, i2 = 0.0, distance = 0.0, cpu_ms = 0.0;
 };
-
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 PackedErrors packed_errors(const Volume<std::uint32_t>& labels, const Volume<std::uint16_t>& scan, const io::H5File& truth,
                            const ShFitter& fitter, const MeasureOptions& o) {

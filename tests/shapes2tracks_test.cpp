@@ -17,6 +17,7 @@
 #include "graintwin/shape/shapes_file.hpp"
 #include "graintwin/track/tracks_file.hpp"
 #include "support/cli_contract.hpp"
+#include "support/golden.hpp"
 #include "support/vtk_summary.hpp"
 
 using namespace graintwin;
@@ -112,6 +113,7 @@ TEST(Shapes2tracks, TracksTheBundledSeriesWithTrueIdentitiesAndRotations) {
     EXPECT_EQ(t.scan_d50[s], track::scan_grains(shape::read_shapes_file(t.scan_files[s])).d50) << "scan " << s;
   std::vector<double> angle_error;
   std::size_t undefined = 0;
+  double confidence = 0.0;
   for (std::size_t i = 0; i < t.tracks; ++i) {
     // Every track must follow one true grain.
     std::size_t ids[3];
@@ -125,6 +127,7 @@ TEST(Shapes2tracks, TracksTheBundledSeriesWithTrueIdentitiesAndRotations) {
     for (std::size_t s = 1; s < 3; ++s) {
       const std::size_t c = i * 3 + s;
       EXPECT_GT(t.confidence[c], 0.5) << "track " << i;
+      confidence += t.confidence[c];
       // Displacement is the centroid difference.
       for (int q = 0; q < 3; ++q)
         EXPECT_NEAR(t.increment[3 * c + q], t.centroid[3 * c + q] - t.centroid[3 * (c - 1) + q], 1e-15);
@@ -143,6 +146,9 @@ TEST(Shapes2tracks, TracksTheBundledSeriesWithTrueIdentitiesAndRotations) {
   EXPECT_EQ(undefined, 0u);
   ASSERT_EQ(angle_error.size(), 620u);
   EXPECT_LT(*std::max_element(angle_error.begin(), angle_error.end()), 1e-3);
+  test::Golden measured("shapes2tracks");
+  measured.check("sand_small_mean_confidence", confidence / 620.0);
+  measured.check("sand_small_max_rotation_error_deg", *std::max_element(angle_error.begin(), angle_error.end()));
   // The file's provenance and parameters.
   const io::H5File f = io::H5File::open(dir / "tracks.h5");
   const auto history = io::read_history(f);

@@ -12,9 +12,9 @@
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/contacts/contacts_file.hpp"
-#include "graintwin/contacts/detect.hpp"
 #include "graintwin/contacts/network.hpp"
 #include "graintwin/contacts/refine.hpp"
+#include "graintwin/contacts/scan_contacts.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/resources.hpp"
@@ -181,28 +181,12 @@ int main(int argc, char** argv) {
     const Shape3& s = lab.labels.shape();
     spdlog::info("{} grains in {} x {} x {} voxels (z, y, x)", lab.grains.size(), s[0], s[1], s[2]);
 
-    std::vector<contacts::Contact> found;
-    try {
-      found = contacts::find_contacts(lab.labels, lab.grains, {o.settings.min_voxels}, ctx.progress_callback("contacts"));
-    } catch (Error& e) {
-      throw e.add_context("in " + labels_path.string() + "; its grain table does not match its label image");
-    }
-    throw_if_interrupted();
-    if (found.empty()) spdlog::warn("no contacts: the grains of {} do not touch", labels_path.string());
-
-    std::vector<contacts::Refinement> fits;
-    if (o.settings.refined) {
-      contacts::RefineParams rp;
-      rp.window_vox = o.settings.window_vox;
-      rp.gap_tolerance_vox = o.settings.gap_tolerance_vox;
-      std::visit([&](const auto& g) {
-        fits = contacts::refine_contacts(g, lab.labels, found, lab.grains, rp, ctx.progress_callback("refine normals"));
-      }, grey);
-      throw_if_interrupted();
-      log_refinement(fits);
-    }
-    const contacts::ContactsFile content = contacts::contacts_content(found, fits, lab.grains, o.settings);
-    log_counted(content, fits, volume_path);
+    const contacts::ScanContacts scan =
+        contacts::scan_contacts(lab, o.settings.refined ? &grey : nullptr, o.settings, labels_path.string(),
+                                [&](const std::string& step) { return ctx.progress_callback(step); });
+    if (o.settings.refined) log_refinement(scan.fits);
+    const contacts::ContactsFile& content = scan.content;
+    log_counted(content, scan.fits, volume_path);
     contacts::write_contacts_file(out.temp_path(), content, ctx.history());
     if (vtk_out) io::write_vtp(vtk_out->temp_path(), contacts::network_polydata(contacts::contact_network(content, lab.grains)));
     throw_if_interrupted();

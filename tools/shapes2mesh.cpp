@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <optional>
-#include <set>
 
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
@@ -187,8 +186,7 @@ double check_options(Options& o) {
 std::size_t open_inputs(cli::RunContext& ctx, const Options& o) {
   const io::H5File sf = io::open_kind(o.shapes, schema::kind::shapes, "pass the output of labels2shapes");
   ctx.add_input_history(sf);
-  const auto dims = sf.info(schema::shapes::grain_label).dims;
-  std::size_t meshes = dims.empty() ? 0 : dims[0];
+  std::size_t meshes = shape::shapes_grain_count(sf);
   if (o.packing_choice == Packing::equivalent) meshes = std::max<std::size_t>(meshes, o.equivalent.grains);
   if (!o.labels.empty()) ctx.add_input_history(io::open_kind(o.labels, schema::kind::labels, "pass the output of ct2labels"));
   if (!o.tracks.empty()) io::open_kind(o.tracks, schema::kind::tracks, "pass the output of shapes2tracks");
@@ -209,15 +207,6 @@ mesh::ScanLabels scan_labels(const segment::LabelsFile& labels, const shape::Sha
   return scan;
 }
 
-/// Labels of the reference scan's grains that are tracked from the first scan to the last.
-std::set<std::uint32_t> tracked_labels(const fs::path& tracks) {
-  const track::TracksTable t = track::read_tracks_file(tracks);
-  std::set<std::uint32_t> out;
-  for (std::size_t i = 0; i < t.tracks; ++i)
-    if (t.label[i * t.scans] > 0 && t.label[i * t.scans + t.scans - 1] > 0) out.insert(t.label[i * t.scans]);
-  return out;
-}
-
 /// The grains meshed: those the inscribed cylinder holds whole (--sample-cylinder inscribed, which
 /// is then set), of them those tracked through the series (--tracked-only).
 std::vector<const shape::GrainShape*> selected_grains(const shape::ShapesFile& shapes, const segment::LabelsFile* labels,
@@ -236,7 +225,7 @@ std::vector<const shape::GrainShape*> selected_grains(const shape::ShapesFile& s
     for (const auto& g : shapes.grains) grains.push_back(&g);
   }
   if (!o.tracks.empty()) {
-    const auto keep = tracked_labels(o.tracks);
+    const auto keep = track::labels_tracked_throughout(track::read_tracks_file(o.tracks));
     const std::size_t before = grains.size();
     std::erase_if(grains, [&](const shape::GrainShape* g) { return !keep.count(g->label); });
     spdlog::info("{} of {} grains are tracked through {}", grains.size(), before, o.tracks.string());

@@ -1,11 +1,9 @@
-// Progress output (non-terminal mode) and interruption handling of the tool wrapper.
+// Progress output of the tool wrapper (non-terminal mode).
 #include <gtest/gtest.h>
 
-#include <csignal>
+#include <algorithm>
 
 #include "graintwin/cli/progress.hpp"
-#include "graintwin/core/error.hpp"
-#include "graintwin/core/interrupt.hpp"
 
 using namespace graintwin;
 
@@ -28,17 +26,4 @@ TEST(Progress, SilentWhenDisabled) {
     p.advance(10);
   }
   EXPECT_TRUE(testing::internal::GetCapturedStderr().empty());
-}
-
-TEST(Interrupt, SignalBecomesInterruptedErrorAtTheNextSafePoint) {
-  install_interrupt_handlers();
-  EXPECT_NO_THROW(throw_if_interrupted());
-  std::raise(SIGINT);
-  EXPECT_TRUE(interrupted());
-  try {
-    throw_if_interrupted();
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.exit_code(), ExitCode::interrupted);
-  }
 }

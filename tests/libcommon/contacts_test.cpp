@@ -1,7 +1,8 @@
 // Contacts between labelled grains against exact answers: touching boxes with known normals and
 // areas, random label images against a brute-force count, fabric tensors and anisotropy of known
 // direction sets, rose counts, coordination numbers, the VTK network, and the grey-level
-// refinement of normals and gaps on scanned touching spheres (the spam protocol).
+// refinement of normals and gaps on scanned touching spheres (the spam protocol); labels2contacts'
+// stage as one call.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -16,6 +17,7 @@
 #include "graintwin/contacts/fabric.hpp"
 #include "graintwin/contacts/network.hpp"
 #include "graintwin/contacts/refine.hpp"
+#include "graintwin/contacts/scan_contacts.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/segment/edt.hpp"
 #include "graintwin/segment/labels.hpp"
@@ -212,6 +214,31 @@ TEST(ContactsDetect, MissingGrainRowIsADataError) {
   auto grains = segment::grain_table(v);
   grains.pop_back();
   EXPECT_THROW(find_contacts(v, grains), DataError);
+}
+
+TEST(ScanContacts, TheStageIsDetectionThenTheFileContentAndNamesTheLabelsFile) {
+  segment::LabelsFile labels;
+  labels.labels = Volume<std::uint32_t>({4, 4, 8});
+  paint(labels.labels, {0, 0, 0, 4, 4, 4}, 1);
+  paint(labels.labels, {0, 0, 4, 4, 4, 8}, 2);
+  labels.grains = segment::grain_table(labels.labels);
+  const ContactsSettings settings;
+  const ScanContacts scan = scan_contacts(labels, nullptr, settings, "l.h5");
+  EXPECT_TRUE(scan.fits.empty());
+  const ContactsFile direct = contacts_content(find_contacts(labels.labels, labels.grains), {}, labels.grains, settings);
+  ASSERT_EQ(scan.content.contacts.size(), 1u);
+  EXPECT_EQ(scan.content.contacts.normal, direct.contacts.normal);
+  EXPECT_EQ(scan.content.coordination.per_grain, direct.coordination.per_grain);
+  ContactsSettings refined = settings;
+  refined.refined = true;
+  EXPECT_THROW(scan_contacts(labels, nullptr, refined, "l.h5"), UsageError);
+  labels.grains.pop_back();
+  try {
+    scan_contacts(labels, nullptr, settings, "l.h5");
+    ADD_FAILURE() << "a grain table without a label's row must be refused";
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.context(), std::vector<std::string>{"in l.h5; its grain table does not match its label image"});
+  }
 }
 
 TEST(ContactsFabric, AnisotropyOfTheSpecChecks) {

@@ -1,10 +1,12 @@
-// HDF5 layer: datasets, attributes, compression, strings, provenance, kind checks.
+// HDF5 layer: datasets, attributes, compression, strings, provenance, kind checks; a file's
+// description (volinfo's stage).
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <limits>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/io/file_info.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
@@ -191,3 +193,31 @@ TEST(KindCheck, AKindAttributeHoldingSeveralStringsIsRefusedNotOverrun) {
   EXPECT_NE(msg.find("attribute 'kind' holds 2 strings where one is expected"), std::string::npos) << msg;
 }
 
+
+TEST(FileInfo, DescribesAFileWithTheValueRangeOnlyWhenAsked) {
+  test::TempDir dir;
+  const auto v = test::ramp_volume<std::uint16_t>({3, 4, 5});
+  write_volume_file(dir / "v.h5", v, {"a ramp"});
+  const nlohmann::json plain = describe_file(dir / "v.h5", false);
+  EXPECT_EQ(plain["kind"], "volume");
+  ASSERT_EQ(plain["images"].size(), 1u);
+  EXPECT_FALSE(plain["images"][0].contains("min"));
+  std::vector<std::string> steps;
+  double last = 0.0;
+  const nlohmann::json ranged = describe_file(dir / "v.h5", true, [&](const std::string& step) {
+    steps.push_back(step);
+    return std::function<void(double)>([&](double share) { last = share; });
+  });
+  EXPECT_EQ(steps, std::vector<std::string>{"value range /volume"});
+  EXPECT_EQ(last, 1.0);
+  const ValueRange whole = value_range(AnyVolume(v));
+  EXPECT_EQ(ranged["images"][0]["min"].get<double>(), whole.min);
+  EXPECT_EQ(ranged["images"][0]["max"].get<double>(), whole.max);
+  EXPECT_DOUBLE_EQ(ranged["images"][0]["mean"].get<double>(), whole.mean);
+  const std::string text = describe_text(ranged);
+  EXPECT_NE(text.find("kind:            volume"), std::string::npos) << text;
+  EXPECT_NE(text.find("  values:          "), std::string::npos) << text;
+  EXPECT_NE(text.find("history:\n  a ramp\n"), std::string::npos) << text;
+  { H5File bare = H5File::create(dir / "bare.h5"); }
+  EXPECT_THROW(describe_file(dir / "bare.h5", false), UsageError);
+}

@@ -12,6 +12,8 @@
 #include "graintwin/segment/preview.hpp"
 #include "graintwin/segment/segment_grains.hpp"
 #include "graintwin/segment/threshold.hpp"
+#include "graintwin/validate/label_match.hpp"
+#include "support/golden.hpp"
 #include "support/phantoms.hpp"
 #include "support/run_tool.hpp"
 
@@ -24,22 +26,9 @@ namespace {
 const std::vector<Ball> kBalls = test::jittered_lattice(3, 7.0, 13.0, 9.0, 0.8, 0.05, 11);
 const Shape3 kShape{44, 44, 44};
 
-/// Share of the true grains matched one-to-one with IoU >= 0.8.
+/// Share of the true grains reproduced, by the one scoring rule of segmentation (IoU >= 0.8).
 double matched_share(const Volume<std::uint32_t>& truth, const Volume<std::uint32_t>& got) {
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> overlap;
-  std::map<std::uint32_t, std::size_t> n_true, n_got;
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    const std::uint32_t t = truth.values()[i], g = got.values()[i];
-    if (t) ++n_true[t];
-    if (g) ++n_got[g];
-    if (t && g) ++overlap[{t, g}];
-  }
-  std::size_t matched = 0;
-  for (const auto& [pair, n] : overlap) {
-    const double iou = double(n) / double(n_true[pair.first] + n_got[pair.second] - n);
-    if (iou >= 0.8) ++matched;
-  }
-  return double(matched) / double(n_true.size());
+  return validate::match_labels(truth, got).matched_share();
 }
 
 template <class T>
@@ -82,6 +71,10 @@ TEST(SegmentGrains, DefaultsFindEverySphereOfANoisyScan) {
   for (std::size_t i = 0; i < r.grains.size(); ++i) EXPECT_EQ(r.grains[i].label, i + 1);
   // Whole-volume void ratio from exact voxel counts of the final mask.
   EXPECT_NEAR(r.void_ratio.e, (1.0 - r.solid_fraction) / r.solid_fraction, 1e-12);
+  test::Golden measured("segment_grains");
+  measured.check("defaults_otsu_threshold", r.threshold);
+  measured.check("defaults_reference_radius_over_true", r.reference_radius_m / 7e-5);
+  measured.check("defaults_void_ratio", r.void_ratio.e);
 }
 
 TEST(SegmentGrains, EveryMarkerAndDenoiseChoiceAgreesOnTheSpheres) {
@@ -183,17 +176,17 @@ TEST(SegmentGrains, RefusesVolumesThatCannotBeSegmented) {
 TEST(SegmentGrains, ValidatesOptionsBeforeWork) {
   SegmentOptions o;
   o.h_vox = -1.0;
-  EXPECT_THROW(validate(o), UsageError);
+  EXPECT_THROW(segment::validate(o), UsageError);
   o = {};
   o.denoise = Denoise::gaussian;
   o.gaussian_sigma_vox = 0.0;
-  EXPECT_THROW(validate(o), UsageError);
+  EXPECT_THROW(segment::validate(o), UsageError);
   o = {};
   o.region_mode = RegionMode::given_cylinder;
-  EXPECT_THROW(validate(o), UsageError);
+  EXPECT_THROW(segment::validate(o), UsageError);
   o = {};
   o.min_distance_vox = 0.0;
-  EXPECT_THROW(validate(o), UsageError);
+  EXPECT_THROW(segment::validate(o), UsageError);
 }
 
 TEST(LabelsFile, RoundTripsEveryField) {

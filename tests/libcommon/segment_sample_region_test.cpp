@@ -7,6 +7,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/segment/sample_region.hpp"
+#include "support/golden.hpp"
 #include "support/phantoms.hpp"
 
 using namespace graintwin;
@@ -61,6 +62,10 @@ TEST(VoidRatio, KnownCylinderOfSpheres) {
   EXPECT_NEAR(v.e / e, 1.0, 0.015);
   EXPECT_NEAR(v.solid_m3 / solid, 1.0, 0.015);
   EXPECT_NEAR((v.solid_m3 + v.void_m3) / cylinder, 1.0, 0.01);
+  test::Golden measured("segment_sample_region");
+  measured.check("spheres_void_ratio_over_exact", v.e / e);
+  measured.check("spheres_solid_over_exact", v.solid_m3 / solid);
+  measured.check("spheres_region_over_cylinder", (v.solid_m3 + v.void_m3) / cylinder);
   // The axial extent restricts the region: half the height, about half the volume.
   Cylinder half = true_cylinder(m);
   half.z_max = m.position_xyz(19.5, 0, 0)[2];

@@ -13,6 +13,7 @@
 #include "graintwin/track/displacement_field.hpp"
 #include "graintwin/track/match.hpp"
 #include "graintwin/track/synthetic.hpp"
+#include "support/golden.hpp"
 
 using namespace graintwin;
 using namespace graintwin::track;
@@ -183,7 +184,15 @@ TEST(MatchImproved, FortyPercentDamagedGrainsAreLostNotMisassigned) {
   const SyntheticScore nearest = score(pairs, Method::nearest);
   EXPECT_GT(nearest.right, nearest.intact * 95 / 100);
   EXPECT_GT(nearest.damaged_wrong, s.damaged / 10);
-  EXPECT_LT(score(pairs, Method::paper).right, s.intact / 2);
+  const SyntheticScore paper = score(pairs, Method::paper);
+  EXPECT_LT(paper.right, s.intact / 2);
+  test::Golden measured("track_damaged");
+  for (const auto& [name, count] : {std::pair{"improved_intact", s.intact}, {"improved_right", s.right}, {"improved_wrong", s.wrong},
+                                    {"improved_lost", s.lost}, {"improved_damaged", s.damaged},
+                                    {"improved_damaged_lost", s.damaged_lost}, {"improved_damaged_own", s.damaged_own},
+                                    {"improved_damaged_wrong", s.damaged_wrong}, {"nearest_right", nearest.right},
+                                    {"nearest_damaged_wrong", nearest.damaged_wrong}, {"paper_right", paper.right}})
+    measured.check(std::string("forty_percent_damaged_") + name, double(count));
 }
 
 TEST(MatchImproved, LighterDamageAndNoDamageStayExact) {

@@ -1,10 +1,14 @@
 // shapes2tracks' stage as a library call (track/series): the parameters it records and the
-// rotation method names, and the whole stage on two synthetic scans written as shapes files.
+// rotation method names, and the whole stage on two synthetic scans written as shapes files; the
+// grains a tracks table follows through the whole series.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <set>
+
 #include "graintwin/core/error.hpp"
 #include "graintwin/track/series.hpp"
+#include "graintwin/track/tracks_file.hpp"
 #include "support/run_tool.hpp"
 
 using namespace graintwin;
@@ -47,4 +51,17 @@ TEST(TrackSeries, AMissingOrEmptyScanIsNamed) {
     for (const std::string& line : e.context()) text += "\n" + line;
     EXPECT_NE(text.find("absent.h5"), std::string::npos) << text;
   }
+}
+
+TEST(TracksFile, GrainsTrackedThroughoutAreThoseOfTheFirstScanStillThereInTheLast) {
+  TracksTable t;
+  t.tracks = 4, t.scans = 3;
+  // Track 0 runs through, 1 is lost after the first scan, 2 is lost in the middle and found again,
+  // 3 starts in the second scan.
+  t.label = {5, 6, 7,  //
+             9, 0, 0,  //
+             2, 0, 4,  //
+             0, 3, 8};
+  EXPECT_EQ(labels_tracked_throughout(t), (std::set<std::uint32_t>{2, 5}));
+  EXPECT_TRUE(labels_tracked_throughout(TracksTable{}).empty());
 }

@@ -17,6 +17,7 @@
 #include "graintwin/track/match.hpp"
 #include "graintwin/track/rotation.hpp"
 #include "graintwin/track/synthetic.hpp"
+#include "support/golden.hpp"
 #include "graintwin/track/tracks.hpp"
 
 using namespace graintwin;
@@ -258,10 +259,16 @@ TEST(MatchImproved, LargeStepWithShearBandWhereTheBaselinesFail) {
   for (std::size_t i = 0; i < truth.size(); ++i)
     if (m.partner[i] >= 0 && m.partner[i] == truth[i]) conf_right += m.confidence[i], ++right;
   EXPECT_GT(conf_right / double(right), 0.9);
+  test::Golden measured("track");
+  measured.check("shear_band_improved_right", s.correct);
+  measured.check("shear_band_improved_wrong", s.wrong);
+  measured.check("shear_band_improved_orphans_matched", s.orphans_matched);
+  measured.check("shear_band_improved_mean_confidence_right", conf_right / double(right));
   for (Method baseline : {Method::paper, Method::nearest, Method::volume}) {
     o.method = baseline;
     const Score b = score(match_grains(ref, def, o), truth);
     EXPECT_LT(b.correct, s.correct - 0.05) << method_name(baseline);
+    measured.check("shear_band_" + method_name(baseline) + "_right", b.correct);
   }
 }
 
@@ -280,10 +287,15 @@ TEST(MatchImproved, SmallStepIsExactAndTheBackwardCheckAgrees) {
   // spectra it is far behind; with 10x less noise it is right on a step this small.
   MatchOptions paper;
   paper.method = Method::paper;
-  EXPECT_LT(score(match_grains(ref, def, paper), truth).correct, 0.9);
+  const double noisy_right = score(match_grains(ref, def, paper), truth).correct;
+  EXPECT_LT(noisy_right, 0.9);
   mo.shape_noise = 0.001;
   const ScanGrains clean = deform_grains(ref, mo, truth);
-  EXPECT_GT(score(match_grains(ref, clean, paper), truth).correct, 0.99);
+  const double clean_right = score(match_grains(ref, clean, paper), truth).correct;
+  EXPECT_GT(clean_right, 0.99);
+  test::Golden measured("track");
+  measured.check("small_step_paper_right", noisy_right);
+  measured.check("small_step_paper_right_clean_shapes", clean_right);
 }
 
 TEST(Chain, LostGrainsAreFoundAgainAndNewGrainsStartTracks) {

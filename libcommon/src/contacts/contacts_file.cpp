@@ -232,7 +232,7 @@ void write_contacts_file(const std::filesystem::path& path, const ContactsFile& 
 void check_contacts_tables(const io::H5File& f) {
   for (const char* table : {sc::group, sc::grains, sc::coordination}) io::table_rows(f, table, kFix);
   // NaN is the fit columns' "not measured"; the geometry of a contact is always measured.
-  io::require_finite_table(f, sc::group, {"normal", "normal_pca", "branch", "point", "centroid", "area", "vector_area"}, kFix);
+  io::require_finite_table(f, sc::group, {sc::normal, sc::normal_pca, sc::branch, sc::point, sc::centroid, sc::area, sc::vector_area}, kFix);
 }
 
 ContactsFile read_contacts_file(const std::filesystem::path& path) {

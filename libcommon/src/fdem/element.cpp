@@ -157,7 +157,7 @@ ElasticElements::ElasticElements(const Model& model) : model_(&model) {
     const int n = checked_node_count(model, e);
     if ((n == 10) != (grain.kind == GrainKind::tet10))
       throw DataError(element_name(model, e) + " has " + std::to_string(n) + " nodes but its grain is declared " +
-                      (grain.kind == GrainKind::tet10 ? "tet10" : "tet4") + "; rebuild the model with one element order per grain");
+                      enum_name(kGrainKindNames, grain.kind) + "; rebuild the model with one element order per grain");
     const TetRule& rule = stiffness_rule(n);
     slot_[e] = static_cast<std::uint32_t>(n == 4 ? linear_.size() : weight_.size());
     for (std::size_t q = 0; q < rule.points.size(); ++q) {

@@ -223,6 +223,15 @@ TriaxialSeries read_triaxial_series(const std::filesystem::path& path) {
   return s;
 }
 
+void check_results_tables(const io::H5File& f) {
+  const std::string fix = "rewrite it with fdemrun";
+  for (const char* g : {sr::grains, sr::series, sr::stages}) io::table_rows(f, g, fix);
+  io::require_finite_table(f, sr::series, {sr::series_time, sr::series_kinetic}, fix);
+  if (f.exists(sr::frames))
+    for (const std::string& frame : f.list(sr::frames))
+      io::require_finite_table(f, std::string(sr::frames) + "/" + frame + "/" + sr::frame_grains, {sr::frame_centroid, sr::frame_rotation}, fix);
+}
+
 std::size_t results_frame_count(const std::filesystem::path& path) {
   const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
   return f.list(sr::frames).size();

@@ -122,10 +122,8 @@ std::vector<const toml::table*> tables(const toml::table& root, const char* name
 }
 
 GrainKind parse_kind(const Table& t) {
-  const std::string k = t.text("kind", "tet4");
-  if (k == "rigid") return GrainKind::rigid;
-  if (k == "tet4") return GrainKind::tet4;
-  if (k == "tet10") return GrainKind::tet10;
+  const std::string k = t.text("kind", enum_name(kGrainKindNames, GrainKind::tet4));
+  if (const std::optional<GrainKind> kind = find_enum(kGrainKindNames, k)) return *kind;
   t.fail("kind '" + excerpt(k) + "' is unknown; use rigid, tet4 or tet10");
 }
 

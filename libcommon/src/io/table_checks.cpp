@@ -59,7 +59,9 @@ void require_finite_table(const H5File& f, const std::string& group, std::initia
     const std::vector<double> v = f.read<double>(name, &dims);
     std::size_t width = 1;
     for (std::size_t k = 1; k < dims.size(); ++k) width *= static_cast<std::size_t>(dims[k]);
-    const bool nan_forbidden = std::find(never_nan.begin(), never_nan.end(), member) != never_nan.end();
+    const bool nan_forbidden = std::any_of(never_nan.begin(), never_nan.end(), [&](std::string_view column) {
+      return column.substr(column.rfind('/') + 1) == member;  // npos + 1 == 0: a bare name is itself
+    });
     refuse_first(f, name, v, width, fix, [&](double x) { return std::isinf(x) || (nan_forbidden && std::isnan(x)); });
   }
 }

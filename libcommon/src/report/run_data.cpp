@@ -98,34 +98,16 @@ std::string check_hint(const std::string& kind) {
 }
 
 /// The tables of a run file of kind `kind` agree in length and hold only values their tool writes
-/// (io/table_checks), before the report draws anything from them. Columns where NaN means "not
-/// measured" (a contact not refined, a strain before shearing) may hold NaN; none may hold infinity.
+/// (io/table_checks, through the checks of the kind's home module), before the report draws
+/// anything from them. Columns where NaN means "not measured" (a contact not refined, a strain
+/// before shearing) may hold NaN; none may hold infinity.
 void check_tables(const io::H5File& f, const std::string& kind) {
-  const auto tables = [&](std::initializer_list<std::string> groups, const std::string& tool) {
-    for (const std::string& g : groups) io::table_rows(f, g, "rewrite it with " + tool);
-  };
-  const auto finite = [&](const std::string& group, std::initializer_list<std::string_view> never_nan, const std::string& tool) {
-    io::require_finite_table(f, group, never_nan, "rewrite it with " + tool);
-  };
-  if (kind == schema::kind::labels) {
-    segment::check_labels_tables(f);
-  } else if (kind == schema::kind::contacts) {
-    contacts::check_contacts_tables(f);
-  } else if (kind == schema::kind::tracks) {
-    tables({schema::tracks::group, schema::tracks::steps, schema::tracks::scans}, "shapes2tracks");
-    finite(schema::tracks::group, {}, "shapes2tracks");
-  } else if (kind == schema::kind::micro) {
-    micro::check_micro_tables(f);
-  } else if (kind == schema::kind::fdem_results) {
-    namespace sr = schema::fdem_results;
-    tables({sr::grains, sr::series, sr::stages}, "fdemrun");
-    finite(sr::series, {"time", "kinetic"}, "fdemrun");
-    if (f.exists(sr::frames))
-      for (const std::string& frame : f.list(sr::frames))
-        finite(std::string(sr::frames) + "/" + frame + "/" + sr::frame_grains, {"centroid", "rotation"}, "fdemrun");
-  } else if (kind == schema::kind::forces) {
-    micro::check_forces_tables(f);
-  }
+  if (kind == schema::kind::labels) segment::check_labels_tables(f);
+  else if (kind == schema::kind::contacts) contacts::check_contacts_tables(f);
+  else if (kind == schema::kind::tracks) track::check_tracks_tables(f);
+  else if (kind == schema::kind::micro) micro::check_micro_tables(f);
+  else if (kind == schema::kind::fdem_results) fdem::check_results_tables(f);
+  else if (kind == schema::kind::forces) micro::check_forces_tables(f);
 }
 
 }  // namespace

@@ -109,7 +109,7 @@ LabelsFile read_labels_file(const std::filesystem::path& path) {
 
 void check_labels_tables(const io::H5File& f) {
   io::table_rows(f, sl::grains, kFix);
-  io::require_finite_table(f, sl::grains, {"centroid", "volume"}, kFix);
+  io::require_finite_table(f, sl::grains, {sl::grain_centroid, sl::grain_volume}, kFix);
 }
 
 double read_void_ratio(const std::filesystem::path& path) {

@@ -175,4 +175,9 @@ ShapesFile read_shapes_file(const std::filesystem::path& path) {
   return c;
 }
 
+std::size_t shapes_grain_count(const io::H5File& f) {
+  const auto dims = f.info(ss::grain_label).dims;
+  return dims.empty() ? 0 : dims[0];
+}
+
 }  // namespace graintwin::shape

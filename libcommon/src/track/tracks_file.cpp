@@ -144,6 +144,19 @@ TracksTable read_tracks_file(const std::filesystem::path& path) {
   return r;
 }
 
+std::set<std::uint32_t> labels_tracked_throughout(const TracksTable& t) {
+  std::set<std::uint32_t> out;
+  for (std::size_t i = 0; i < t.tracks; ++i)
+    if (t.label[i * t.scans] > 0 && t.label[i * t.scans + t.scans - 1] > 0) out.insert(t.label[i * t.scans]);
+  return out;
+}
+
+void check_tracks_tables(const io::H5File& f) {
+  const std::string fix = "rewrite it with shapes2tracks";
+  for (const char* g : {st::group, st::steps, st::scans}) io::table_rows(f, g, fix);
+  io::require_finite_table(f, st::group, {}, fix);
+}
+
 TrackedCentroids read_tracked_centroids(const std::filesystem::path& path) {
   const io::H5File f = io::open_kind(path, schema::kind::tracks, "pass the output of shapes2tracks");
   TrackedCentroids c;

@@ -10,11 +10,16 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/core/enum_names.hpp"
+
 namespace graintwin::fdem {
 
 /// How a grain is modelled. Every grain has a tetrahedral mesh (it gives a rigid grain its mass
 /// and inertia) and a closed outward surface (contact works on surfaces for all three).
 enum class GrainKind : std::uint8_t { rigid = 0, tet4 = 1, tet10 = 2 };
+/// Their names in scenes and messages.
+inline constexpr std::array<EnumName<GrainKind>, 3> kGrainKindNames{
+    {{GrainKind::rigid, "rigid"}, {GrainKind::tet4, "tet4"}, {GrainKind::tet10, "tet10"}}};
 
 /// The reference experiment's defaults (docs/methods.md): Ottawa sand in the CT-FDEM paper.
 struct Material {

@@ -101,6 +101,11 @@ struct TriaxialSeries {
 };
 /// UsageError naming the file when it is not a results file; DataError when the columns differ in length.
 TriaxialSeries read_triaxial_series(const std::filesystem::path& path);
+/// The checks the report makes on the tables of an open kind=fdem_results file before it draws
+/// from them (io/table_checks): the /grains, /series and /stages columns agree in length, no column
+/// holds infinity, and the series' time and kinetic energy and every frame's grain centroids and
+/// rotations hold no NaN either. DataError naming the file and the column.
+void check_results_tables(const io::H5File& file);
 std::size_t results_frame_count(const std::filesystem::path& path);
 ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t frame);
 

@@ -21,7 +21,8 @@ namespace graintwin::io {
 std::size_t table_rows(const H5File& f, const std::string& group, const std::string& fix);
 
 /// Refuses an infinite value in any floating-point column of the table under `group`, and a NaN in
-/// the columns named in `never_nan` (elsewhere NaN is the formats' "not measured").
+/// the columns named in `never_nan` (elsewhere NaN is the formats' "not measured"). A column is
+/// named by its dataset's name in io/schema.hpp: its last path component is the column's name.
 void require_finite_table(const H5File& f, const std::string& group, std::initializer_list<std::string_view> never_nan,
                           const std::string& fix);
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/io/h5file.hpp"
 #include "graintwin/shape/grain_measure.hpp"
 
 namespace graintwin::shape {
@@ -21,5 +22,8 @@ void write_shapes_file(const std::filesystem::path& path, const ShapesFile& cont
                        const std::vector<std::string>& history);
 /// UsageError naming the file if it is not a shapes file; DataError if its tables disagree.
 ShapesFile read_shapes_file(const std::filesystem::path& path);
+/// The number of grains an open kind=shapes file holds (the rows of its grain table), read from the
+/// table's layout alone: what a tool sizes its workers by before it reads the grains.
+std::size_t shapes_grain_count(const io::H5File& file);
 
 }  // namespace graintwin::shape

@@ -4,9 +4,11 @@
 // for ParaView. Written by shapes2tracks.
 #include <cstdint>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "graintwin/io/h5file.hpp"
 #include "graintwin/track/tracks.hpp"
 
 namespace graintwin::track {
@@ -38,6 +40,13 @@ struct TracksTable {
 };
 /// UsageError naming the file if it is not a tracks file; DataError if its tables disagree.
 TracksTable read_tracks_file(const std::filesystem::path& path);
+/// The labels, in the first scan, of the grains whose tracks reach the last scan.
+std::set<std::uint32_t> labels_tracked_throughout(const TracksTable& tracks);
+
+/// The checks the report makes on the tables of an open kind=tracks file before it draws from them
+/// (io/table_checks): the /tracks, /steps and /scans columns agree in length, and no /tracks
+/// column holds infinity (NaN is a track's "not in this scan"). DataError naming the file and column.
+void check_tracks_tables(const io::H5File& file);
 
 /// The tracked centroids alone (/tracks/centroid, N x T x 3 flat and track-major, m, NaN where a
 /// track misses a scan), for readers that need only the positions (the report's strains).
