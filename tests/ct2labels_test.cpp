@@ -105,7 +105,7 @@ TEST(Ct2labels, SegmentsTheBundledSandScansAsTheirTruthHasThem) {
     const synth::GroundTruth truth = synth::read_ground_truth(series / ("truth_" + scan + ".h5"));
     const validate::SegmentationScore s =
         validate::score_segmentation(validate::match_labels(truth.labels, labels.labels), labels.sample.void_ratio.e,
-                                     validate::true_void_ratio(truth.labels, labels.sample.region));
+                                     validate::true_void_ratio(truth.labels, labels.sample.region).e);
     EXPECT_GE(s.right_share, 0.98) << "scan " << scan;
     EXPECT_NEAR(s.void_ratio / s.void_ratio_true, 1.0, 0.02) << "scan " << scan;
     const std::string at = "scan_" + scan + "_";
