@@ -140,9 +140,7 @@ SeriesParams series_params(const Options& o) {
   if (o.strains.empty()) throw UsageError("--strains needs at least one value (0 for an unloaded scan)");
   p.strains = o.strains;
   p.loading.bulge = o.bulge;
-  if (o.band == "none") p.loading.band = ShearBand::none;
-  else if (o.band == "crossed") p.loading.band = ShearBand::crossed;
-  else if (o.band != "single") throw UsageError("--band '" + o.band + "' is not none, single or crossed");
+  p.loading.band = parse_enum(kShearBandNames, o.band, "--band");
   p.loading.band_angle_deg = o.band_angle;
   p.loading.band_azimuth_deg = o.band_azimuth;
   p.loading.band_width = o.band_width.empty() ? 0.0 : parse_length_m(o.band_width, "--band-width");
@@ -150,7 +148,8 @@ SeriesParams series_params(const Options& o) {
   p.loading.nonaffine = o.nonaffine;
   p.loading.rotation_per_shear = o.rotation_per_shear;
   p.contact_search = o.contact_search.empty() ? 0.0 : parse_length_m(o.contact_search, "--contact-search");
-  if (o.loading == "simulated") {
+  const LoadingKind loading = parse_enum(kLoadingKindNames, o.loading, "--loading");
+  if (loading == LoadingKind::simulated) {
     if (o.triaxial_scene.empty())
       throw UsageError("--loading simulated needs --triaxial-scene, e.g. pipelines/scenes/triaxial.toml");
     experiment::check_loading_inputs(p);
@@ -162,8 +161,6 @@ SeriesParams series_params(const Options& o) {
     tp.keep_results = o.keep_simulation;
     tp.membrane_thickness = p.membrane_thickness;
     p.simulate = experiment::triaxial_loading(tp);
-  } else if (o.loading != "prescribed") {
-    throw UsageError("--loading '" + o.loading + "' is not prescribed or simulated");
   } else if (!o.triaxial_scene.empty()) {
     throw UsageError("--triaxial-scene drives --loading simulated only; give both or neither");
   }

@@ -10,6 +10,7 @@
 #include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/shape/sh_basis.hpp"
+#include "graintwin/synth/loading.hpp"
 
 namespace graintwin::synth {
 
@@ -146,7 +147,7 @@ void write_ground_truth(const std::filesystem::path& path, const GroundTruth& t,
           with_units("m"));
   f.write(sg::contact_overlap, overlap, with_units("m"));
   f.write(sg::contact_touching, touching);
-  f.set_attr(schema::path::root, sg::loading, std::string(t.simulated ? "simulated" : "prescribed"));
+  f.set_attr(schema::path::root, sg::loading, std::string(enum_name(kLoadingKindNames, t.simulated ? LoadingKind::simulated : LoadingKind::prescribed)));
   if (t.simulated) {
     if (t.contact_force.size() != m)
       throw UsageError("write_ground_truth: a simulated state needs one contact force per contact");
@@ -192,7 +193,7 @@ GroundTruth read_ground_truth(const std::filesystem::path& path) {
   t.contact_tolerance = f.attr_double(root, sg::contact_tolerance);
   t.labels = io::read_image_as<std::uint32_t>(f, schema::path::labels);
 
-  const std::size_t n = io::table_rows(f, "/grains", kRewrite);
+  const std::size_t n = io::table_rows(f, sg::grains, kRewrite);
   const std::vector<std::uint32_t> label = f.read<std::uint32_t>(sg::grain_label);
   for (std::size_t i = 0; i < label.size(); ++i)
     if (label[i] != i + 1)
@@ -226,7 +227,7 @@ GroundTruth read_ground_truth(const std::filesystem::path& path) {
   t.sh_coeffs_body = matrix(sg::sh_coeffs_body, ncoef);
   t.sh_invariants = matrix(sg::sh_invariants, static_cast<std::size_t>(t.sh_degree + 1));
 
-  const std::size_t m = io::table_rows(f, "/contacts", kRewrite);
+  const std::size_t m = io::table_rows(f, sg::contacts, kRewrite);
   const std::vector<std::uint32_t> pair = m ? f.read<std::uint32_t>(sg::contact_pair) : std::vector<std::uint32_t>{};
   const auto normal = finite_table(f, sg::contact_normal, m, 3), point = finite_table(f, sg::contact_point, m, 3),
              overlap = finite_table(f, sg::contact_overlap, m, 1);
@@ -245,14 +246,14 @@ GroundTruth read_ground_truth(const std::filesystem::path& path) {
     c.normal = Eigen::Vector3d(normal[3 * k], normal[3 * k + 1], normal[3 * k + 2]);
     c.touching = touching[k] != 0;
   }
-  t.simulated = f.attr_string(root, sg::loading).value_or("prescribed") == "simulated";
+  t.simulated = find_enum(kLoadingKindNames, f.attr_string(root, sg::loading).value_or("")) == LoadingKind::simulated;
   if (t.simulated) {
     const auto force = finite_table(f, sg::contact_force, m, 3);
     t.contact_force.resize(m);
     for (std::size_t k = 0; k < m; ++k) t.contact_force[k] = Eigen::Vector3d(force[3 * k], force[3 * k + 1], force[3 * k + 2]);
     t.stress_ratio = f.attr_double(root, sg::stress_ratio);
     t.volumetric_strain = f.attr_double(root, sg::volumetric_strain);
-    const std::size_t k = io::table_rows(f, "/loading", kRewrite);
+    const std::size_t k = io::table_rows(f, sg::curve, kRewrite);
     t.loading_curve.axial_strain = finite_table(f, sg::curve_axial_strain, k, 1);
     t.loading_curve.stress_ratio = finite_table(f, sg::curve_stress_ratio, k, 1);
     t.loading_curve.volumetric_strain = finite_table(f, sg::curve_volumetric_strain, k, 1);

@@ -414,7 +414,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
                        {"max_overlap_m", report.max_overlap},
                        {"sweeps", report.sweeps},
                        {"seconds", report.seconds}};
-  series["loading"] = p.simulate ? "simulated" : "prescribed";
+  series["loading"] = enum_name(kLoadingKindNames, p.simulate ? LoadingKind::simulated : LoadingKind::prescribed);
   series["grains"] = summary.grains;
   if (!grains.solids.empty()) series["non_star_grains"] = summary.non_star_grains;
   series["voxels_per_d50"] = d_ref / voxel;

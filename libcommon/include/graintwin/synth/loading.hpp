@@ -6,14 +6,25 @@
 // reached from state k-1 by the strain increment, so nonaffine motion and rotations random-walk.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <vector>
 
+#include "graintwin/core/enum_names.hpp"
 #include "graintwin/synth/packing.hpp"
 
 namespace graintwin::synth {
 
 enum class ShearBand { none, single, crossed };
+/// ctsynth's --band names.
+inline constexpr std::array<EnumName<ShearBand>, 3> kShearBandNames{
+    {{ShearBand::none, "none"}, {ShearBand::single, "single"}, {ShearBand::crossed, "crossed"}}};
+
+/// Where a series' states come from: made-up kinematics, or a simulated triaxial test.
+enum class LoadingKind { prescribed, simulated };
+/// ctsynth's --loading names, also the ground truth's and series.json's `loading`.
+inline constexpr std::array<EnumName<LoadingKind>, 2> kLoadingKindNames{
+    {{LoadingKind::prescribed, "prescribed"}, {LoadingKind::simulated, "simulated"}}};
 
 struct LoadingParams {
   double centre_x = 0.0, centre_y = 0.0;  ///< sample axis (m)
