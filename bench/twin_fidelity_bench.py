@@ -6,6 +6,7 @@ twin_fidelity; docs/validate.md, twin line).
 
 Cases, each a twin built from scan 0 and run with pipelines/scenes/triaxial.toml:
 - pipeline: the run's own twin (ct2labels, labels2shapes, shapes2mesh);
+- pipeline, no cut: the same meshed without shapes2mesh's cut at the neighbours;
 - exact labels: the truth's label image (truthswap), then labels2shapes and shapes2mesh;
 - + exact shapes: the true SH surfaces of those grains at their measured centroids (truthswap);
 - + exact positions: the true surfaces at the true centroids (truthswap --positions);
@@ -20,7 +21,7 @@ chaos. Every run is scored by the validate tool against the series' truth.
 
 Needs a finished `make -f Makefile.pipeline SERIES=<series>` of a series made with ctsynth
 --loading simulated; writes into a new folder under --scratch (printed), links to the run's other
-files, and touches nothing else. About 45 minutes on an idle 2-core machine for sand_small.
+files, and touches nothing else. About 50 minutes on an idle 2-core machine for sand_small.
 
     python3 bench/twin_fidelity_bench.py [--series sand_small] [--factors 1 0.98 0.96]
         [--truth-factors 0.98 0.96] [--build build] [--scratch /tmp/graintwin_twin_fidelity] [--no-publish]
@@ -39,7 +40,7 @@ from bench_doc import SOURCE, finish  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "pipelines", "scenes", "triaxial.toml")
 PARAMS = os.path.join(SOURCE, "pipelines", "params")
-SWAPS = ["pipeline", "exact labels", "+ exact shapes", "+ exact positions", "+ the truth's meshing"]
+SWAPS = ["pipeline", "pipeline, no cut", "exact labels", "+ exact shapes", "+ exact positions", "+ the truth's meshing"]
 
 
 def run(cmd, cwd=None):
@@ -101,7 +102,9 @@ def swap_models(a, scratch, run_dir):
         surface_nodes = tomllib.load(f).get("simulated-surface-nodes", 500)
     shapes["+ the truth's meshing"] = shapes["+ exact positions"]
     truth_meshing = ["--surface-nodes", f"{surface_nodes:g}", "--cut-at-neighbours", "false"]
-    models = {"pipeline": os.path.join(run_dir, "model.h5")}
+    models = {"pipeline": os.path.join(run_dir, "model.h5"), "pipeline, no cut": os.path.join(work, "model_no_cut.h5")}
+    run([f"{bin_}/shapes2mesh", os.path.join(run_dir, "scan_000", "shapes.h5"), os.path.join(run_dir, "scan_000", "labels.h5"),
+         models["pipeline, no cut"], "--config", params(a.series, "shapes2mesh"), "--cut-at-neighbours", "false", "-q"])
     for case, s in shapes.items():
         models[case] = os.path.join(work, f"model_{len(models)}.h5")
         run([f"{bin_}/shapes2mesh", s, labels, models[case], "--config", params(a.series, "shapes2mesh"), "-q"] +
