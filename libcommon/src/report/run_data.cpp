@@ -1,10 +1,7 @@
 #include "graintwin/report/run_data.hpp"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 
 #include "graintwin/contacts/contacts_file.hpp"
 #include "graintwin/contacts/fabric.hpp"
@@ -14,6 +11,7 @@
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
+#include "graintwin/io/series_record.hpp"
 #include "graintwin/io/table_checks.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/local_deformation.hpp"
@@ -219,15 +217,11 @@ ExperimentData read_experiment(const RunFiles& files) {
     e.tracked_axial_strain = tracked.axial, e.tracked_volumetric_strain = tracked.volumetric;
   }
   if (!files.scan_strains.empty()) {
-    std::ifstream in(files.scan_strains);
-    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-    if (j.is_discarded() || !j.contains("scans") || !j["scans"].is_array())
-      throw UsageError("--scan-strains " + files.scan_strains.string() +
-                       " is not a JSON object with a \"scans\" array; pass a series.json as ctsynth writes it");
-    for (const auto& s : j["scans"]) {
-      if (!s.contains("axial_strain") || !s["axial_strain"].is_number())
-        throw UsageError("--scan-strains " + files.scan_strains.string() + ": every entry of \"scans\" needs a number \"axial_strain\"");
-      e.applied_axial_strain.push_back(s["axial_strain"].get<double>());
+    try {
+      e.applied_axial_strain = io::read_series_axial_strains(files.scan_strains);
+    } catch (Error& error) {
+      error.add_context("reading --scan-strains");
+      throw;
     }
     if (e.applied_axial_strain.size() != scans)
       throw UsageError("--scan-strains " + files.scan_strains.string() + " lists " + std::to_string(e.applied_axial_strain.size()) +

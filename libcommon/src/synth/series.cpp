@@ -16,6 +16,7 @@
 #include "graintwin/core/geometry.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/resources.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/shape/grain_measure.hpp"
 #include "graintwin/shape/sh_basis.hpp"
@@ -315,8 +316,9 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   const bool separating = p.grains.shape == GrainShape::angular || from_library;
 
   const ShRotator rotator(grains.sh_degree);
+  namespace sr = schema::series_record;
   nlohmann::json series;
-  series["scans"] = nlohmann::json::array();
+  series[sr::scans] = nlohmann::json::array();
   for (std::size_t k = 0; k < states.size(); ++k) {
     const LoadedState& state = states[k];
     const std::vector<PackedGrain>& poses = state.poses;
@@ -385,9 +387,9 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
     write_ground_truth(dir / scan_name("truth", k), truth, history);
     spdlog::info("scan {}: strain {:.4g}, solid fraction {:.4f} (void ratio {:.4f}), {} touching contacts, {} near", k,
                  eps, truth.solid_fraction, truth.void_ratio, touching, truth.contacts.size() - touching);
-    nlohmann::json row{{"scan", scan_name("scan", k)},
-                       {"truth", scan_name("truth", k)},
-                       {"axial_strain", eps},
+    nlohmann::json row{{sr::scan, scan_name("scan", k)},
+                       {sr::truth, scan_name("truth", k)},
+                       {sr::axial_strain, eps},
                        {"sample_height_m", height_k},
                        {"solid_fraction", truth.solid_fraction},
                        {"void_ratio", truth.void_ratio},
@@ -400,7 +402,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
       row["volumetric_strain"] = state.volumetric_strain;
       row["force_pairs"] = state.forces.size();
     }
-    series["scans"].push_back(row);
+    series[sr::scans].push_back(row);
     throw_if_interrupted();
   }
   SeriesSummary summary;
@@ -408,19 +410,19 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   summary.non_star_grains = static_cast<std::size_t>(std::count_if(
       grains.non_star.begin(), grains.non_star.end(), [&](const NonStarMeasures& m) { return misses_much(m, voxel); }));
   summary.packed_solid_fraction = report.solid_fraction;
-  series["packing"] = {{"solid_fraction", report.solid_fraction},
+  series[sr::packing] = {{"solid_fraction", report.solid_fraction},
                        {"shell_edges_m", std::vector<double>(shell_edges.begin(), shell_edges.end() - 1)},
                        {"shell_solid_fractions", shells},
                        {"max_overlap_m", report.max_overlap},
                        {"sweeps", report.sweeps},
                        {"seconds", report.seconds}};
-  series["loading"] = enum_name(kLoadingKindNames, p.simulate ? LoadingKind::simulated : LoadingKind::prescribed);
+  series[sr::loading] = enum_name(kLoadingKindNames, p.simulate ? LoadingKind::simulated : LoadingKind::prescribed);
   series["grains"] = summary.grains;
   if (!grains.solids.empty()) series["non_star_grains"] = summary.non_star_grains;
   series["voxels_per_d50"] = d_ref / voxel;
   series["shape_zyx"] = shape;
-  series["history"] = history;
-  std::ofstream(dir / "series.json") << series.dump(2) << "\n";
+  series[sr::history] = history;
+  std::ofstream(dir / sr::file_name) << series.dump(2) << "\n";
   return summary;
 }
 

@@ -508,6 +508,19 @@ inline constexpr const char* curve_stress_ratio = "/loading/stress_ratio";      
 inline constexpr const char* curve_volumetric_strain = "/loading/volumetric_strain";  ///< (K) ln(V0 / V)
 }  // namespace graintwin::schema::ground_truth
 
+// series.json (ctsynth, beside a series' scans; JSON), layout in docs/formats.md: what each scan
+// shows and how the series was made. Written by synth/series, read by io/series_record.
+namespace graintwin::schema::series_record {
+inline constexpr const char* file_name = "series.json";
+inline constexpr const char* scans = "scans";                ///< one object per scan, in order
+inline constexpr const char* scan = "scan";                  ///< the scan's file stem (scan_NNN)
+inline constexpr const char* truth = "truth";                ///< its truth's file stem (truth_NNN)
+inline constexpr const char* axial_strain = "axial_strain";  ///< applied axial strain (compression positive)
+inline constexpr const char* loading = "loading";            ///< "prescribed" or "simulated"
+inline constexpr const char* packing = "packing";
+inline constexpr const char* history = "history";
+}  // namespace graintwin::schema::series_record
+
 // validation.json (validate; JSON, not HDF5), layout in docs/formats.md: the sections of a run's
 // error budget against ctsynth's ground truth. Each section holds its summary numbers and, under
 // `scans` or `increments`, the per-scan or per-increment lines (field names in docs/validate.md).
