@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <numbers>
 
@@ -154,6 +155,11 @@ TEST(Truthswap, BadRequestsAreRefusedInOneSentenceWithNothingWritten) {
   test::expect_clean_failure("truthswap", f.dir, {truth_file, labels, out.string(), "--positions"}, 2, "drop --positions");
   test::expect_clean_failure("truthswap", f.dir, {truth_file, truth_file, out.string()}, 2, "kind=ground_truth; pass a labels file");
   test::expect_clean_failure("truthswap", f.dir, {labels, labels, out.string()}, 2, "truth_NNN.h5");
+  // An empty truth, and an output that is one of the inputs, even with --force.
+  const fs::path empty = f.dir / "empty.h5";
+  { std::ofstream touch(empty); }
+  test::expect_clean_failure("truthswap", f.dir, {empty.string(), labels, out.string()}, 2, "empty.h5");
+  test::expect_clean_failure("truthswap", f.dir, {truth_file, shapes, labels, "--labels", labels, "--force"}, 2, "labels.h5");
   // A truth of another scan size.
   synth::GroundTruth other = true_series();
   other.labels = test::label_balls({31, 30, 30}, balls(), Vec3{kVoxel, kVoxel, kVoxel});

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
 
   return tool.run(argc, argv, [&](cli::RunContext& ctx) {
     check_truth_swap(files, options);
+    if (!files.labels.empty()) io::declare_input(files.labels);  // read by option: no output may replace it
     io::AtomicOutput out(output, ctx.force());
     for (const fs::path& p : {files.truth, files.input, files.labels})
       if (!p.empty()) ctx.add_input_history(io::H5File::open(p));
