@@ -187,8 +187,8 @@ TEST(ShBasis, SphereInvariantsAndTable) {
   const gs::RadialTable table = gs::radial_table_from_sh(gs::sphere_coeffs(r, degree), degree, 32);
   EXPECT_NEAR(table.volume() / (4.0 / 3.0 * std::numbers::pi * r * r * r), 1.0, 1e-4);
   EXPECT_NEAR(table.surface_area() / (4.0 * std::numbers::pi * r * r), 1.0, 1e-3);
-  EXPECT_NEAR(table.min_radius(), r, 1e-12 * r);
-  EXPECT_NEAR(table.max_radius(), r, 1e-12 * r);
+  EXPECT_NEAR(table.min_radius(), r, 1e-7 * r);  // tables store single precision
+  EXPECT_NEAR(table.max_radius(), r, 1e-7 * r);
   EXPECT_LT(table.centroid().norm(), 1e-12 * r);
   // Solid sphere: J = 2/5 V r^2 I.
   const double j = 0.4 * table.volume() * r * r;
@@ -332,13 +332,14 @@ TEST(RadialTable, ScaledRescalesEverything) {
   const double s = 2.5e-4;
   const gs::RadialTable u = t.scaled(s);
   const Eigen::Vector3d d = Eigen::Vector3d(0.3, 0.1, -0.9).normalized();
-  EXPECT_NEAR(u.radius(d), s * t.radius(d), 1e-15);
+  // Tables store single precision: the scaled radii are rounded again.
+  EXPECT_NEAR(u.radius(d), s * t.radius(d), 2e-7 * u.radius(d));
   EXPECT_NEAR(u.volume(), s * s * s * t.volume(), 1e-12 * u.volume());
   EXPECT_NEAR(u.surface_area(), s * s * t.surface_area(), 1e-12 * u.surface_area());
-  EXPECT_NEAR(u.min_radius(), s * t.min_radius(), 1e-15);
+  EXPECT_NEAR(u.min_radius(), s * t.min_radius(), 2e-7 * u.min_radius());
   EXPECT_LT((u.inertia_tensor() - std::pow(s, 5) * t.inertia_tensor()).norm(),
             1e-12 * u.inertia_tensor().norm());
-  EXPECT_LT((u.surface_normal(d) - t.surface_normal(d)).norm(), 1e-12);
+  EXPECT_LT((u.surface_normal(d) - t.surface_normal(d)).norm(), 1e-6);
   EXPECT_THROW(t.scaled(0.0), graintwin::UsageError);
 }
 

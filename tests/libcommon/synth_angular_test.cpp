@@ -61,7 +61,7 @@ TEST(AngularGrain, CubeRadiusIsExactAlongFaceNormalsEdgesAndDiagonals) {
   const shape::RadialTable t = g.table(96);
   EXPECT_NEAR(t.volume(), e * e * e, 2e-3 * e * e * e);
   EXPECT_LT(t.centroid().norm(), 1e-6 * e);
-  EXPECT_NEAR(t.max_radius(), std::sqrt(3.0) / 2.0 * e, 1e-12 * e);  // corners are nodes
+  EXPECT_NEAR(t.max_radius(), std::sqrt(3.0) / 2.0 * e, 1e-7 * e);  // corners are nodes (single precision)
 }
 
 TEST(AngularGrain, HalfSpacesFacingAwayLeaveADirectionUnbounded) {
@@ -121,7 +121,7 @@ TEST(RandomAngularGrain, SameSeedSameGrainCentredAtUnitSize) {
     const int i = static_cast<int>(k % (n + 2)), j = static_cast<int>(k / (n + 2) % (n + 2));
     if (i == 0 || j == 0 || i == n + 1 || j == n + 1) continue;
     const double r = ga.radius(nodes[k]);
-    ASSERT_NEAR(ta.radius(nodes[k]), r, 1e-9 * r) << "node " << k;
+    ASSERT_NEAR(ta.radius(nodes[k]), r, 2e-7 * r) << "node " << k;  // single precision, rounded again when scaled
   }
 }
 

@@ -106,7 +106,7 @@ RadialTable RadialTable::from_node_radii(int n, std::vector<double> radii) {
                       "every direction (re-centre it or choose another shape)");
     }
   }
-  t.r_ = std::move(radii);
+  t.r_.assign(radii.begin(), radii.end());
   t.min_radius_ = t.r_[t.index(0, 1, 1)];
   t.max_radius_ = t.min_radius_;
   for (int face = 0; face < 6; ++face) {
@@ -137,8 +137,8 @@ RadialTable::Cell RadialTable::cell_of(const Eigen::Vector3d& d) const {
 double RadialTable::radius(const Eigen::Vector3d& unit_dir) const {
   const Cell c = cell_of(unit_dir);
   const double t = c.t, w = c.w;
-  const double* p = r_.data() + index(c.face, c.i + 1, c.j + 1);
-  const double* q = p + stride_;
+  const float* p = r_.data() + index(c.face, c.i + 1, c.j + 1);
+  const float* q = p + stride_;
   return (1.0 - w) * ((1.0 - t) * p[0] + t * p[1]) + w * ((1.0 - t) * q[0] + t * q[1]);
 }
 
@@ -232,8 +232,8 @@ void RadialTable::integrate() {
       }
     }
     for (int face = 0; face < 6; ++face) {
-      const double* lo = &r_[index(face, 1, j + 1)];  // r at nodes (i, j) and (i + 1, j): lo[i], lo[i + 1]
-      const double* hi = &r_[index(face, 1, j + 2)];
+      const float* lo = &r_[index(face, 1, j + 1)];  // r at nodes (i, j) and (i + 1, j): lo[i], lo[i + 1]
+      const float* hi = &r_[index(face, 1, j + 2)];
       double* S = &sums[static_cast<std::size_t>(face * kSums * cells)];
 #pragma omp simd
       for (int i = 0; i < cells; ++i) {
@@ -319,7 +319,7 @@ RadialTable RadialTable::scaled(double s) const {
                      std::to_string(s) + ")");
   }
   RadialTable t = *this;
-  for (double& r : t.r_) r *= s;
+  for (float& r : t.r_) r = static_cast<float>(r * s);
   t.min_radius_ *= s;
   t.max_radius_ *= s;
   const double s2 = s * s;

@@ -68,7 +68,8 @@ int table_nodes(double radius_vox) {
 
 double grain_bytes(double diameter, double voxel_size, int degree) {
   const double stride = table_nodes(0.5 * diameter / voxel_size) + 2.0;  // nodes plus the ghost ring
-  return 8.0 * (6.0 * stride * stride + shape::sh_count(degree)) + sizeof(shape::RadialTable) + sizeof(shape::ShapeStats);
+  return sizeof(float) * 6.0 * stride * stride + sizeof(double) * shape::sh_count(degree) + sizeof(shape::RadialTable) +
+         sizeof(shape::ShapeStats);
 }
 
 GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diameters,

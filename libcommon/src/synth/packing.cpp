@@ -601,19 +601,36 @@ PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
 std::vector<PackedGrain> pack_in_stages(
     const std::vector<std::vector<const shape::RadialTable*>>& stages, const Container& c,
     const PackingParams& p, PackingReport* report, const std::function<void(double)>& progress) {
-  if (stages.empty()) {
-    throw UsageError("pack_in_stages: no stages; pass at least the grains' true shapes");
-  }
-  for (std::size_t k = 1; k < stages.size(); ++k) {
+  for (std::size_t k = 1; k < stages.size(); ++k) {  // before any work, though the stages check again
     if (stages[k].size() != stages[0].size()) {
-      throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " +
-                       std::to_string(stages[k].size()) + " shapes but stage 0 has " +
-                       std::to_string(stages[0].size()) + "; pass one shape per grain in every stage");
+      throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " + std::to_string(stages[k].size()) +
+                       " shapes but stage 0 has " + std::to_string(stages[0].size()) +
+                       "; pass one shape per grain in every stage");
     }
   }
+  return pack_in_stages(stages.size(), [&stages](std::size_t k) { return stages[k]; }, c, p, report, progress);
+}
+
+std::vector<PackedGrain> pack_in_stages(std::size_t stage_count, const StageShapes& stage_shapes,
+                                        const Container& c, const PackingParams& p, PackingReport* report,
+                                        const std::function<void(double)>& progress) {
+  if (stage_count == 0) {
+    throw UsageError("pack_in_stages: no stages; pass at least the grains' true shapes");
+  }
+  std::size_t grains = 0;
+  auto shapes_of = [&](std::size_t k) {
+    std::vector<const shape::RadialTable*> shapes = stage_shapes(k);
+    if (k == 0) grains = shapes.size();
+    if (shapes.size() != grains) {
+      throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " + std::to_string(shapes.size()) +
+                       " shapes but stage 0 has " + std::to_string(grains) +
+                       "; pass one shape per grain in every stage");
+    }
+    return shapes;
+  };
   const auto t0 = std::chrono::steady_clock::now();
   // Progress: the growth takes most of the time, the relaxations share the rest evenly.
-  const double growth_share = stages.size() == 1 ? 1.0 : 0.7;
+  const double growth_share = stage_count == 1 ? 1.0 : 0.7;
   auto part = [&](double lo, double hi) -> std::function<void(double)> {
     if (!progress) return {};
     return [&progress, lo, hi](double f) { progress(lo + (hi - lo) * f); };
@@ -622,24 +639,24 @@ std::vector<PackedGrain> pack_in_stages(
     try {
       return run();
     } catch (const DataError& e) {
-      if (stages.size() == 1) throw;
-      throw DataError("packing stage " + std::to_string(k + 1) + " of " +
-                      std::to_string(stages.size()) + ": " + e.message());
+      if (stage_count == 1) throw;
+      throw DataError("packing stage " + std::to_string(k + 1) + " of " + std::to_string(stage_count) + ": " +
+                      e.message());
     }
   };
   PackingReport r;
   std::vector<PackedGrain> poses =
-      in_stage(0, [&] { return pack_grains(stages[0], c, p, &r, part(0.0, growth_share)); });
+      in_stage(0, [&] { return pack_grains(shapes_of(0), c, p, &r, part(0.0, growth_share)); });
   int sweeps = r.sweeps;
   const double initial_scale = r.initial_scale;
-  const double relax_share = (1.0 - growth_share) / std::max<double>(1.0, stages.size() - 1.0);
+  const double relax_share = (1.0 - growth_share) / std::max<double>(1.0, stage_count - 1.0);
   // Each later stage starts shrunk a little and regrows: at full size the new bumps would have to
   // be pushed out of a jammed packing; shrunk, they find room and the grains re-jam slowly.
   PackingParams regrow = p;
   regrow.initial_scale = kTune.stage_regrow_scale;
-  for (std::size_t k = 1; k < stages.size(); ++k) {
+  for (std::size_t k = 1; k < stage_count; ++k) {
     const double lo = growth_share + (k - 1) * relax_share;
-    r = in_stage(k, [&] { return relax_grains(stages[k], poses, c, regrow, part(lo, lo + relax_share)); });
+    r = in_stage(k, [&] { return relax_grains(shapes_of(k), poses, c, regrow, part(lo, lo + relax_share)); });
     sweeps += r.sweeps;
   }
   r.sweeps = sweeps;

@@ -230,7 +230,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   const double voxel = p.voxel_size;
   const Vec3 voxels{std::ceil((bound.hi[2] - bound.lo[2]) / voxel), std::ceil((bound.hi[1] - bound.lo[1]) / voxel),
                     std::ceil((bound.hi[0] - bound.lo[0]) / voxel)};  // z y x, as reals until they are known to fit
-  // What the series holds at once: the grains' tables (and one smoothed copy per packing stage)
+  // What the series holds at once: the grains' tables (and one smoothed copy while a packing stage runs)
   // and one scan being rendered.
   const double target = p.solid_fraction * p.container.volume();
   double mean_grain_volume = 0.0, typical_d = p.psd.d50;
@@ -241,7 +241,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   const double grains_expected = library ? target / mean_grain_volume : expected_grain_count(p.psd, target);
   const double scan_bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel;
   const double grain_table_bytes = grains_expected * grain_bytes(typical_d, voxel, p.grains.sand.degree) *
-                                   static_cast<double>(1 + p.pack_degrees.size());
+                                   (p.pack_degrees.empty() ? 1.0 : 2.0);
   // The advice names first what dominates: millions of tiny grains are fixed by the PSD, not the voxels.
   check_memory(scan_bytes + grain_table_bytes, "ctsynth",
                fmt::format("scans of {:.3g} x {:.3g} x {:.3g} voxels (z, y, x) and about {:.3g} grains", voxels[0],
@@ -275,23 +275,26 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   PackingParams pp = p.packing;
   pp.seed = p.seed;
   PackingReport report;
-  std::vector<std::vector<shape::RadialTable>> smooth(p.pack_degrees.size());
-  std::vector<std::vector<const shape::RadialTable*>> stages;
-  for (std::size_t k = 0; k < p.pack_degrees.size(); ++k) {
-    smooth[k] = smoothed_tables(grains, p.pack_degrees[k], voxel);
-    stages.emplace_back();
-    for (const auto& t : smooth[k]) stages.back().push_back(&t);
-  }
-  stages.push_back(tables);
-  const std::vector<PackedGrain> packed = pack_in_stages(stages, p.container, pp, &report, progress("packing"));
-  smooth.clear();
+  // The smoothed stages' tables are made as each stage starts, so one stage's copy lives at a time.
+  std::vector<shape::RadialTable> smooth;
+  const std::size_t stage_count = p.pack_degrees.size() + 1;
+  auto stage_shapes = [&](std::size_t k) {
+    smooth = {};  // the last stage's copy goes before the next is made
+    if (k + 1 == stage_count) return tables;
+    smooth = smoothed_tables(grains, p.pack_degrees[k], voxel);
+    std::vector<const shape::RadialTable*> shapes;
+    for (const auto& t : smooth) shapes.push_back(&t);
+    return shapes;
+  };
+  const std::vector<PackedGrain> packed =
+      pack_in_stages(stage_count, stage_shapes, p.container, pp, &report, progress("packing"));
   const std::vector<double> shell_edges{0.0, 0.25 * d_ref, 0.5 * d_ref, d_ref, HUGE_VAL};
   const std::vector<double> shells = solid_fraction_by_wall_distance(tables, packed, p.container, shell_edges);
   spdlog::info("packed: solid fraction {:.4f} (by distance from the walls: {:.3f} within d50/4, {:.3f} d50/4-d50/2, "
                "{:.3f} d50/2-d50, {:.3f} beyond d50), max overlap {:.3g} um (tolerance {:.3g} um), {} touching "
                "pairs, {} stages, {} sweeps, {:.1f} s",
                report.solid_fraction, shells[0], shells[1], shells[2], shells[3], report.max_overlap * 1e6,
-               report.tolerance * 1e6, report.touching_pairs, stages.size(), report.sweeps, report.seconds);
+               report.tolerance * 1e6, report.touching_pairs, stage_count, report.sweeps, report.seconds);
   throw_if_interrupted();
 
   // --- loading states ---
