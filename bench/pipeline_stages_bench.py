@@ -14,7 +14,6 @@ Each run writes into a new folder of its own under --scratch (printed; nothing e
 import argparse
 import glob
 import os
-import resource
 import tempfile
 import subprocess
 import sys
@@ -30,19 +29,24 @@ PATH_NAMES = ("gmsh remeshed", "kept surface", "ellipsoid")
 ORIGIN_NAMES = ("SH fit", "voxels", "ellipsoid")
 
 
-def children_cpu():
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
+def run_measured(cmd):
+    """Runs cmd from the source folder: its wall and CPU seconds (user + system of all its
+    processes) and the peak resident memory, in bytes, of the largest of them (wait4's rusage
+    covers every process the command waited for). Exits with the command's stderr if it fails."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=SOURCE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    err = proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{err.strip()[-3000:]}")
+    return time.perf_counter() - t0, usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024
 
 
-def run_stage(series, stage, out, build):
-    cmd = ["make", "-s", "-f", "Makefile.pipeline", f"SERIES={series}", f"OUT={out}", f"BIN={build}/bin", stage]
-    cpu0, t0 = children_cpu(), time.perf_counter()
-    done = subprocess.run(cmd, cwd=SOURCE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    wall, cpu = time.perf_counter() - t0, children_cpu() - cpu0
-    if done.returncode != 0:
-        sys.exit(f"pipeline_stages_bench: {' '.join(cmd)} failed:\n{done.stderr.strip()}")
-    return wall, cpu
+def run_stage(series, stage, out, build, inp=None):
+    """One Makefile.pipeline stage of a series from sample_volumes/ (or from the folder `inp`),
+    measured by run_measured()."""
+    cmd = ["make", "-s", "-f", "Makefile.pipeline", f"SERIES={series}", f"OUT={out}", f"BIN={build}/bin"]
+    return run_measured(cmd + ([f"IN={inp}"] if inp else []) + [stage])
 
 
 def grains_of(labels_path):
@@ -72,7 +76,7 @@ def bench_series(series, stages, build, run_dir):
     out = os.path.join(run_dir, series)
     rows = {}
     for stage in stages:
-        wall, cpu = run_stage(series, stage, out, build)
+        wall, cpu, _ = run_stage(series, stage, out, build)
         rows[stage] = {"wall_s": wall, "cpu_s": cpu}
         print(f"{series:14s} {stage:9s} wall {wall:7.2f} s  cpu {cpu:7.2f} s", flush=True)
     names = [os.path.splitext(os.path.basename(s))[0] for s in scans]

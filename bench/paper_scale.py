@@ -1,0 +1,142 @@
+#!/usr/bin/env python3
+"""Paper scale: every stage's cost as the sample grows from the bundled 310 grains toward the
+reference experiment's size (docs/benchmarks.md, section paper_scale).
+
+Cases: the bundled series sand_small, then samples made by ctsynth from
+pipelines/scenes/paper_scale.toml (the experiment's cylinder, voxel size, void ratio and grading)
+with the cylinder scaled to each of --diameters (mm; the height keeps the experiment's 25:12).
+For each case the bench runs ctsynth (stage "synth": packing and rendering the scans) and then
+Makefile.pipeline's stages one after another (--stages), and records each stage's wall time, CPU
+time (user + system of all its processes), peak resident memory (its largest process) and the
+bytes it wrote. Between consecutive cases it gives each stage's growth exponent: the slope of CPU
+time against the reference scan's grain count on log-log axes (1 is linear; N log N from 300 to
+16 000 grains shows as about 1.2).
+
+The simulate stage is left out unless named in --stages: at thousands of grains the triaxial test
+takes hours (docs/fdem_triaxial.md). Each run writes into a new folder under --scratch (printed)
+and touches nothing else.
+
+    python3 bench/paper_scale.py [--diameters 6 12] [--stages inspect segment contacts shapes track mesh]
+        [--build build] [--scratch /tmp/graintwin_paper_scale] [--no-publish]
+"""
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+
+import h5py
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_doc import SOURCE, finish  # noqa: E402
+from pipeline_stages_bench import run_measured, run_stage  # noqa: E402
+
+SCENE = os.path.join(SOURCE, "pipelines", "scenes", "paper_scale.toml")
+HEIGHT_OVER_DIAMETER = 25.0 / 12.0
+
+
+def folder_bytes(path):
+    total = 0
+    for root, _, files in os.walk(path):
+        for f in files:
+            p = os.path.join(root, f)
+            if not os.path.islink(p):
+                total += os.path.getsize(p)
+    return total
+
+
+def make_series(diameter_mm, build, folder):
+    """ctsynth's paper-scale scene in a cylinder `diameter_mm` across: the synth stage's figures."""
+    height_mm = diameter_mm * HEIGHT_OVER_DIAMETER
+    os.makedirs(os.path.dirname(folder), exist_ok=True)
+    cmd = [os.path.join(build, "bin", "ctsynth"), SCENE, folder, "-q",
+           "--diameter", f"{diameter_mm:g}mm", "--height", f"{height_mm:.4g}mm"]
+    wall, cpu, rss = run_measured(cmd)
+    with open(os.path.join(folder, "series.json")) as f:
+        packing = json.load(f)["packing"]
+    return {"wall_s": wall, "cpu_s": cpu, "peak_bytes": rss, "output_bytes": folder_bytes(folder),
+            "packing_s": packing["seconds"], "sweeps": packing["sweeps"]}
+
+
+def grains_of(labels_path):
+    with h5py.File(labels_path, "r") as f:
+        return int(f["grains/label"].shape[0])
+
+
+def bench_case(name, inp, stages, build, run_dir, synth=None):
+    out = os.path.join(run_dir, name)
+    os.makedirs(out, exist_ok=True)
+    rows = {"synth": synth} if synth else {}
+    for stage in stages:
+        before = folder_bytes(out)
+        wall, cpu, rss = run_stage(name, stage, out, build, inp=inp)
+        rows[stage] = {"wall_s": wall, "cpu_s": cpu, "peak_bytes": rss, "output_bytes": folder_bytes(out) - before}
+        print(f"{name:14s} {stage:9s} wall {wall:8.1f} s  cpu {cpu:8.1f} s  peak {rss / 2**30:6.2f} GiB", flush=True)
+    scans = sorted(d for d in os.listdir(out) if d.startswith("scan_"))
+    return {"grains": grains_of(os.path.join(out, scans[0], "labels.h5")), "scans": len(scans), "stages": rows}
+
+
+def exponent(a, b, stage):
+    ra, rb = a["stages"].get(stage), b["stages"].get(stage)
+    if not ra or not rb or ra["cpu_s"] <= 0 or b["grains"] == a["grains"]:
+        return None
+    return math.log(rb["cpu_s"] / ra["cpu_s"]) / math.log(b["grains"] / a["grains"])
+
+
+def table(results, stages):
+    names = list(results)
+    head = "| stage | " + " | ".join(f"{n} ({results[n]['grains']} grains): wall s / CPU s / peak GiB / output MB" for n in names)
+    pairs = list(zip(names, names[1:]))
+    head += "".join(f" | exponent {a} -> {b}" for a, b in pairs) + " |"
+    lines = [head, "|---|" + "---|" * (len(names) + len(pairs))]
+    for stage in ["synth"] + stages:
+        cells = []
+        for n in names:
+            r = results[n]["stages"].get(stage)
+            cells.append("-" if r is None else
+                         f"{r['wall_s']:.1f} / {r['cpu_s']:.1f} / {r['peak_bytes'] / 2**30:.2f} / {r['output_bytes'] / 1e6:.0f}")
+        for a, b in pairs:
+            e = exponent(results[a], results[b], stage)
+            cells.append("-" if e is None else f"{e:.2f}")
+        lines.append(f"| {stage} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--diameters", nargs="+", type=float, default=[6.0, 12.0],
+                    help="cylinder diameters (mm) of the generated cases; 12 is the experiment's")
+    ap.add_argument("--stages", nargs="+", default=["inspect", "segment", "contacts", "shapes", "track", "mesh"])
+    ap.add_argument("--build", default=os.path.join(SOURCE, "build"))
+    ap.add_argument("--scratch", default="/tmp/graintwin_paper_scale")
+    ap.add_argument("--no-publish", action="store_true")
+    a = ap.parse_args()
+    build = os.path.abspath(a.build)
+    os.makedirs(a.scratch, exist_ok=True)
+    run_dir = tempfile.mkdtemp(prefix="paper_scale-", dir=a.scratch)
+    print(f"outputs in {run_dir}", flush=True)
+    results = {"sand_small": bench_case("sand_small", None, a.stages, build, run_dir)}
+    for d in a.diameters:
+        name = f"paper_d{d:g}mm"
+        series = os.path.join(run_dir, "series", name)
+        synth = make_series(d, build, series)
+        print(f"{name:14s} synth     wall {synth['wall_s']:8.1f} s  cpu {synth['cpu_s']:8.1f} s  "
+              f"peak {synth['peak_bytes'] / 2**30:6.2f} GiB", flush=True)
+        results[name] = bench_case(name, series, a.stages, build, run_dir, synth)
+    packing = ", ".join(f"{n}: {r['stages']['synth']['sweeps']} sweeps in {r['stages']['synth']['packing_s']:.0f} s"
+                        for n, r in results.items() if "synth" in r["stages"])
+    text = (
+        "Every stage's cost as the sample grows (`python3 bench/paper_scale.py`; "
+        f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). sand_small is the bundled series (its "
+        "synth stage is not rerun); the others are pipelines/scenes/paper_scale.toml in a cylinder of the "
+        "named diameter (height 25:12 of it; 12 mm is the experiment's), three scans each. Per stage: wall "
+        "and CPU seconds, the peak resident memory of its largest process and the bytes it wrote; then the "
+        "growth exponent of CPU time against the reference scan's grains between consecutive cases. "
+        f"Packing: {packing}.\n\n" + table(results, a.stages) + "\n")
+    finish("paper_scale", text, run_dir, results, not a.no_publish)
+
+
+if __name__ == "__main__":
+    main()
