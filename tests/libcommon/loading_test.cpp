@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <vector>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/synth/loading.hpp"
 #include "graintwin/synth/psd.hpp"
 
@@ -19,7 +22,9 @@ TEST(Psd, OttawaSamplesHaveTheRightBoundsAndMassMedian) {
     ASSERT_GE(x, psd.d_min);
     ASSERT_LE(x, psd.d_max);
   }
-  EXPECT_NEAR(volume_median_diameter(d) / psd.d50, 1.0, 0.02);
+  std::vector<double> volume;
+  for (double x : d) volume.push_back(std::numbers::pi / 6.0 * x * x * x);
+  EXPECT_NEAR(d50_of_volumes(volume) / psd.d50, 1.0, 0.02);
   EXPECT_NEAR(psd.percent_passing(psd.d50), 50.0, 1.0);
   EXPECT_DOUBLE_EQ(psd.percent_passing(0.2e-3), 0.0);
   EXPECT_DOUBLE_EQ(psd.percent_passing(2e-3), 100.0);

@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numeric>
 #include <random>
 #include <vector>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/shape/radial_table.hpp"
 #include "graintwin/synth/grains.hpp"
 #include "graintwin/synth/packing.hpp"
@@ -50,8 +52,9 @@ TEST(PackInStages, RoughSandMeetsTheToleranceWithItsTrueShapes) {
   const std::vector<RadialTable> deg11 = synth::smoothed_tables(grains, 11, gp.voxel_size);
   const auto shapes = grains.table_pointers();
   // The grain count sets the density exactly: rescale the container to the drawn volume.
-  double volume = 0.0;
-  for (const auto* s : shapes) volume += s->volume();
+  std::vector<double> volumes;
+  for (const auto* s : shapes) volumes.push_back(s->volume());
+  const double volume = std::accumulate(volumes.begin(), volumes.end(), 0.0);
   const double k = std::cbrt(volume / fill / c.volume());
   c.radius *= k;
   c.height *= k;
@@ -93,7 +96,7 @@ TEST(PackInStages, RoughSandMeetsTheToleranceWithItsTrueShapes) {
   ASSERT_FALSE(progress.empty());
   EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
   EXPECT_DOUBLE_EQ(progress.back(), 1.0);
-  const double d50 = synth::volume_median_diameter(diameters);
+  const double d50 = d50_of_volumes(volumes);
   const auto shells = synth::solid_fraction_by_wall_distance(shapes, packed, c,
                                                              {0.0, 0.25 * d50, 0.5 * d50, d50, HUGE_VAL});
   std::printf("[ packing ] %zu sand grains in stages (degree 7, 11, 15): solid fraction %.3f (by distance "

@@ -1,3 +1,6 @@
+// fdemrun scene files: one parse function per scene table, called in order by read_scene; the
+// checked TOML access they read with is in scene_table.hpp, the model a scene builds in
+// scene_model.cpp.
 #include "graintwin/fdem/scene.hpp"
 
 #include <fmt/format.h>
@@ -10,116 +13,16 @@
 #include <string>
 
 #include "graintwin/core/error.hpp"
-#include "graintwin/core/statistics.hpp"
 #include "graintwin/core/message.hpp"
 #include "graintwin/core/strings.hpp"
 #include "graintwin/fdem/model_file.hpp"
-#include "graintwin/fdem/primitives.hpp"
+#include "scene_table.hpp"
 
 namespace graintwin::fdem {
 namespace {
 
-/// One TOML table with the name it is reported under ("scene.toml: [[grains]] 2").
-class Table {
- public:
-  Table(const toml::table& t, std::string where, std::initializer_list<const char*> keys) : t_(t), where_(std::move(where)) {
-    const std::set<std::string> known(keys.begin(), keys.end());
-    for (auto&& [k, v] : t)
-      if (!known.count(std::string(k.str()))) {
-        std::string list;
-        for (const char* key : keys) list += (list.empty() ? "" : ", ") + std::string(key);
-        const std::string hint = closest_name(std::string(k.str()), {keys.begin(), keys.end()});
-        fail("key '" + excerpt(std::string(k.str())) + "' is unknown" + (hint.empty() ? "" : "; did you mean '" + hint + "'?") +
-             " (known: " + list + ")");
-      }
-  }
-  [[noreturn]] void fail(const std::string& what) const { throw UsageError(where_ + ": " + what); }
-  bool has(const char* key) const { return t_.contains(key); }
-  const std::string& where() const { return where_; }
-
-  double number(const char* key, double fallback) const {
-    const toml::node* n = t_.get(key);
-    if (!n) return fallback;
-    const auto v = n->value<double>();
-    if (!v || !std::isfinite(*v)) fail(std::string(key) + " must be a number");
-    return *v;
-  }
-  double positive(const char* key, double fallback) const {
-    const double v = number(key, fallback);
-    if (!(v > 0)) fail(std::string(key) + " must be positive");
-    return v;
-  }
-  double non_negative(const char* key, double fallback) const {
-    const double v = number(key, fallback);
-    if (v < 0) fail(std::string(key) + " must not be negative");
-    return v;
-  }
-  bool flag(const char* key, bool fallback) const {
-    const toml::node* n = t_.get(key);
-    if (!n) return fallback;
-    if (!n->is_boolean()) fail(std::string(key) + " must be true or false");
-    return n->value<bool>().value();
-  }
-  std::string text(const char* key, const std::string& fallback) const {
-    const toml::node* n = t_.get(key);
-    if (!n) return fallback;
-    if (!n->is_string()) fail(std::string(key) + " must be a string");
-    return n->value<std::string>().value();
-  }
-  Eigen::Vector3d vector(const char* key, const Eigen::Vector3d& fallback) const {
-    const toml::node* n = t_.get(key);
-    if (!n) return fallback;
-    const toml::array* a = n->as_array();
-    if (!a || a->size() != 3) fail(std::string(key) + " must be an array of 3 numbers, e.g. [0, 0, 1]");
-    Eigen::Vector3d v;
-    for (int k = 0; k < 3; ++k) {
-      const auto x = (*a)[static_cast<std::size_t>(k)].value<double>();
-      if (!x || !std::isfinite(*x)) fail(std::string(key) + " must be an array of 3 numbers, e.g. [0, 0, 1]");
-      v[k] = *x;
-    }
-    return v;
-  }
-  /// An array of 3-vectors, e.g. [[0, 0, 1e-3], [0, 0, -1e-3]]; empty when the key is absent.
-  std::vector<Eigen::Vector3d> vectors(const char* key) const {
-    std::vector<Eigen::Vector3d> out;
-    const toml::node* n = t_.get(key);
-    if (!n) return out;
-    const toml::array* a = n->as_array();
-    const std::string usage = std::string(key) + " must be an array of points, e.g. [[0, 0, 1e-3]]";
-    if (!a || a->empty()) fail(usage);
-    for (const toml::node& item : *a) {
-      const toml::array* p = item.as_array();
-      if (!p || p->size() != 3) fail(usage);
-      Eigen::Vector3d v;
-      for (int k = 0; k < 3; ++k) {
-        const auto x = (*p)[static_cast<std::size_t>(k)].value<double>();
-        if (!x || !std::isfinite(*x)) fail(usage);
-        v[k] = *x;
-      }
-      out.push_back(v);
-    }
-    return out;
-  }
-  const toml::table& raw() const { return t_; }
-
- private:
-  const toml::table& t_;
-  std::string where_;
-};
-
-/// The tables of an array of tables `[[name]]` (empty when absent).
-std::vector<const toml::table*> tables(const toml::table& root, const char* name, const std::string& file) {
-  std::vector<const toml::table*> out;
-  const toml::node* n = root.get(name);
-  if (!n) return out;
-  const toml::array* a = n->as_array();
-  if (!a) throw UsageError(file + ": " + name + " must be written as [[" + name + "]] tables");
-  for (const toml::node& item : *a) {
-    if (!item.is_table()) throw UsageError(file + ": " + name + " must be written as [[" + name + "]] tables");
-    out.push_back(item.as_table());
-  }
-  return out;
-}
+using detail::Table;
+using detail::tables;
 
 GrainKind parse_kind(const Table& t) {
   const std::string k = t.text("kind", enum_name(kGrainKindNames, GrainKind::tet4));
@@ -552,57 +455,6 @@ Scene read_scene(const std::filesystem::path& path, const std::filesystem::path&
 Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model) {
   if (!model) throw UsageError("read_scene: give a model");
   return parse_scene(path, {}, model);
-}
-
-Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
-  Model m;
-  if (scene.model) {
-    m = *scene.model->model;
-    if (scene.model->kind)
-      for (Grain& g : m.grains) g.kind = *scene.model->kind;
-  }
-  m.materials = scene.materials;
-  m.platens.clear();
-  for (const GrainSpec& g : scene.grains) {
-    if (g.shape == PrimitiveShape::box) {
-      add_grain(m, box_mesh(g.size, g.element_size), g.position, g.kind, g.material, g.label);
-    } else {
-      if (!mesh_curved)
-        throw UsageError("grain label " + std::to_string(g.label) + " is a " + enum_name(kPrimitiveShapeNames, g.shape) +
-                         ", which this program cannot mesh (gmsh is in graintwin_mesh); use fdemrun");
-      mesh_curved(m, g);
-    }
-  }
-  for (const PlatenSpec& p : scene.platens) m.platens.push_back(p.platen);
-  m.sample = scene.sample;
-  for (std::uint32_t k = 0; k < std::min(scene.size_penalties.size(), m.materials.size()); ++k) {
-    const SizePenalty& rule = scene.size_penalties[k];
-    if (!(rule.per_size > 0)) continue;
-    const double h = rule.element_size > 0 ? rule.element_size : contact_element_size(m, k);
-    if (!(h > 0))
-      throw UsageError("material '" + m.materials[k].name + "' sets penalty_per_size but no grain uses it; " +
-                       "give it penalty_element_size or drop the key");
-    m.materials[k].normal_penalty = m.materials[k].tangential_penalty = rule.per_size * m.materials[k].young / h;
-    if (const std::string problem = material_range_problem(m.materials[k]); !problem.empty())
-      throw UsageError(fmt::format("material '{}': penalty_per_size {:g} x young / {:g} m gives a penalty out of range: {}; "
-                                   "lower penalty_per_size or give a larger penalty_element_size",
-                                   m.materials[k].name, rule.per_size, h, problem));
-  }
-  return m;
-}
-
-double contact_element_size(const Model& model, std::uint32_t material) {
-  std::vector<double> edges;
-  for (std::size_t t = 0; t < model.triangles.size(); ++t) {
-    const Grain& grain = model.grains[model.triangle_grain[t]];
-    if (grain.material != material) continue;
-    // A 10-node grain's surface triangles are quarters of its element faces.
-    const bool quadratic = grain.element_end > grain.element_begin && model.nodes_of(grain.element_begin) == 10;
-    const double split = quadratic ? 2.0 : 1.0;
-    const auto& c = model.triangles[t];
-    for (int i = 0; i < 3; ++i) edges.push_back(split * (model.nodes[c[i]] - model.nodes[c[(i + 1) % 3]]).norm());
-  }
-  return median(std::move(edges));
 }
 
 }  // namespace graintwin::fdem

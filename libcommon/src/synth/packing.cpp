@@ -1,7 +1,8 @@
 // Dense packing of star-shaped grains by growth with overlap relaxation: the driver. Its parts
 // live beside it: the random start (packing_start.cpp), the candidate pairs (packing_pairs.cpp),
 // the contact kernels (packing_geometry.cpp); the contacts of grains at given poses are in
-// packing_contacts.cpp, the measures of a finished packing in packing_measures.cpp.
+// packing_contacts.cpp, the measures of a finished packing in packing_measures.cpp, and the
+// packing in stages of smoother shapes first in packing_stages.cpp.
 //
 // 1. Start: all grains at a common scale s0 (0.55, or less when the bounding spheres would fill
 //    more than 25 % of the container), random orientation, random position by random sequential
@@ -97,7 +98,6 @@ struct Tune {
                                     // bounding radius); in between the last contact seeds them
   int stall_sweeps = 2000;          // sweeps without 0.1 % growth: jammed before full size
   int settle_sweeps = 3000;         // sweeps at full size without 1 % less overlap: jammed
-  double stage_regrow_scale = 0.98;  // pack_in_stages(): later stages regrow from this scale
 };
 constexpr Tune kTune{};
 
@@ -596,75 +596,6 @@ PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
   Packer packer(shapes, c, p);
   poses = packer.relax_from(poses, &report, progress);
   return report;
-}
-
-std::vector<PackedGrain> pack_in_stages(
-    const std::vector<std::vector<const shape::RadialTable*>>& stages, const Container& c,
-    const PackingParams& p, PackingReport* report, const std::function<void(double)>& progress) {
-  for (std::size_t k = 1; k < stages.size(); ++k) {  // before any work, though the stages check again
-    if (stages[k].size() != stages[0].size()) {
-      throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " + std::to_string(stages[k].size()) +
-                       " shapes but stage 0 has " + std::to_string(stages[0].size()) +
-                       "; pass one shape per grain in every stage");
-    }
-  }
-  return pack_in_stages(stages.size(), [&stages](std::size_t k) { return stages[k]; }, c, p, report, progress);
-}
-
-std::vector<PackedGrain> pack_in_stages(std::size_t stage_count, const StageShapes& stage_shapes,
-                                        const Container& c, const PackingParams& p, PackingReport* report,
-                                        const std::function<void(double)>& progress) {
-  if (stage_count == 0) {
-    throw UsageError("pack_in_stages: no stages; pass at least the grains' true shapes");
-  }
-  std::size_t grains = 0;
-  auto shapes_of = [&](std::size_t k) {
-    std::vector<const shape::RadialTable*> shapes = stage_shapes(k);
-    if (k == 0) grains = shapes.size();
-    if (shapes.size() != grains) {
-      throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " + std::to_string(shapes.size()) +
-                       " shapes but stage 0 has " + std::to_string(grains) +
-                       "; pass one shape per grain in every stage");
-    }
-    return shapes;
-  };
-  const auto t0 = std::chrono::steady_clock::now();
-  // Progress: the growth takes most of the time, the relaxations share the rest evenly.
-  const double growth_share = stage_count == 1 ? 1.0 : 0.7;
-  auto part = [&](double lo, double hi) -> std::function<void(double)> {
-    if (!progress) return {};
-    return [&progress, lo, hi](double f) { progress(lo + (hi - lo) * f); };
-  };
-  auto in_stage = [&](std::size_t k, auto&& run) {
-    try {
-      return run();
-    } catch (const DataError& e) {
-      if (stage_count == 1) throw;
-      throw DataError("packing stage " + std::to_string(k + 1) + " of " + std::to_string(stage_count) + ": " +
-                      e.message());
-    }
-  };
-  PackingReport r;
-  std::vector<PackedGrain> poses =
-      in_stage(0, [&] { return pack_grains(shapes_of(0), c, p, &r, part(0.0, growth_share)); });
-  int sweeps = r.sweeps;
-  const double initial_scale = r.initial_scale;
-  const double relax_share = (1.0 - growth_share) / std::max<double>(1.0, stage_count - 1.0);
-  // Each later stage starts shrunk a little and regrows: at full size the new bumps would have to
-  // be pushed out of a jammed packing; shrunk, they find room and the grains re-jam slowly.
-  PackingParams regrow = p;
-  regrow.initial_scale = kTune.stage_regrow_scale;
-  for (std::size_t k = 1; k < stage_count; ++k) {
-    const double lo = growth_share + (k - 1) * relax_share;
-    r = in_stage(k, [&] { return relax_grains(shapes_of(k), poses, c, regrow, part(lo, lo + relax_share)); });
-    sweeps += r.sweeps;
-  }
-  r.sweeps = sweeps;
-  r.initial_scale = initial_scale;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (report) *report = r;
-  if (progress) progress(1.0);
-  return poses;
 }
 
 }  // namespace graintwin::synth

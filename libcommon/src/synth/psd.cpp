@@ -66,17 +66,4 @@ double expected_grain_count(const Psd& psd, double target_volume) {
   return target_volume / (M_PI / 6.0 * std::max(mean_d3, psd.d_min * psd.d_min * psd.d_min));
 }
 
-double volume_median_diameter(std::vector<double> diameters) {
-  if (diameters.empty()) return 0.0;
-  std::sort(diameters.begin(), diameters.end());
-  double total = 0.0;
-  for (double d : diameters) total += d * d * d;
-  double acc = 0.0;
-  for (double d : diameters) {
-    acc += d * d * d;
-    if (acc >= 0.5 * total) return d;
-  }
-  return diameters.back();
-}
-
 }  // namespace graintwin::synth

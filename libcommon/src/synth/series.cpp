@@ -10,12 +10,14 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <random>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/geometry.hpp"
 #include "graintwin/core/interrupt.hpp"
 #include "graintwin/core/resources.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/shape/grain_measure.hpp"
@@ -87,17 +89,13 @@ bool misses_much(const NonStarMeasures& m, double voxel) {
          m.reentry_depth > criteria.max_reentry_depth_vox * voxel;
 }
 
-GrainSet make_grain_set(const SeriesParams& p, const ShapeLibrary* library, std::mt19937_64& rng, double& d50,
+GrainSet make_grain_set(const SeriesParams& p, const ShapeLibrary* library, std::mt19937_64& rng,
                         const std::function<void(double)>& progress) {
   const double target = p.solid_fraction * p.container.volume();
-  if (library) {
-    const GrainSet set = make_library_grains(*library, draw_library_grains(*library, target, rng),
-                                             p.grains.sand.degree, p.voxel_size, progress);
-    d50 = volume_median_diameter(set.diameters);
-    return set;
-  }
+  if (library)
+    return make_library_grains(*library, draw_library_grains(*library, target, rng), p.grains.sand.degree,
+                               p.voxel_size, progress);
   const std::vector<double> diameters = sample_diameters(p.psd, target, rng);
-  d50 = volume_median_diameter(diameters);
   GrainSetParams gp = p.grains;
   gp.voxel_size = p.voxel_size;
   gp.seed = p.seed;
@@ -258,16 +256,18 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
 
   // --- grains ---
   std::mt19937_64 rng(p.seed);
-  double d50 = 0.0;
-  const GrainSet grains = make_grain_set(p, library.get(), rng, d50, progress("grain shapes"));
+  const GrainSet grains = make_grain_set(p, library.get(), rng, progress("grain shapes"));
   throw_if_interrupted();
-  // Lengths in units of d50 (wall shells, the band width) take the PSD's d50, or the library's drawn one.
+  // The grains' d50 from their exact volumes, the truth's (as validate reads it). Lengths in units
+  // of d50 (wall shells, the band width) take the PSD's d50, or the library's drawn one.
+  std::vector<double> grain_volumes;
+  for (const auto& st : grains.stats) grain_volumes.push_back(st.volume);
+  const double d50 = d50_of_volumes(grain_volumes);
   const double d_ref = library ? d50 : p.psd.d50;
   log_grains(p, grains, library.get(), d50, d_ref);
   const auto tables = grains.table_pointers();
   const auto solids = grains.solid_pointers();
-  double grain_volume = 0.0;
-  for (const auto& st : grains.stats) grain_volume += st.volume;
+  const double grain_volume = std::accumulate(grain_volumes.begin(), grain_volumes.end(), 0.0);
   spdlog::info("the grains' exact volume fills {:.4f} of the {}", grain_volume / p.container.volume(),
                container_kind_name(p.container.kind));
 

@@ -1,23 +1,26 @@
+// Grain matching between two scans: the paper's Algorithm 1 and the improved matcher (consensus
+// anchors, the predicted displacement field, the combined cost, the assignment and its confidence).
+// The explanations of grains damaged by the segmentation are weighed in match_damage.cpp.
 #include "graintwin/track/match.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
-#include <numbers>
-#include <numeric>
-#include <tuple>
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
-#include "graintwin/core/geometry.hpp"
 #include "graintwin/core/point_grid.hpp"
-#include "graintwin/core/statistics.hpp"
 #include "graintwin/track/assignment.hpp"
 #include "graintwin/track/displacement_field.hpp"
+#include "match_damage.hpp"
 
 namespace graintwin::track {
 namespace {
+
+using detail::Prediction;
+using detail::Scales;
+using detail::volume_z;
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t none = DisplacementField::none;
@@ -183,12 +186,6 @@ double shrunk_sigma(const DisplacementField::Estimate& e, double global, double 
   return std::max(floor, std::sqrt((3.0 * global * global + e.weight * e.spread * e.spread) / (3.0 + e.weight)));
 }
 
-/// Spreads of the cost's terms over the right anchors: position (per component, m), shape
-/// (D / ||R_0||) and volume (ln(v_def / v_ref), about its scan-wide bias).
-struct Scales {
-  double position = 0.0, shape = 0.0, volume_mean = 0.0, volume = 0.0;
-};
-
 /// The displacement field of the anchors, each weighted by its probability of being a right pair
 /// judged by its position, shape and volume residuals together (right_pair_probability): a global
 /// affine (RANSAC + reweighting), then local fits, refitted once with the weights of their own
@@ -250,125 +247,6 @@ Predictor build_predictor(const Anchors& an, double d50, const MatchOptions& o) 
   return p;
 }
 
-/// The standardised volume residual of a label of volume v_def for a grain (or grains) of v_ref.
-double volume_z(double v_def, double v_ref, const Scales& k) { return (std::log(v_def / v_ref) - k.volume_mean) / k.volume; }
-
-/// Where each reference grain is looked for: its predicted position, the position spread there
-/// and the candidate window.
-struct Prediction {
-  std::vector<Eigen::Vector3d> position;
-  std::vector<double> sigma, window;
-};
-
-/// A right match costs less than this 99.9 % of the time (chi^2 with 5 degrees of freedom).
-constexpr double kRightMatchCost = 20.5;
-
-/// Which grains on either side have a match about as good as a right one (below kRightMatchCost).
-/// Such a label is not taken as a merged or cut one: a label that is grain i with a small
-/// neighbour attached, or with a sliver cut off, is grain i's own match, not its damage. Such a
-/// reference grain is not taken as having merged into a neighbour's label.
-struct Plausible {
-  std::vector<char> label, grain;
-  explicit Plausible(const SparseCosts& c) : label(c.columns, 0), grain(c.rows(), 0) {
-    for (std::size_t r = 0; r < c.rows(); ++r)
-      for (std::size_t e = c.row_start[r]; e < c.row_start[r + 1]; ++e)
-        if (c.cost[e] < kRightMatchCost) label[c.column[e]] = 1, grain[r] = 1;
-  }
-};
-
-/// One explanation of a reference grain as damaged by the other scan's segmentation.
-struct Damage {
-  double cost = 0.0;
-  std::size_t grain = none;
-  std::size_t merged_with = none;                ///< the reference neighbour of a merge
-  std::array<std::size_t, 2> label{none, none};  ///< the merged label, or the two pieces
-  auto key() const { return std::tie(cost, grain, merged_with, label); }
-};
-
-/// Reference grain i's damage explanations as plausible as a right match (docs/shapes2tracks.md),
-/// costed like a match: merged with a touching reference neighbour k into one label (its volume the
-/// sum of theirs, its centroid their volume-weighted predicted centroid), or cut into two labels
-/// (their volumes summing to i's, their volume-weighted centroid at i's prediction). Mass balance
-/// ties such labels to grain i as closely as a right match would. Neither i, nor k, nor a label
-/// may have a plausible match: the explanations stand in for matches that are implausible anyway.
-/// The shape term of a match counts 1 (its mean): a damaged shape is not predicted.
-void damage_explanations(std::size_t i, const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid,
-                         const PointGrid& def_grid, const Prediction& at, const Scales& k, double largest_diameter,
-                         const Plausible& plausible, std::vector<Damage>& out) {
-  if (plausible.grain[i]) return;
-  const Eigen::Vector3d& p = at.position[i];
-  const double s2 = at.sigma[i] * at.sigma[i], v = ref.volume[i], d = equivalent_diameter(v);
-  const auto consider = [&](double cost, std::size_t with, std::size_t a, std::size_t b) {
-    if (cost + 1.0 < kRightMatchCost) out.push_back({cost + 1.0, i, with, {a, b}});
-  };
-  // Touching grains: centroids at most 0.75 (d_i + d_k) apart (elongated sand grains reach about
-  // 0.75 d from their centroid).
-  ref_grid.for_each_within(ref.centroid[i], 0.75 * (d + largest_diameter), [&](std::size_t n, double d2) {
-    const double vn = ref.volume[n];
-    if (n == i || plausible.grain[n] || d2 > std::pow(0.75 * (d + equivalent_diameter(vn)), 2)) return;
-    const Eigen::Vector3d joint = (v * p + vn * at.position[n]) / (v + vn);
-    def_grid.for_each_within(joint, at.window[i], [&](std::size_t m, double e2) {
-      if (plausible.label[m]) return;
-      const double zv = volume_z(def.volume[m], v + vn, k);
-      consider(e2 / s2 + zv * zv, n, m, none);
-    });
-  });
-  // Pieces: centroids inside the grain's body, found within its reach plus the prediction's spread.
-  std::vector<std::size_t> piece;
-  def_grid.for_each_within(p, std::min(at.window[i], 0.75 * d + 3.0 * at.sigma[i]), [&](std::size_t j, double) {
-    if (def.volume[j] < v && !plausible.label[j]) piece.push_back(j);
-  });
-  for (std::size_t a = 0; a < piece.size(); ++a)
-    for (std::size_t b = a + 1; b < piece.size(); ++b) {
-      const double va = def.volume[piece[a]], vb = def.volume[piece[b]];
-      const Eigen::Vector3d joint = (va * def.centroid[piece[a]] + vb * def.centroid[piece[b]]) / (va + vb);
-      const double zv = volume_z(va + vb, v, k);
-      consider((joint - p).squaredNorm() / s2 + zv * zv, none, piece[a], piece[b]);
-    }
-}
-
-/// Each reference grain's lost cost: `lost_cost`, or the cost of its damage explanation when that
-/// is lower, so that a damaged grain is lost rather than steal a neighbour's label. The
-/// explanations are taken cheapest first, each label explaining one grain's damage (a merged
-/// label: the pair's), so that one damaged grain's labels do not explain away another grain.
-std::vector<double> damage_lost_costs(const ScanGrains& ref, const ScanGrains& def, const PointGrid& ref_grid,
-                                      const PointGrid& def_grid, const Prediction& at, const Scales& k,
-                                      const SparseCosts& costs, double lost_cost) {
-  const Plausible plausible(costs);
-  const double largest_diameter = ref.size() ? equivalent_diameter(*std::max_element(ref.volume.begin(), ref.volume.end())) : 0.0;
-  std::vector<std::vector<Damage>> found(ref.size());
-#pragma omp parallel for schedule(dynamic, 256)
-  for (std::size_t i = 0; i < ref.size(); ++i)
-    damage_explanations(i, ref, def, ref_grid, def_grid, at, k, largest_diameter, plausible, found[i]);
-  std::vector<Damage> all;
-  for (const auto& f : found) all.insert(all.end(), f.begin(), f.end());
-  std::sort(all.begin(), all.end(), [](const Damage& a, const Damage& b) { return a.key() < b.key(); });
-  // A grain that fills at least 80 % of a merged label, or keeps at least 80 % of its volume in one
-  // piece, is still that label's grain (ct2labels' accuracy criterion, IoU >= 0.8): it keeps its
-  // lost cost and may match that label.
-  const auto dominant = [](double part, double whole) { return part >= 0.8 * whole; };
-  std::vector<double> lost(ref.size(), lost_cost);
-  std::vector<char> explained(ref.size(), 0), used(def.size(), 0);
-  for (const Damage& g : all) {
-    const bool merge = g.merged_with != none;
-    if (explained[g.grain] || (merge && explained[g.merged_with])) continue;
-    if (std::any_of(g.label.begin(), g.label.end(), [&](std::size_t j) { return j != none && used[j]; })) continue;
-    for (std::size_t j : g.label)
-      if (j != none) used[j] = 1;
-    explained[g.grain] = 1;
-    if (merge) {
-      explained[g.merged_with] = 1;
-      const double v = ref.volume[g.grain], vn = ref.volume[g.merged_with];
-      if (!dominant(v, v + vn)) lost[g.grain] = std::min(lost_cost, g.cost);
-      if (!dominant(vn, v + vn)) lost[g.merged_with] = std::min(lost_cost, g.cost);
-    } else {
-      const double va = def.volume[g.label[0]], vb = def.volume[g.label[1]];
-      if (!dominant(std::max(va, vb), va + vb)) lost[g.grain] = std::min(lost_cost, g.cost);
-    }
-  }
-  return lost;
-}
-
 /// One pass: predict, gather candidates around the predictions, cost them, assign.
 struct Pass {
   SparseCosts costs;
@@ -413,7 +291,7 @@ Pass assign_pass(const ScanGrains& ref, const ScanGrains& def, const PointGrid& 
     for (const auto& [j, w] : r) pass.costs.add(j, w);
     pass.costs.end_row();
   }
-  pass.lost_cost = damage_lost_costs(ref, def, ref_grid, grid, at, k, pass.costs, o.lost_cost);
+  pass.lost_cost = detail::damage_lost_costs(ref, def, ref_grid, grid, at, k, pass.costs, o.lost_cost);
   pass.assignment = solve_assignment(pass.costs, pass.lost_cost);
   pass.predicted = std::move(at.position);
   diag.mean_candidates = ref.size() ? static_cast<double>(pass.costs.column.size()) / ref.size() : 0.0;

@@ -29,7 +29,4 @@ std::vector<double> sample_diameters(const Psd& psd, double target_volume, std::
 /// what a sample will cost before drawing it.
 double expected_grain_count(const Psd& psd, double target_volume);
 
-/// Volume-weighted median of a set of diameters (the d50 a sieve analysis would report).
-double volume_median_diameter(std::vector<double> diameters);
-
 }  // namespace graintwin::synth
