@@ -31,7 +31,7 @@ import h5py
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_doc import SOURCE, finish  # noqa: E402
-from pipeline_stages_bench import run_measured, run_stage  # noqa: E402
+from pipeline_stages_bench import PER_SCAN, run_measured, run_stage  # noqa: E402
 
 SCENE = os.path.join(SOURCE, "pipelines", "scenes", "paper_scale.toml")
 HEIGHT_OVER_DIAMETER = 25.0 / 12.0
@@ -82,15 +82,21 @@ def bench_case(name, inp, stages, build, run_dir, synth=None):
 
 
 def exponent(a, b, stage):
+    """Slope of CPU time against grains: per scan for the stages run once per scan (and synth,
+    which renders every scan), per pair of scans for track."""
     ra, rb = a["stages"].get(stage), b["stages"].get(stage)
     if not ra or not rb or ra["cpu_s"] <= 0 or b["grains"] == a["grains"]:
         return None
-    return math.log(rb["cpu_s"] / ra["cpu_s"]) / math.log(b["grains"] / a["grains"])
+
+    def runs(case):
+        return case["scans"] if stage in PER_SCAN or stage == "synth" else case["scans"] - 1 if stage == "track" else 1
+
+    return math.log((rb["cpu_s"] / runs(b)) / (ra["cpu_s"] / runs(a))) / math.log(b["grains"] / a["grains"])
 
 
 def table(results, stages):
     names = list(results)
-    head = "| stage | " + " | ".join(f"{n} ({results[n]['grains']} grains): wall s / CPU s / peak GiB / output MB" for n in names)
+    head = "| stage | " + " | ".join(f"{n} ({results[n]['grains']} grains, {results[n]['scans']} scans): wall s / CPU s / peak GiB / output MB" for n in names)
     pairs = list(zip(names, names[1:]))
     head += "".join(f" | exponent {a} -> {b}" for a, b in pairs) + " |"
     lines = [head, "|---|" + "---|" * (len(names) + len(pairs))]
@@ -117,13 +123,19 @@ def main():
     ap.add_argument("--build", default=os.path.join(SOURCE, "build"))
     ap.add_argument("--scratch", default="/tmp/graintwin_paper_scale")
     ap.add_argument("--no-publish", action="store_true")
+    ap.add_argument("--results", help="a finished run's paper_scale.json: publish its figures again, run nothing")
     a = ap.parse_args()
     build = os.path.abspath(a.build)
     os.makedirs(a.scratch, exist_ok=True)
     run_dir = tempfile.mkdtemp(prefix="paper_scale-", dir=a.scratch)
     print(f"outputs in {run_dir}", flush=True)
-    results = {"sand_small": bench_case("sand_small", None, a.stages, build, run_dir)}
-    for d in a.diameters:
+    if a.results:
+        with open(a.results) as f:
+            results = json.load(f)
+        a.stages = [s for s in a.stages if any(s in r["stages"] for r in results.values())]
+    else:
+        results = {"sand_small": bench_case("sand_small", None, a.stages, build, run_dir)}
+    for d in ([] if a.results else a.diameters):
         name = f"paper_d{d:g}mm"
         series = os.path.join(run_dir, "series", name)
         synth = make_series(d, a.solid_fraction, build, series)
@@ -137,9 +149,11 @@ def main():
         f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). sand_small is the bundled series (its "
         "synth stage is not rerun); the others are pipelines/scenes/paper_scale.toml in a cylinder of the "
         f"named diameter (height 25:12 of it; 12 mm is the experiment's) at solid fraction {a.solid_fraction or 0.628:g}, "
-        "three scans each. Per stage: wall "
+        "three scans each (sand_small has four). Per stage: wall "
         "and CPU seconds, the peak resident memory of its largest process and the bytes it wrote; then the "
-        "growth exponent of CPU time against the reference scan's grains between consecutive cases. "
+        "growth exponent of CPU time (per scan for the stages run once per scan and for synth, per pair of scans for "
+        "track) against the reference "
+        "scan's grains between consecutive cases. "
         f"Packing: {packing}.\n\n" + table(results, a.stages) + "\n")
     finish("paper_scale", text, run_dir, results, not a.no_publish)
 
