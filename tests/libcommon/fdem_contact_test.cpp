@@ -379,7 +379,7 @@ TEST(ContactModel, PressedFaceCarriesPenaltyTimesAreaTimesOverlap) {
   EXPECT_NEAR(stats.max_overlap, overlap, 1e-15);
   EXPECT_NEAR(stats.elastic_energy, 0.5 * expected * overlap, 1e-12 * expected * overlap);
 
-  const std::vector<ContactRecord> records = contact.contacts();
+  const std::span<const ContactRecord> records = contact.contacts();
   ASSERT_EQ(records.size(), 1u);
   EXPECT_EQ(records[0].a, 0u);
   EXPECT_EQ(records[0].b, 1u);
@@ -619,7 +619,7 @@ TEST(ContactModel, PlatenFrictionGrowsWithSlipThenHoldsMuTimesNormalForce) {
     const double elastic = mat.tangential_penalty * area * 100.0 * s.dt * step;
     EXPECT_NEAR(total.x(), -std::min(elastic, cap), 1e-9 * cap) << step;
   }
-  const std::vector<ContactRecord> records = contact.contacts();
+  const std::span<const ContactRecord> records = contact.contacts();
   ASSERT_EQ(records.size(), 1u);
   EXPECT_EQ(records[0].b, 1u);  // grains.size() + platen 0
   EXPECT_NEAR((records[0].normal + Eigen::Vector3d::UnitZ()).norm(), 0, 1e-12);

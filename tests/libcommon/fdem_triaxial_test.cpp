@@ -89,6 +89,38 @@ TEST(Triaxial, ConsolidatesInTheWallThenInTheMembraneAndShears) {
   EXPECT_LT(largest_gap, 1e-9);
 }
 
+TEST(Triaxial, AServoNeverMovesFasterThanItsContactsStiffnessAllows) {
+  // 1e5 N/m of contact under a 10 N force error: one step of 1e-6 s may close at most
+  // 0.25 x 10 / 1e5 = 2.5e-5 m, i.e. 25 m/s; slower servos and untouched boundaries pass unchanged.
+  EXPECT_DOUBLE_EQ(stiffness_limited_velocity(-100.0, 10.0, 1e5, 1e-6), -25.0);
+  EXPECT_DOUBLE_EQ(stiffness_limited_velocity(100.0, -10.0, 1e5, 1e-6), 25.0);
+  EXPECT_DOUBLE_EQ(stiffness_limited_velocity(3.0, 10.0, 1e5, 1e-6), 3.0);
+  EXPECT_DOUBLE_EQ(stiffness_limited_velocity(-100.0, 10.0, 0.0, 1e-6), -100.0);
+}
+
+TEST(Triaxial, AFastServoSettlesOnStiffGrains) {
+  // Columns of rigid cubes are far stiffer than a sand packing: at a servo inertial number of 0.3
+  // the wall and platens would cross the whole 10 % proportional band in one step and swing about
+  // sigma_3 without settling; judged by their contacts' stiffness they settle to 1 %.
+  omp_set_num_threads(1);
+  const Model model = cube_sample();
+  SolverOptions so;
+  so.damping = 2e3;
+  Solver solver(model, so);
+  TriaxialOptions o;
+  o.servo_inertial_number = 0.3;
+  TriaxialBoundary boundary(model, o, grains_d50(solver));
+  solver.set_boundary(&boundary);
+  const double dt = 0.9 * solver.time_step_limits().stable();
+  std::size_t steps = 0;
+  ASSERT_NO_THROW(steps = consolidate_in_wall(solver, boundary, o, dt, 20000));
+  const TriaxialMeasure m = measure(solver, boundary, find_platens(model));
+  EXPECT_NEAR(m.axial_stress, o.confining_pressure, 0.01 * o.confining_pressure) << steps << " steps";
+  EXPECT_NEAR(boundary.wall_stress(), o.confining_pressure, 0.01 * o.confining_pressure);
+  EXPECT_GT(boundary.wall_stiffness(), 0);
+  EXPECT_GT(solver.platen_stiffness(0) + solver.platen_stiffness(1), 0);
+}
+
 TEST(Triaxial, RefusesAMembranePoissonRatioAboveOneThirdACheckpointAndAModelWithoutPlatens) {
   Model model = cube_sample();
   TriaxialOptions o;

@@ -290,7 +290,7 @@ void ContactModel::keep_initial_overlaps(std::span<const Overlap> overlaps) {
 
 std::span<const RigidLoad> ContactModel::rigid_loads() const { return state_->loads; }
 
-std::vector<ContactRecord> ContactModel::contacts() const { return state_->records; }
+std::span<const ContactRecord> ContactModel::contacts() const { return state_->records; }
 
 double ContactModel::stable_time_step() const {
   const std::vector<double> steps = grain_time_steps();

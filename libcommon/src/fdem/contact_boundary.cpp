@@ -49,6 +49,7 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
       if (s.pose[g].rigid) s.loads[g].add(arm, law.force);
       else f[node] += law.force;
       stats.radial_force += law.normal_force;
+      stats.radial_stiffness += law.normal_stiffness;
       stats.elastic_energy += law.elastic_energy;
       stats.dissipated += law.dissipated;
       ++stats.contacts;

@@ -29,19 +29,19 @@ void ContactModel::save(io::H5File& file, const std::string& group) const {
   if (!s.records.empty()) {  // the last step's contacts, for a frame written before the next step
     std::vector<std::uint32_t> pair(2 * s.records.size());
     std::vector<double> values;
-    values.reserve(10 * s.records.size());
+    values.reserve(11 * s.records.size());
     for (std::size_t i = 0; i < s.records.size(); ++i) {
       const ContactRecord& r = s.records[i];
       pair[2 * i] = r.a;
       pair[2 * i + 1] = r.b;
       values.insert(values.end(), {r.point[0], r.point[1], r.point[2], r.normal[0], r.normal[1], r.normal[2], r.force[0],
-                                   r.force[1], r.force[2], r.overlap});
+                                   r.force[1], r.force[2], r.overlap, r.stiffness});
     }
     const hsize_t n = s.records.size();
     io::DatasetOptions exact;
     exact.compress = false;
     file.write(group + "/" + ck::record_pair, pair.data(), {n, 2});
-    file.write(group + "/" + ck::record_values, values.data(), {n, 10}, exact);
+    file.write(group + "/" + ck::record_values, values.data(), {n, 11}, exact);
   }
   if (!s.history.empty()) {
     std::vector<std::uint32_t> pair(2 * s.history.size()), node(s.history.size());
@@ -140,12 +140,16 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
     const auto pair = file.read<std::uint32_t>(group + "/" + ck::record_pair, &pair_dims);
     const auto values = file.read<double>(group + "/" + ck::record_values, &value_dims);
     const auto n = static_cast<hsize_t>(record_entries);
-    if (pair_dims != std::vector<hsize_t>{n, 2} || value_dims != std::vector<hsize_t>{n, 10})
-      throw bad(fmt::format("does not hold {} contact records in record_pair (n x 2) and record_values (n x 10)", n));
+    // Checkpoints written before the records held their stiffness have 10 columns (stiffness 0).
+    const hsize_t columns = value_dims.size() == 2 ? value_dims[1] : 0;
+    if (pair_dims != std::vector<hsize_t>{n, 2} || value_dims.size() != 2 || value_dims[0] != n ||
+        (columns != 10 && columns != 11))
+      throw bad(fmt::format("does not hold {} contact records in record_pair (n x 2) and record_values (n x 11)", n));
     records.resize(n);
     for (std::size_t i = 0; i < records.size(); ++i) {
-      const double* v = values.data() + 10 * i;
-      records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9]};
+      const double* v = values.data() + columns * i;
+      records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9],
+                    columns == 11 ? v[10] : 0.0};
     }
   }
   // Checkpoints written before initial overlaps could be kept have none.

@@ -25,6 +25,7 @@ NodeContactForce node_contact_force(const ContactLaw& law, const Eigen::Vector3d
   // The dashpot may not pull: clamp F_n at 0 while the contact opens fast.
   out.normal_force = std::max(0.0, elastic_normal - law.normal_damping * separating);
   out.dissipated = -(out.normal_force - elastic_normal) * separating * dt;
+  out.normal_stiffness = overlap > 0 ? law.normal_stiffness : 0.0;
 
   const Eigen::Vector3d tangential_velocity = relative_velocity - separating * normal;
   // Rotate the stored spring into the current tangent plane, keeping its length.

@@ -26,6 +26,7 @@ CandidateSum ContactModel::State::sum_hits(const Candidate& c, std::span<const N
     weight += h.law.normal_force;
     point_sum += h.point;
     record.overlap = std::max(record.overlap, h.overlap);
+    record.stiffness += h.law.normal_stiffness;
     sum.elastic_energy += h.law.elastic_energy;
     sum.dissipated += h.law.dissipated;
   }

@@ -75,6 +75,7 @@ Solver::Solver(const Model& model, const SolverOptions& options)
   state_.v.assign(model.nodes.size(), Eigen::Vector3d::Zero());
   for (const Platen& p : model.platens) state_.platens.push_back({p.point, p.normal.normalized(), Eigen::Vector3d::Zero(), p.friction});
   platen_force_.assign(model.platens.size(), Eigen::Vector3d::Zero());
+  platen_stiffness_.assign(model.platens.size(), 0.0);
   force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
   rigid_loads_.assign(grains, RigidLoad{});
   if (!(options.rigid_contact_nodes >= 1))
@@ -200,11 +201,7 @@ StepReport Solver::step(double dt) {
       if (m.grains[g].kind == GrainKind::rigid) poses_[g] = pose_of(g);
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
   }
-  std::vector<ContactRecord> records;
-  if (contact_ && !state_.platens.empty()) records = contact_->contacts();
-  for (auto& f : platen_force_) f.setZero();
-  for (const ContactRecord& r : records)
-    if (r.b >= grains) platen_force_[r.b - grains] += r.force;
+  sum_platen_contacts();
   BoundaryStep boundary;
   if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
   if (contact_) {
@@ -349,9 +346,20 @@ Eigen::Matrix3d Solver::element_stress(std::size_t e) const {
   return elements_.average_cauchy_stress(state_.x, e, e + 1);
 }
 
-std::vector<ContactRecord> Solver::contacts() const { return contact_ ? contact_->contacts() : std::vector<ContactRecord>{}; }
+std::span<const ContactRecord> Solver::contacts() const {
+  return contact_ ? contact_->contacts() : std::span<const ContactRecord>{};
+}
 
 Eigen::Vector3d Solver::platen_force(std::size_t p) const { return platen_force_.at(p); }
+double Solver::platen_stiffness(std::size_t p) const { return platen_stiffness_.at(p); }
+
+void Solver::sum_platen_contacts() {
+  const std::size_t grains = model_->grains.size();
+  for (auto& f : platen_force_) f.setZero();
+  std::fill(platen_stiffness_.begin(), platen_stiffness_.end(), 0.0);
+  for (const ContactRecord& r : contacts())
+    if (r.b >= grains) platen_force_[r.b - grains] += r.force, platen_stiffness_[r.b - grains] += r.stiffness;
+}
 
 void Solver::save(io::H5File& f, const std::string& group) const {
   place_rigid_nodes();  // the file's node positions are the placed ones
@@ -438,7 +446,8 @@ void Solver::load(const io::H5File& f, const std::string& group) {
   if (contact_) contact_->load(f, group + "/" + ck::contact);
   if (boundary_) boundary_->load(f, group + "/" + ck::boundary);
   state_ = std::move(s);
-  platen_force_ = platen_force;
+  sum_platen_contacts();          // the stiffness, from the restored records
+  platen_force_ = platen_force;  // as saved: checkpoints of older runs hold no records
   rigid_loads_ = std::move(rigid_loads);
   rigid_nodes_stale_ = true;
 }

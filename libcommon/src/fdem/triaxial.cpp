@@ -73,7 +73,8 @@ void TriaxialBoundary::set_platens(double z_bottom, double z_top, double v_botto
   v_top_ = v_top;
 }
 
-double TriaxialBoundary::wall_stress() const { return wall_force_ / (2 * kPi * wall_.radius * (z_top_ - z_bottom_)); }
+double TriaxialBoundary::wall_area() const { return 2 * kPi * wall_.radius * (z_top_ - z_bottom_); }
+double TriaxialBoundary::wall_stress() const { return wall_force_ / wall_area(); }
 
 void TriaxialBoundary::build_membrane_lattice(double centre_radius, double z_min, double z_max, double density_scaling) {
   membrane_ = build_membrane(options_.membrane, wall_.axis_xy, centre_radius, z_min, z_max, ball_radius_);
@@ -106,6 +107,7 @@ void TriaxialBoundary::install_membrane(const ContactModel& contact, double dt) 
     if (z > z_top_) motion_[b] = BallMotion::clamped, clamp_group_[b] = 1;
   }
   wall_force_ = 0;
+  wall_stiffness_ = 0;
   membrane_started_ = false;
 }
 
@@ -137,6 +139,7 @@ BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eige
     const BoundaryContactStats s = contact.add_wall_forces(x, v, wall_, dt, f);
     last_contact_ = s;
     wall_force_ = s.radial_force;
+    wall_stiffness_ = s.radial_stiffness;
     out.elastic = s.elastic_energy;
     out.dissipated = s.dissipated;
     out.work = -s.radial_force * wall_.radial_velocity * dt;  // the wall pushes inwards
@@ -174,7 +177,7 @@ double TriaxialBoundary::stable_time_step(const ContactModel& contact) const {
 
 void TriaxialBoundary::save(io::H5File& file, const std::string& group) const {
   file.ensure_group(group);
-  file.set_attr(group, ck::wall, std::vector<double>{wall_.radius, wall_.radial_velocity, wall_force_});
+  file.set_attr(group, ck::wall, std::vector<double>{wall_.radius, wall_.radial_velocity, wall_force_, wall_stiffness_});
   file.set_attr(group, ck::boundary_platens, std::vector<double>{z_bottom_, z_top_, v_bottom_, v_top_});
   file.set_attr(group, ck::pressure, pressure_);
   file.set_attr(group, ck::ball_radius, ball_radius_);
@@ -202,10 +205,13 @@ void TriaxialBoundary::load(const io::H5File& file, const std::string& group) {
   if (values(ck::ball_radius, 1)[0] != ball_radius_)
     throw DataError(file.path().string() + ": checkpoint " + group + " was written with another membrane ball radius; " +
                     "restart with the scene that wrote it");
-  const auto wall = values(ck::wall, 3), platens = values(ck::boundary_platens, 4);
+  // Checkpoints written before the wall's stiffness was kept hold 3 values (stiffness 0).
+  const auto wall = file.attr_doubles(group, ck::wall).size() == 3 ? values(ck::wall, 3) : values(ck::wall, 4);
+  const auto platens = values(ck::boundary_platens, 4);
   wall_.radius = wall[0];
   wall_.radial_velocity = wall[1];
   wall_force_ = wall[2];
+  wall_stiffness_ = wall.size() == 4 ? wall[3] : 0.0;
   set_platens(platens[0], platens[1], platens[2], platens[3]);
   pressure_ = values(ck::pressure, 1)[0];
   membrane_.reset();
@@ -257,6 +263,12 @@ double servo_velocity(double stress, double target, double fastest) {
   return fastest * std::clamp((stress - target) / (0.1 * target), -1.0, 1.0);
 }
 
+double stiffness_limited_velocity(double velocity, double force_error, double stiffness, double dt) {
+  if (!(stiffness > 0)) return velocity;
+  const double stiffest = kServoStepShare * std::abs(force_error) / (stiffness * dt);
+  return std::clamp(velocity, -stiffest, stiffest);
+}
+
 namespace {
 
 /// Moves both platens apart at +-velocity / 2 (positive: opening) and tells the boundary.
@@ -265,6 +277,23 @@ void drive_platens(Solver& solver, TriaxialBoundary& boundary, const PlatenPair&
   solver.set_platen_velocity(platens.bottom, Eigen::Vector3d(0, 0, -0.5 * velocity));
   solver.set_platen_velocity(platens.top, Eigen::Vector3d(0, 0, 0.5 * velocity));
   boundary.set_platens(state[platens.bottom].point.z(), state[platens.top].point.z(), -0.5 * velocity, 0.5 * velocity);
+}
+
+/// servo_velocity of the platens, no faster than stiffness_limited_velocity allows with the
+/// grains against them (each platen moves at half the velocity).
+double platen_servo_velocity(const Solver& solver, const PlatenPair& platens, const TriaxialMeasure& m, double target,
+                             double fastest, double dt) {
+  const double stiffness = solver.platen_stiffness(platens.bottom) + solver.platen_stiffness(platens.top);
+  const double force_error = (m.axial_stress - target) * m.volume / m.height;
+  return stiffness_limited_velocity(servo_velocity(m.axial_stress, target, fastest), force_error, 0.5 * stiffness, dt);
+}
+
+/// servo_velocity of the wall, no faster than stiffness_limited_velocity allows with the grains
+/// against it.
+double wall_servo_velocity(const TriaxialBoundary& boundary, double target, double fastest, double dt) {
+  const double force_error = (boundary.wall_stress() - target) * boundary.wall_area();
+  return stiffness_limited_velocity(servo_velocity(boundary.wall_stress(), target, fastest), force_error,
+                                    boundary.wall_stiffness(), dt);
 }
 
 double servo_rate(const Solver& solver, const TriaxialOptions& options) {
@@ -287,8 +316,8 @@ std::size_t consolidate_in_wall(Solver& solver, TriaxialBoundary& boundary, cons
   const double sigma = options.confining_pressure, rate = servo_rate(solver, options);
   while (p.step < max_steps && p.settled < kSettledSteps) {
     const TriaxialMeasure m = measure(solver, boundary, platens);
-    const double radial = servo_velocity(boundary.wall_stress(), sigma, rate * boundary.wall().radius);
-    drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
+    const double radial = wall_servo_velocity(boundary, sigma, rate * boundary.wall().radius, dt);
+    drive_platens(solver, boundary, platens, platen_servo_velocity(solver, platens, m, sigma, rate * m.height, dt));
     boundary.set_wall_velocity(radial);
     const StepReport r = solver.step(dt);
     const bool stresses = std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance &&
@@ -342,7 +371,7 @@ std::size_t consolidate_in_membrane(Solver& solver, TriaxialBoundary& boundary, 
         ramp_steps ? std::min(1.0, static_cast<double>(p.step - p.released + 1) / static_cast<double>(ramp_steps)) : 1.0;
     boundary.set_pressure(ramp * sigma);
     const TriaxialMeasure m = measure(solver, boundary, platens);
-    drive_platens(solver, boundary, platens, servo_velocity(m.axial_stress, sigma, rate * m.height));
+    drive_platens(solver, boundary, platens, platen_servo_velocity(solver, platens, m, sigma, rate * m.height, dt));
     const StepReport r = solver.step(dt);
     const bool stress = ramp == 1.0 && std::abs(m.axial_stress / sigma - 1) < options.stress_tolerance;
     ++p.step;
@@ -374,8 +403,8 @@ std::size_t shear(Solver& solver, TriaxialBoundary& boundary, const TriaxialOpti
     const double speed = ramp_steps > 0 ? std::min(1.0, double(p.step + 1) / ramp_steps) : 1.0;
     drive_platens(solver, boundary, platens, -speed * shearing.strain_rate * h0);
     if (!boundary.has_membrane())
-      boundary.set_wall_velocity(servo_velocity(boundary.wall_stress(), options.confining_pressure,
-                                                wall_rate * boundary.wall().radius));
+      boundary.set_wall_velocity(
+          wall_servo_velocity(boundary, options.confining_pressure, wall_rate * boundary.wall().radius, dt));
     const StepReport r = solver.step(dt);
     ++p.step;
     if (on_step) on_step(measure(solver, boundary, platens), r);

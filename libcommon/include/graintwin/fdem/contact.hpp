@@ -89,6 +89,9 @@ struct ContactRecord {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, a -> b (direction of the normal force on b)
   Eigen::Vector3d force = Eigen::Vector3d::Zero();   ///< N, total force on b (minus that on a)
   double overlap = 0;                                ///< m, deepest node penetration of the pair
+  /// N/m, the node contacts' normal stiffness summed: how fast the force grows as the pair closes
+  /// (a servo driving a platen keeps its step's force change below the force error with it).
+  double stiffness = 0;
 };
 
 /// A rigid vertical cylindrical wall around the sample (the servo wall of the forming procedure,
@@ -104,6 +107,7 @@ struct CylinderWallState {
 struct BoundaryContactStats {
   std::size_t contacts = 0;     ///< node-wall or ball-grain contacts
   double radial_force = 0;      ///< N: wall only, the grains' total outward push on the wall
+  double radial_stiffness = 0;  ///< N/m: wall only, the node contacts' normal stiffness summed
   double elastic_energy = 0;    ///< J stored in the contact springs now
   double dissipated = 0;        ///< J lost by dashpots and slip in this step
   double max_overlap = 0;       ///< m
@@ -200,7 +204,7 @@ class ContactModel {
   /// starts them, and add_wall_forces and add_ball_forces after it.
   std::span<const RigidLoad> rigid_loads() const;
   /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
-  std::vector<ContactRecord> contacts() const;
+  std::span<const ContactRecord> contacts() const;
   /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).
   double stable_time_step() const;
   /// The same limit grain by grain (over each grain's surface nodes; infinity for a grain without).

@@ -23,6 +23,7 @@ ContactLaw contact_law(double normal_penalty, double tangential_penalty, double 
 struct NodeContactForce {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();   ///< on the node, N (the other side gets -force)
   double normal_force = 0;                           ///< F_n >= 0, N
+  double normal_stiffness = 0;                       ///< N/m, k_n while the elastic overlap is positive, else 0
   Eigen::Vector3d spring = Eigen::Vector3d::Zero();  ///< tangential spring after the step, N (history)
   bool slipping = false;
   double elastic_energy = 0;  ///< J stored after the step: k_n delta^2 / 2 + |s|^2 / (2 k_t)

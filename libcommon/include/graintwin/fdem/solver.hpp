@@ -178,9 +178,11 @@ class Solver {
   /// Volume-averaged Cauchy stress of element e, tension positive, Pa (zero in rigid grains).
   Eigen::Matrix3d element_stress(std::size_t element) const;
   /// Grain-pair and grain-platen resultants of the last step (empty without contact).
-  std::vector<ContactRecord> contacts() const;
+  std::span<const ContactRecord> contacts() const;
   /// Force the grains exert on platen p in the last step, N.
   Eigen::Vector3d platen_force(std::size_t platen) const;
+  /// Normal stiffness of the grains' contacts with platen p in the last step, N/m (0 untouched).
+  double platen_stiffness(std::size_t platen) const;
   bool has_contact() const { return contact_ != nullptr; }
 
   /// Checkpoint: the state, the last step's platen forces, the contact history (membrane balls'
@@ -195,6 +197,8 @@ class Solver {
   RigidPose pose_of(std::size_t grain) const;
   /// Places every rigid grain's nodes (x, v) from its body (pose_of), if a step moved them since.
   void place_rigid_nodes() const;
+  /// Platen forces and stiffnesses from the last step's contact records.
+  void sum_platen_contacts();
   /// Mass-weighted mean of per-node `values` over grain g's nodes.
   Eigen::Vector3d mass_mean(std::size_t grain, const std::vector<Eigen::Vector3d>& values) const;
   Eigen::Vector3d angular_velocity(std::size_t grain, const Eigen::Quaterniond& q, const Eigen::Vector3d& L) const;
@@ -216,6 +220,7 @@ class Solver {
   std::vector<RigidLoad> rigid_loads_;
   std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
+  std::vector<double> platen_stiffness_;       ///< per platen, last step, N/m
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
   mutable SolverState state_;
   mutable bool rigid_nodes_stale_ = false;

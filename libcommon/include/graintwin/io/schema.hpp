@@ -332,11 +332,11 @@ inline constexpr const char* history_offset = "offset";                  ///< (n
 inline constexpr const char* ball_grain = "ball_grain";                  ///< uint32 (n x 2) membrane ball, grain
 inline constexpr const char* ball_spring = "ball_spring";                ///< (n x 3) N
 inline constexpr const char* record_pair = "record_pair";                ///< uint32 (n x 2), the last step's contacts
-inline constexpr const char* record_values = "record_values";            ///< (n x 10) point, normal, force, overlap
+inline constexpr const char* record_values = "record_values";            ///< (n x 11) point, normal, force, overlap, stiffness (10 before stiffness)
 inline constexpr const char* deep_pair = "deep_pair";                    ///< uint32 (n x 2)
 inline constexpr const char* deep_pair_depth = "deep_pair_depth";        ///< (n) m
 // Attributes and members of /state/boundary.
-inline constexpr const char* wall = "wall";                        ///< attribute: radius, radial velocity, radial force
+inline constexpr const char* wall = "wall";                        ///< attribute: radius, radial velocity, radial force, radial stiffness (3 values before stiffness)
 inline constexpr const char* boundary_platens = "platens";         ///< attribute: z bottom, z top, their velocities
 inline constexpr const char* pressure = "pressure";                ///< attribute, Pa
 inline constexpr const char* ball_radius = "ball_radius";          ///< attribute, m
