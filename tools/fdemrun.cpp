@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -108,14 +109,19 @@ struct Checkpoints {
   const fs::path& path;
   const Solver& solver;
   const std::string& digest;
+  mutable std::size_t written = 0;
+  mutable double seconds = 0;
 
   void save(const TriaxialRunProgress* triaxial) const {
     if (path.empty()) return;
+    const auto start = std::chrono::steady_clock::now();
     io::AtomicOutput ckpt(path, true);
     write_checkpoint(ckpt.temp_path(), solver, digest, [&](io::H5File& f) {
       if (triaxial) save_progress(f, *triaxial);
     });
     ckpt.replace_now();
+    ++written;
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   /// Where a failed run can be continued from.
   void add_context(Error& e) const {
@@ -230,10 +236,14 @@ std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solve
   return run;
 }
 
-void log_end(const ResultsWriter& writer, Solver& solver) {
+void log_end(const ResultsWriter& writer, const Solver& solver, int threads, double vtk_seconds, const Checkpoints& checkpoints) {
   spdlog::info("{} frames, final time {:.6g} s after {} steps{}", writer.frames(), solver.time(), solver.step_count(),
                solver.has_contact() ? fmt::format(", contact search rebuilt {} times", solver.contact_model()->rebuild_count())
                                     : std::string());
+  spdlog::info("time: {}", describe_step_times(solver.step_times(), solver.model().grains.size(), threads));
+  spdlog::info("output: {} frames in {:.3g} s{}, {} checkpoints in {:.3g} s", writer.frames(), writer.frame_seconds(),
+               vtk_seconds > 0 ? fmt::format(" (and their VTK in {:.3g} s)", vtk_seconds) : std::string(), checkpoints.written,
+               checkpoints.seconds);
 }
 
 }  // namespace
@@ -270,8 +280,12 @@ int main(int argc, char** argv) {
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());
     const Checkpoints checkpoints{o.checkpoint, solver, digest};
+    double vtk_seconds = 0;
     const auto add_vtk_frame = [&] {
-      if (frames) frames->add(solver);
+      if (!frames) return;
+      const auto start = std::chrono::steady_clock::now();
+      frames->add(solver);
+      vtk_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     };
     if (scene.triaxial) {
       TriaxialRunHooks hooks;
@@ -303,6 +317,6 @@ int main(int argc, char** argv) {
     writer.finish(ctx.history());
     if (frames) frames->finish();
     io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
-    log_end(writer, solver);
+    log_end(writer, solver, ctx.threads(), vtk_seconds, checkpoints);
   });
 }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -24,30 +25,44 @@ Eigen::Vector3d inner_point(const Membrane& m, const Eigen::Vector3d& x) {
   return {m.axis_xy[0] + rho[0], m.axis_xy[1] + rho[1], x[2]};
 }
 
-/// A triangle of the inner surface clipped to z_bottom <= z <= z_top (Sutherland-Hodgman); points
-/// on a plane get exactly that plane's z, so the cap edges can be recognised.
-std::vector<Eigen::Vector3d> clip_to_slab(std::vector<Eigen::Vector3d> poly, double z_bottom, double z_top) {
-  const auto clip = [](const std::vector<Eigen::Vector3d>& in, double z0, bool keep_above) {
-    std::vector<Eigen::Vector3d> out;
-    const auto inside = [&](const Eigen::Vector3d& p) { return keep_above ? p[2] >= z0 : p[2] <= z0; };
-    for (std::size_t i = 0; i < in.size(); ++i) {
-      const Eigen::Vector3d& a = in[i];
-      const Eigen::Vector3d& b = in[(i + 1) % in.size()];
-      if (inside(a)) out.push_back(a);
-      if (inside(a) != inside(b)) {
-        Eigen::Vector3d c = a + (b - a) * ((z0 - a[2]) / (b[2] - a[2]));
-        c[2] = z0;
-        out.push_back(c);
-      }
+/// A polygon of at most 5 corners: a triangle clipped by two parallel planes. Fixed storage, so
+/// the volumes, computed every step of a triaxial test, allocate nothing per triangle.
+struct SlabPolygon {
+  std::array<Eigen::Vector3d, 5> corner;
+  std::size_t size = 0;
+  std::span<const Eigen::Vector3d> points() const { return {corner.data(), size}; }
+};
+
+/// `poly` clipped to z >= z0 (keep_above) or z <= z0 (Sutherland-Hodgman).
+SlabPolygon clip_at(const SlabPolygon& poly, double z0, bool keep_above) {
+  SlabPolygon out;
+  const auto inside = [&](const Eigen::Vector3d& p) { return keep_above ? p[2] >= z0 : p[2] <= z0; };
+  for (std::size_t i = 0; i < poly.size; ++i) {
+    const Eigen::Vector3d& a = poly.corner[i];
+    const Eigen::Vector3d& b = poly.corner[(i + 1) % poly.size];
+    if (inside(a)) out.corner[out.size++] = a;
+    if (inside(a) != inside(b)) {
+      Eigen::Vector3d c = a + (b - a) * ((z0 - a[2]) / (b[2] - a[2]));
+      c[2] = z0;
+      out.corner[out.size++] = c;
     }
-    return out;
-  };
-  poly = clip(poly, z_bottom, true);
-  if (poly.size() >= 3) poly = clip(poly, z_top, false);
+  }
+  return out;
+}
+
+/// A triangle of the inner surface clipped to z_bottom <= z <= z_top; points on a plane get exactly
+/// that plane's z, so the cap edges can be recognised. A triangle inside the slab comes back as is.
+SlabPolygon clip_to_slab(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double z_bottom,
+                         double z_top) {
+  SlabPolygon poly{{a, b, c}, 3};
+  const auto within = [&](const Eigen::Vector3d& p) { return p[2] >= z_bottom && p[2] <= z_top; };
+  if (within(a) && within(b) && within(c)) return poly;
+  poly = clip_at(poly, z_bottom, true);
+  if (poly.size >= 3) poly = clip_at(poly, z_top, false);
   return poly;
 }
 
-/// Calls visit(polygon) for every lateral triangle of the inner surface clipped to the slab;
+/// Calls visit(polygon corners) for every lateral triangle of the inner surface clipped to the slab;
 /// DataError when the membrane does not span the slab (the surface would not be closed by the caps).
 template <class Visit>
 void for_each_clipped_triangle(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top,
@@ -62,9 +77,11 @@ void for_each_clipped_triangle(const Membrane& m, std::span<const Eigen::Vector3
     throw DataError(fmt::format("the membrane (end rings up to z = {:.4g} m and from z = {:.4g} m) does not span the "
                                 "platens at z = {:.4g} and {:.4g} m; extend it beyond both platens",
                                 highest_bottom, lowest_top, z_bottom, z_top));
+  std::vector<Eigen::Vector3d> inner(x.size());
+  for (std::size_t b = 0; b < x.size(); ++b) inner[b] = inner_point(m, x[b]);
   for (const auto& t : m.triangles) {
-    const auto poly = clip_to_slab({inner_point(m, x[t[0]]), inner_point(m, x[t[1]]), inner_point(m, x[t[2]])}, z_bottom, z_top);
-    if (poly.size() >= 3) visit(poly);
+    const SlabPolygon poly = clip_to_slab(inner[t[0]], inner[t[1]], inner[t[2]], z_bottom, z_top);
+    if (poly.size >= 3) visit(poly.points());
   }
 }
 
@@ -274,7 +291,7 @@ MembraneState relax_membrane(const Membrane& m, double damping,
 double enclosed_volume(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top) {
   const Eigen::Vector3d o(m.axis_xy[0], m.axis_xy[1], z_bottom);
   double lateral = 0, top_area = 0;
-  for_each_clipped_triangle(m, x, z_bottom, z_top, [&](const std::vector<Eigen::Vector3d>& poly) {
+  for_each_clipped_triangle(m, x, z_bottom, z_top, [&](std::span<const Eigen::Vector3d> poly) {
     for (std::size_t i = 1; i + 1 < poly.size(); ++i)
       lateral += (poly[0] - o).dot((poly[i] - poly[0]).cross(poly[i + 1] - poly[0])) / 6.0;
     // Edges on the top plane bound the cap, traversed against the cap's own (outward, +z) sense.
@@ -289,7 +306,7 @@ double enclosed_volume(const Membrane& m, std::span<const Eigen::Vector3d> x, do
 
 double enclosed_volume_radial(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top) {
   double volume = 0;
-  for_each_clipped_triangle(m, x, z_bottom, z_top, [&](const std::vector<Eigen::Vector3d>& poly) {
+  for_each_clipped_triangle(m, x, z_bottom, z_top, [&](std::span<const Eigen::Vector3d> poly) {
     for (std::size_t i = 1; i + 1 < poly.size(); ++i) {
       const Eigen::Vector3d area2 = (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);  // 2 A n
       const Eigen::Vector3d centroid = (poly[0] + poly[i] + poly[i + 1]) / 3.0;

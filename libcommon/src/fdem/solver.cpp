@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -184,6 +185,14 @@ StepReport Solver::step(double dt) {
   std::vector<char> bad(grains, 0);
   // Threads only pay off beyond a few thousand nodes: a barrier per loop costs more on small scenes.
   const bool parallel = m.nodes.size() > 4096;
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point& t) {
+    const Clock::time_point now = Clock::now();
+    const double s = std::chrono::duration<double>(now - t).count();
+    t = now;
+    return s;
+  };
+  Clock::time_point mark = Clock::now();
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
@@ -193,6 +202,7 @@ StepReport Solver::step(double dt) {
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
   }
 
+  times_.elements += seconds_since(mark);
   StepReport report;
   if (contact_) {
     // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
@@ -202,8 +212,14 @@ StepReport Solver::step(double dt) {
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
   }
   sum_platen_contacts();
+  times_.contact += seconds_since(mark);
   BoundaryStep boundary;
-  if (boundary_) boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
+  if (boundary_) {
+    boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
+    const double seconds = seconds_since(mark);
+    times_.boundary += seconds;
+    if (const std::size_t bodies = boundary_->bodies()) times_.body_steps += bodies, times_.body_seconds += seconds;
+  }
   if (contact_) {
     const std::span<const RigidLoad> loads = contact_->rigid_loads();
     rigid_loads_.assign(loads.begin(), loads.end());
@@ -281,6 +297,8 @@ StepReport Solver::step(double dt) {
   check_health(e);
   state_.time += dt;
   ++state_.step;
+  times_.motion += seconds_since(mark);
+  ++times_.steps;
   return report;
 }
 

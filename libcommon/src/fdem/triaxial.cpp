@@ -84,6 +84,7 @@ void TriaxialBoundary::build_membrane_lattice(double centre_radius, double z_min
   membrane_->ball_mass *= density_scaling;
   membrane_->ball_inertia *= density_scaling;
   membrane_state_ = rest_state(*membrane_);
+  ++membrane_moves_;
   const std::size_t n = membrane_->balls();
   motion_.assign(n, BallMotion::free);
   clamp_group_.assign(n, 0);
@@ -121,14 +122,21 @@ void TriaxialBoundary::set_membrane_fixed(bool fixed) {
   }
 }
 
+template <class Compute>
+double TriaxialBoundary::cached(VolumeCache& cache, Compute&& compute) const {
+  if (cache.moves != membrane_moves_ || cache.z_bottom != z_bottom_ || cache.z_top != z_top_)
+    cache = {membrane_moves_, z_bottom_, z_top_, compute()};
+  return cache.value;
+}
+
 double TriaxialBoundary::volume() const {
   if (!membrane_) return kPi * wall_.radius * wall_.radius * (z_top_ - z_bottom_);
-  return enclosed_volume(*membrane_, membrane_state_.x, z_bottom_, z_top_);
+  return cached(volume_cache_, [&] { return enclosed_volume(*membrane_, membrane_state_.x, z_bottom_, z_top_); });
 }
 
 double TriaxialBoundary::volume_radial() const {
   if (!membrane_) return volume();
-  return enclosed_volume_radial(*membrane_, membrane_state_.x, z_bottom_, z_top_);
+  return cached(radial_cache_, [&] { return enclosed_volume_radial(*membrane_, membrane_state_.x, z_bottom_, z_top_); });
 }
 
 BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
@@ -148,6 +156,7 @@ BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eige
   }
   const Membrane& m = *membrane_;
   MembraneState& s = membrane_state_;
+  ++membrane_moves_;
   std::fill(ball_force_.begin(), ball_force_.end(), Eigen::Vector3d::Zero());
   std::fill(ball_moment_.begin(), ball_moment_.end(), Eigen::Vector3d::Zero());
   const BoundaryContactStats c = contact.add_ball_forces(x, v, s.x, s.v, s.spin, {m.ball_radius, m.ball_mass, options_.membrane_friction},
@@ -225,6 +234,7 @@ void TriaxialBoundary::load(const io::H5File& file, const std::string& group) {
   membrane_state_.v = read_vectors(file, group + "/" + ck::ball_velocity, balls);
   membrane_state_.spin = read_vectors(file, group + "/" + ck::ball_spin, balls);
   membrane_state_.shear = read_vectors(file, group + "/" + ck::bond_shear, membrane_->bonds.size());
+  ++membrane_moves_;
   const auto motion = file.read<std::uint8_t>(group + "/" + ck::ball_motion);
   clamp_group_ = file.read<std::uint8_t>(group + "/" + ck::ball_clamp_group);
   if (motion.size() != balls || clamp_group_.size() != balls)

@@ -55,6 +55,8 @@ class ResultsWriter {
   void add_frame(const Solver& solver, const TriaxialBoundary* boundary = nullptr,
                  std::optional<double> axial_strain = std::nullopt);
   std::size_t frames() const { return frames_; }
+  /// Wall-clock seconds spent writing frames so far.
+  double frame_seconds() const { return frame_seconds_; }
   /// Writes the series, the stages, the parameters and the provenance; the file is complete afterwards.
   void finish(const std::vector<std::string>& history);
 
@@ -64,6 +66,7 @@ class ResultsWriter {
   io::H5File file_;
   std::size_t platens_ = 0;
   std::size_t frames_ = 0;
+  double frame_seconds_ = 0;
   std::vector<SeriesRow> rows_;
   std::string parameters_;
   std::vector<std::string> stage_names_;

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/fdem/step_times.hpp"
 #include "graintwin/fdem/contact.hpp"
 #include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/model.hpp"
@@ -113,6 +114,8 @@ class Boundary {
                              std::span<Eigen::Vector3d> f) = 0;
   /// The boundary's own stable time step, s (infinity if it sets none).
   virtual double stable_time_step(const ContactModel& contact) const = 0;
+  /// How many bodies of its own it steps (membrane balls), for the run's time accounts.
+  virtual std::size_t bodies() const { return 0; }
   /// Checkpoint of the boundary's own state under `group` (Solver::save calls it), and its restore
   /// into a boundary built the same way (DataError when it does not fit).
   virtual void save(io::H5File& file, const std::string& group) const = 0;
@@ -183,6 +186,8 @@ class Solver {
   Eigen::Vector3d platen_force(std::size_t platen) const;
   /// Normal stiffness of the grains' contacts with platen p in the last step, N/m (0 untouched).
   double platen_stiffness(std::size_t platen) const;
+  /// Where the steps' time went since the solver was built (step_times.hpp).
+  const StepTimes& step_times() const { return times_; }
   bool has_contact() const { return contact_ != nullptr; }
 
   /// Checkpoint: the state, the last step's platen forces, the contact history (membrane balls'
@@ -221,6 +226,7 @@ class Solver {
   std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   std::vector<double> platen_stiffness_;       ///< per platen, last step, N/m
+  StepTimes times_;
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
   mutable SolverState state_;
   mutable bool rigid_nodes_stale_ = false;

@@ -44,6 +44,7 @@ class TriaxialBoundary final : public Boundary {
   TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50);
 
   bool has_membrane() const { return membrane_.has_value(); }
+  std::size_t bodies() const override { return membrane_ ? membrane_->balls() : 0; }
   const CylinderWallState& wall() const { return wall_; }
   void set_wall_velocity(double radial_velocity) { wall_.radial_velocity = radial_velocity; }
   /// The platens' heights and vertical velocities for this step: the wall's height, the membrane's
@@ -101,6 +102,17 @@ class TriaxialBoundary final : public Boundary {
   double pressure_ = 0;
   std::optional<Membrane> membrane_;
   MembraneState membrane_state_;
+  /// The enclosed volumes are read several times a step (servo, observer, results row) and cost a
+  /// pass over every membrane triangle: each is kept until the balls or the platens move.
+  struct VolumeCache {
+    std::uint64_t moves = ~std::uint64_t{0};
+    double z_bottom = 0, z_top = 0, value = 0;
+  };
+  std::uint64_t membrane_moves_ = 0;  ///< counts the changes of membrane_state_
+  mutable VolumeCache volume_cache_, radial_cache_;
+  /// `cache`'s value while it is current, else compute() stored in it.
+  template <class Compute>
+  double cached(VolumeCache& cache, Compute&& compute) const;
   std::vector<BallMotion> motion_;
   std::vector<std::uint8_t> clamp_group_;  ///< 0 bottom, 1 top
   std::vector<Eigen::Vector3d> ball_force_, ball_moment_;  ///< per ball, scratch of apply()
