@@ -70,28 +70,10 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
     throw DataError("fdem contact: ball positions, velocities, spins, forces and moments must have one entry per ball");
   if (!(balls.radius > 0) || !(balls.mass > 0)) throw UsageError("membrane balls need a positive radius and mass");
   const double r = balls.radius;
-  // Broad phase: the grains' boxes, inflated by the ball radius, in a hash grid of cells as large
-  // as the largest box, so a box spans at most 8 cells and a ball looks in one.
-  double cell = 0;
-  for (std::size_t g = 0; g < s.grains.size(); ++g) {
-    const Aabb& box = s.trees.bounds(g);
-    if ((box.lo.array() <= box.hi.array()).all()) cell = std::max(cell, (box.hi - box.lo).maxCoeff());
-  }
-  cell += 2 * r;
-  const auto index = [cell](double c) { return static_cast<std::int64_t>(std::floor(c / cell)); };
-  const auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
-    const auto bits = [](std::int64_t a) { return static_cast<std::uint64_t>(a + (1 << 20)) & 0x1FFFFFu; };
-    return bits(i) << 42 | bits(j) << 21 | bits(k);
-  };
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
-  for (std::uint32_t g = 0; g < s.grains.size(); ++g) {
-    const Aabb& box = s.trees.bounds(g);
-    if (!(box.lo.array() <= box.hi.array()).all()) continue;
-    const Aabb grown = box.inflated(r);
-    for (std::int64_t i = index(grown.lo.x()); i <= index(grown.hi.x()); ++i)
-      for (std::int64_t j = index(grown.lo.y()); j <= index(grown.hi.y()); ++j)
-        for (std::int64_t k = index(grown.lo.z()); k <= index(grown.hi.z()); ++k) grid[key(i, j, k)].push_back(g);
-  }
+  const double moved2 = 0.25 * s.skin * s.skin;
+  bool stale = s.ball_lists_rebuilds != s.rebuilds || s.ball_lists_radius != r || s.ball_built_at.size() != n;
+  for (std::size_t b = 0; b < n && !stale; ++b) stale = (centres[b] - s.ball_built_at[b]).squaredNorm() > moved2;
+  if (stale) s.build_ball_lists(centres, r);
   const auto spring_of = [&](std::uint32_t ball, std::uint32_t grain) -> Eigen::Vector3d {
     const auto it = std::lower_bound(s.ball_history.begin(), s.ball_history.end(), std::make_pair(ball, grain),
                                      [](const BallHistoryEntry& h, const std::pair<std::uint32_t, std::uint32_t>& k) {
@@ -106,12 +88,11 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
     std::vector<BallHit>& out = s.ball_hits[b];
     out.clear();
     const Eigen::Vector3d& c = centres[b];
-    const auto it = grid.find(key(index(c.x()), index(c.y()), index(c.z())));
-    if (it == grid.end()) continue;
-    for (std::uint32_t g : it->second) {
+    for (BallCandidate& candidate : s.ball_candidates[b]) {
+      const std::uint32_t g = candidate.grain;
       if (!s.trees.bounds(g).inflated(r).contains(c)) continue;
       SurfaceTrees::Nearest near;
-      if (!s.nearest(g, c, r + s.max_penetration, x, near)) continue;
+      if (!s.ball_nearest(candidate, c, r + s.max_penetration, x, near)) continue;
       const Eigen::Vector3d d = near.closest.point - c;  // from the centre to the surface
       const double dist = std::sqrt(near.distance2);
       const bool inside = d.dot(s.pseudonormal(near.triangle, near.closest.feature, x)) > 0;
@@ -155,6 +136,47 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
       s.ball_history.push_back({b, h.grain, h.law.spring});
     }
   return stats;
+}
+
+void ContactModel::State::build_ball_lists(std::span<const Eigen::Vector3d> centres, double radius) {
+  // The grains' boxes, grown by the reach, in a hash grid of cells as large as the largest grown
+  // box, so a box spans at most 8 cells and a ball looks in one.
+  const double reach = radius + skin;
+  double cell = 0;
+  for (std::size_t g = 0; g < grains.size(); ++g) {
+    const Aabb& box = trees.bounds(g);
+    if ((box.lo.array() <= box.hi.array()).all()) cell = std::max(cell, (box.hi - box.lo).maxCoeff());
+  }
+  cell += 2 * reach;
+  const auto index = [cell](double c) { return static_cast<std::int64_t>(std::floor(c / cell)); };
+  const auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
+    const auto bits = [](std::int64_t a) { return static_cast<std::uint64_t>(a + (1 << 20)) & 0x1FFFFFu; };
+    return bits(i) << 42 | bits(j) << 21 | bits(k);
+  };
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
+  for (std::uint32_t g = 0; g < grains.size(); ++g) {
+    const Aabb& box = trees.bounds(g);
+    if (!(box.lo.array() <= box.hi.array()).all()) continue;
+    const Aabb grown = box.inflated(reach);
+    for (std::int64_t i = index(grown.lo.x()); i <= index(grown.hi.x()); ++i)
+      for (std::int64_t j = index(grown.lo.y()); j <= index(grown.hi.y()); ++j)
+        for (std::int64_t k = index(grown.lo.z()); k <= index(grown.hi.z()); ++k) grid[key(i, j, k)].push_back(g);
+  }
+  const std::size_t n = centres.size();
+  ball_candidates.resize(n);
+#pragma omp parallel for schedule(dynamic, 64) if (n >= kParallelNodes / 4)
+  for (std::int64_t b = 0; b < static_cast<std::int64_t>(n); ++b) {
+    std::vector<BallCandidate>& list = ball_candidates[b];
+    list.clear();
+    const Eigen::Vector3d& c = centres[b];
+    const auto it = grid.find(key(index(c.x()), index(c.y()), index(c.z())));
+    if (it == grid.end()) continue;
+    for (std::uint32_t g : it->second)
+      if (trees.bounds(g).inflated(reach).contains(c)) list.push_back({g, SurfaceTrees::kNoHint, SearchMemo{}});
+  }
+  ball_built_at.assign(centres.begin(), centres.end());
+  ball_lists_rebuilds = rebuilds;
+  ball_lists_radius = radius;
 }
 
 double ContactModel::ball_stable_time_step(const BallContactOptions& balls) const {

@@ -168,6 +168,27 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
   }
 }
 
+bool ContactModel::State::ball_nearest(BallCandidate& candidate, const Eigen::Vector3d& c, double radius,
+                                       std::span<const Eigen::Vector3d> x, SurfaceTrees::Nearest& near) const {
+  const std::uint32_t g = candidate.grain;
+  const RigidPose& body = pose[g];
+  if (!body.rigid) {  // a deformable surface moves under any memo: searched anew from the last triangle
+    if (!trees.nearest(g, c, radius, x, near, candidate.hint)) return false;
+    candidate.hint = near.triangle;
+    return true;
+  }
+  // A ball touches whether its centre is inside or outside the grain: no side ends the search.
+  NearNode listed;
+  listed.hint = candidate.hint;
+  Checks checks;
+  const Eigen::Vector3d q = body.rotation.transpose() * (c - body.translation);
+  if (!nearest_remembered(g, q, radius, listed, candidate.memo, near, checks, [](const SurfaceTrees::Nearest&) { return false; }))
+    return false;
+  near.closest.point = body.rotation * near.closest.point + body.translation;
+  candidate.hint = near.triangle;
+  return true;
+}
+
 void ContactModel::State::platen_hits(const Candidate& key, const PlatenState& platen,
                                       std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double dt,
                                       std::vector<NodeHit>& out, Checks& checks) const {

@@ -155,6 +155,14 @@ struct BallHit {
   NodeContactForce law;
 };
 
+/// A grain a membrane ball may touch before its ball's list is rebuilt, with the ball's search memo
+/// on it (rigid grains, in their body frame) and the triangle it last found nearest.
+struct BallCandidate {
+  std::uint32_t grain = 0;
+  std::uint32_t hint = SurfaceTrees::kNoHint;
+  SearchMemo memo;
+};
+
 /// Twice the area times the unit normal of triangle t at node positions x.
 inline Eigen::Vector3d triangle_normal(const std::array<std::uint32_t, 3>& t, std::span<const Eigen::Vector3d> x) {
   return (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
@@ -229,6 +237,13 @@ struct ContactModel::State {
 
   std::vector<BallHistoryEntry> ball_history;  ///< sorted by (ball, grain)
   std::vector<std::vector<BallHit>> ball_hits;   ///< per ball, this step
+  /// Per ball, the grains it may touch: every grain whose box, grown by the ball radius and the
+  /// skin, held the ball's centre at the build. Complete until the ball moves skin / 2 from
+  /// ball_built_at or the broad phase rebuilds (a grain node moved skin / 2); then built again.
+  std::vector<std::vector<BallCandidate>> ball_candidates;
+  std::vector<Eigen::Vector3d> ball_built_at;
+  std::size_t ball_lists_rebuilds = ~std::size_t{0};  ///< `rebuilds` when the lists were built
+  double ball_lists_radius = 0;                      ///< the ball radius they were built for
 
   std::vector<RigidLoad> loads;  ///< per grain, this step's (rigid_loads())
 
@@ -462,6 +477,15 @@ struct ContactModel::State {
   void grain_hits(std::uint32_t from, std::uint32_t to, const Candidate& key, std::span<NearNode> nodes,
                   std::span<SearchMemo> memos, double moved, std::span<const Eigen::Vector3d> x,
                   std::span<const Eigen::Vector3d> v, double dt, std::vector<NodeHit>& out, Checks& checks) const;
+
+  // Membrane balls (contact_boundary.cpp, contact_narrow_phase.cpp).
+
+  /// Every ball's candidate grains (ball_candidates) for balls of `radius` at `centres`.
+  void build_ball_lists(std::span<const Eigen::Vector3d> centres, double radius);
+  /// The triangle of grain candidate.grain nearest to the ball centre c within `radius` (world
+  /// frame): a rigid grain is searched in its body frame through the candidate's memo.
+  bool ball_nearest(BallCandidate& candidate, const Eigen::Vector3d& c, double radius, std::span<const Eigen::Vector3d> x,
+                    SurfaceTrees::Nearest& near) const;
 
   /// Nodes of grain key.a behind `platen`, with their forces.
   void platen_hits(const Candidate& key, const PlatenState& platen, std::span<const Eigen::Vector3d> x,
