@@ -23,4 +23,14 @@ std::string format_duration(double seconds) {
   return fmt::format("{}d{:02}h", hours / 24, hours % 24);
 }
 
+Interval::Interval(double period, Clock clock)
+    : period_(period), clock_(clock ? std::move(clock) : Clock(monotonic_seconds)), start_(clock_()), last_(start_) {}
+
+bool Interval::due() {
+  const double now = clock_();
+  if (now - last_ < period_) return false;
+  last_ = now;
+  return true;
+}
+
 }  // namespace graintwin
