@@ -344,7 +344,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
       shell.thickness = p.membrane_thickness;
       shell.z0 = state.base_z;
       shell.z1 = state.top_z;
-      membrane = render_shell(shell, shape, vs, origin, p.render);
+      membrane = render_shell(shell, shape, vs, origin, p.render, progress(fmt::format("render scan {}: membrane", k)));
     }
     const Volume<std::uint16_t> scan = simulate_scan(images.fraction, p.membrane_thickness > 0.0 ? &membrane : nullptr,
                                                      scanner_for_scan(p, lp, box, k));
