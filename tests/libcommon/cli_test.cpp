@@ -71,6 +71,8 @@ TEST(ProgressText, TheTerminalLineFitsItsColumns) {
   EXPECT_EQ(cli::progress_bar_line("job", 0.4, 72.0, 80),
             "job [############                  ]  40%  1m12s elapsed, about 1m48s left");
   EXPECT_EQ(cli::progress_bar_line("job", 0.4, 72.0, 60),
-            "job [######         ]  40%  1m12s elapsed, about 1m48s left");  // a narrower bar
+            "job [####        ]  40%  1m12s elapsed, about 1m48s left");  // a narrower bar
+  // Before there is an estimate the bar is as wide: it does not jump when the estimate appears.
+  EXPECT_EQ(cli::progress_bar_line("job", 0.4, 0.4, 60), "job [####        ]  40%  0s elapsed");
   EXPECT_EQ(cli::progress_bar_line("job", 0.4, 72.0, 40), "job  40%  1m12s elapsed, about 1m48s le");  // no bar, cut
 }

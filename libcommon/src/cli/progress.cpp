@@ -22,6 +22,9 @@ constexpr double kLogLineInterval = 60.0;
 constexpr double kRedrawInterval = 0.1;
 /// The widest bar, and the narrowest worth drawing.
 constexpr int kBarWidth = 30, kNarrowestBar = 10;
+/// Columns kept for the status beside the bar, so that the bar does not narrow when the estimate
+/// appears: " 99%  59m59s elapsed, about 59m59s left" and one spare.
+constexpr std::size_t kStatusColumns = 40;
 
 int terminal_columns() {
   winsize w{};
@@ -45,7 +48,7 @@ std::string progress_status(double fraction, double elapsed) {
 std::string progress_bar_line(const std::string& label, double fraction, double elapsed, int columns) {
   const std::string status = progress_status(fraction, elapsed);
   // The bar's brackets and spaces take 4 columns; the last column stays free.
-  const int room = columns - 1 - static_cast<int>(label.size() + status.size()) - 4;
+  const int room = columns - 1 - static_cast<int>(label.size() + std::max(status.size(), kStatusColumns)) - 4;
   const int width = std::min(room, kBarWidth);
   std::string line = label;
   if (width >= kNarrowestBar) {
