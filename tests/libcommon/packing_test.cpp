@@ -347,8 +347,10 @@ TEST(PackGrains, ThreeHundredSpheresPackDenselyWithinTheTolerance) {
 }
 
 TEST(PackingStatus, ReadsAsAStatusLine) {
-  EXPECT_EQ(synth::packing_status_text({0, 3, 812, 20000, 0.931, 12.3e-6, 5.5e-6}),
+  EXPECT_EQ(synth::packing_status_text({0, 3, 812, 20000, 0.9315, 12.3e-6, 5.5e-6}),
             "stage 1 of 3, sweep 812 of at most 20000: growing, 93.1 % of full size, deepest overlap 12.30 um");
+  EXPECT_EQ(synth::packing_status_text({1, 3, 2, 20000, 0.9996, 52.3e-6, 5.5e-6}),
+            "stage 2 of 3, sweep 2 of at most 20000: growing, 99.9 % of full size, deepest overlap 52.30 um");
   EXPECT_EQ(synth::packing_status_text({0, 1, 4000, 20000, 1.0, 12.3e-6, 5.5e-6}),
             "sweep 4000 of at most 20000: at full size, deepest overlap 12.30 um, to end within 5.50 um");
 }

@@ -571,9 +571,9 @@ std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*
 std::string packing_status_text(const PackingStatus& s) {
   std::string text = s.stages > 1 ? fmt::format("stage {} of {}, ", s.stage + 1, s.stages) : std::string();
   text += fmt::format("sweep {} of at most {}: ", s.sweep, s.max_sweeps);
-  if (s.scale < 1.0)
-    return text + fmt::format("growing, {:.1f} % of full size, deepest overlap {:.2f} um", 100.0 * s.scale,
-                              1e6 * s.worst_overlap);
+  if (s.scale < 1.0)  // rounded down: a growing packing never reads 100 %
+    return text + fmt::format("growing, {:.1f} % of full size, deepest overlap {:.2f} um",
+                              std::floor(1000.0 * s.scale) / 10.0, 1e6 * s.worst_overlap);
   return text + fmt::format("at full size, deepest overlap {:.2f} um, to end within {:.2f} um", 1e6 * s.worst_overlap,
                             1e6 * s.tolerance);
 }
