@@ -15,6 +15,7 @@
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/interval.hpp"
 #include "graintwin/mesh/ellipsoid_grain.hpp"
 #include "graintwin/fdem/frames_vtk.hpp"
 #include "graintwin/fdem/results_file.hpp"
@@ -189,31 +190,29 @@ void run_stages_shown(cli::RunContext& ctx, Solver& solver, const Scene& scene, 
   progress->done();
 }
 
-/// Runs the scene's triaxial test: progress per phase, a status line every few thousand steps of a
-/// consolidation (whose length is not known in advance), a warning when shearing was not quasi-static.
-/// The summary, or nothing when the run stopped at --stop-step.
+/// Runs the scene's triaxial test: progress and time left per phase of known length (shearing), a
+/// status line every half minute of a consolidation, which runs until it settles (a percentage of its
+/// most allowed steps would mislead), a warning when shearing was not quasi-static. The summary, or
+/// nothing when the run stopped at --stop-step.
 std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solver& solver, const Scene& scene,
                                                      const RunSchedule& schedule, std::uint64_t stop_step, ResultsWriter& writer,
                                                      TriaxialRunHooks hooks, const Checkpoints& checkpoints) {
   std::unique_ptr<cli::Progress> progress;
   std::string phase;
-  std::size_t taken = 0;
+  Interval status(kStatusLineSeconds);
   hooks.phase = [&](const std::string& name, std::size_t steps) {
     if (progress) progress->done();
     progress = steps ? ctx.progress(name + " steps", steps) : nullptr;
     phase = name;
-    taken = 0;
+    status = Interval(kStatusLineSeconds);
     spdlog::info("{} begins at step {}{}", name, solver.step_count(), steps ? fmt::format(" ({} steps)", steps) : "");
   };
-  hooks.step = [&](const TriaxialMeasure& m, const StepReport& r, const TriaxialRunProgress&) {
-    ++taken;
-    if (progress) progress->advance();
-    if (!progress && taken % 1000 == 0)
-      spdlog::info("{}: {} steps, axial {:.4g} kPa, lateral {:.4g} kPa, kinetic / elastic energy {:.3g}, {} contact "
-                   "searches rebuilt",
-                   phase, taken, 1e-3 * m.axial_stress, 1e-3 * m.lateral_stress,
-                   r.energies.kinetic / (r.energies.strain + r.energies.contact_elastic),
-                   solver.contact_model()->rebuild_count());
+  hooks.step = [&](const TriaxialMeasure& m, const StepReport& r, const TriaxialRunProgress& at) {
+    if (progress)
+      progress->advance();
+    else if (status.due())
+      spdlog::info("{}, {} in: {}; {} contact searches rebuilt", phase, format_duration(status.elapsed()),
+                   consolidation_status(*scene.triaxial, m, r, at.procedure), solver.contact_model()->rebuild_count());
     throw_if_interrupted();
   };
   const std::optional<TriaxialRunSummary> run = run_triaxial_scene(

@@ -345,7 +345,7 @@ int main(int argc, char** argv) {
     std::optional<mesh::EquivalentTwin> sample;
     if (equivalent) {
       o.equivalent = mesh::scan_packing_options(o.equivalent, shapes.grains, scan ? &*scan : nullptr, o.labels.string());
-      sample = mesh::pack_equivalent_twin(grains, shapes.degree, o.equivalent, ctx.progress_callback("packing"));
+      sample = mesh::pack_equivalent_twin(grains, shapes.degree, o.equivalent, synth::log_packing_status("packing"));
       log_equivalent_sample(*sample, grains.size(), shapes.psd.d50);
     }
     const mesh::TwinGrains twin_grains = sample ? mesh::grains_of_sample(*sample, grains) : mesh::grains_in_place(grains);

@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
       ctx.add_input_history(io::open_kind(p, schema::kind::shapes, "pass the output of labels2shapes"));
 
     const TracksFile content =
-        track_series(positional, co, ro, ctx.progress_callback("matching"), ctx.progress_callback("rotations"));
+        track_series(positional, co, ro, [&](const std::string& step) { return ctx.progress_callback(step); });
     log_series(content, co, ro);
     write_tracks_file(out.temp_path(), content, ctx.history());
     if (vtk_out) write_tracks_vtp(vtk_out->temp_path(), content);

@@ -282,3 +282,23 @@ TEST(Triaxial, TheRunsProgressRoundTripsAndADamagedOneIsRefused) {
   io::H5File::create(dir / "plain.h5");  // a checkpoint of a run without a triaxial test
   EXPECT_THROW(load_progress(io::H5File::open(dir / "plain.h5")), DataError);
 }
+
+TEST(Triaxial, ConsolidationStatusSaysWhereTheStressesAndEnergyStandAgainstWhatSettlesThem) {
+  TriaxialSpec spec;  // 300 kPa within 1 %, at most 200 000 steps a phase
+  StepReport r;
+  r.energies.kinetic = 3.0, r.energies.strain = 10.0, r.energies.contact_elastic = 40.0;
+  const TriaxialMeasure m{2.981e5, 3.0123e5, 3.5e-3, 1.2e-7, 1.2e-7};
+  using Phase = TriaxialProgress::Phase;
+  EXPECT_EQ(consolidation_status(spec, m, r, {Phase::wall, 1200, 40, 0, 0}),
+            "step 1200 of at most 200000, in the wall: axial 298.1 kPa, lateral 301.2 kPa (settle within 1 % of 300 "
+            "kPa); kinetic / elastic energy 0.06 (settles below 0.05); settled for 40 of 100 steps");
+  EXPECT_EQ(consolidation_status(spec, m, r, {Phase::membrane_fixed, 30, 0, 0, 0}),
+            "step 30 of at most 200000, membrane held while the grains settle against it; kinetic / elastic energy "
+            "0.06 (settles below 0.05); settled for 0 of 100 steps");
+  const TriaxialMeasure ramping{2.5e5, 1.5e5, 3.5e-3, 1.2e-7, 1.2e-7};
+  EXPECT_EQ(consolidation_status(spec, ramping, r, {Phase::membrane_released, 800, 0, 300, 0}),
+            "step 800 of at most 200000, membrane released: axial 250 kPa (settles within 1 % of 300 kPa), pressure "
+            "150 kPa (ramped to 300 kPa); kinetic / elastic energy 0.06 (settles below 0.05); settled for 0 of 100 steps");
+  EXPECT_EQ(consolidation_status(spec, m, r, {Phase::shearing, 5, 0, 0, 3.5e-3}),
+            "step 5: axial 298.1 kPa, lateral 301.2 kPa; kinetic / elastic energy 0.06");
+}

@@ -294,8 +294,9 @@ TEST(PackGrains, ThreeHundredSpheresPackDenselyWithinTheTolerance) {
   const Container c = cylinder_for(g.volume, 0.565);
   synth::PackingParams p;
   synth::PackingReport r;
-  std::vector<double> fractions;
-  const auto packed = synth::pack_grains(g.shapes, c, p, &r, [&](double f) { fractions.push_back(f); });
+  std::vector<synth::PackingStatus> statuses;
+  const auto packed =
+      synth::pack_grains(g.shapes, c, p, &r, [&](const synth::PackingStatus& s) { statuses.push_back(s); });
   ASSERT_EQ(packed.size(), 300u);
   EXPECT_NEAR(r.solid_fraction, 0.565, 1e-9);
   EXPECT_GE(r.core_solid_fraction, 0.60);
@@ -330,14 +331,28 @@ TEST(PackGrains, ThreeHundredSpheresPackDenselyWithinTheTolerance) {
     EXPECT_LT(angle_between(k.contact.normal, branch), 0.05 * kDeg);
   }
   EXPECT_GE(r.touching_pairs, 600u);  // about 2 contacts per grain or more: a jammed-like packing
-  // Progress: non-decreasing, ends at 1.
-  ASSERT_FALSE(fractions.empty());
-  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
-  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  // Status: every sweep but the last (which ends the packing) reports, growing to full size and
+  // then settling toward the tolerance.
+  ASSERT_EQ(statuses.size(), static_cast<std::size_t>(r.sweeps - 1));
+  for (std::size_t k = 0; k < statuses.size(); ++k) ASSERT_EQ(statuses[k].sweep, static_cast<int>(k + 1));
+  EXPECT_LT(statuses.front().scale, 1.0);
+  EXPECT_EQ(statuses.back().scale, 1.0);
+  EXPECT_EQ(statuses.back().tolerance, tol);
+  EXPECT_EQ(statuses.back().max_sweeps, p.max_sweeps);
+  EXPECT_EQ(statuses.back().stages, 1u);
   std::printf("[ packing ] 300 spheres: solid fraction %.3f (core %.3f), max overlap %.3f um "
               "(tolerance %.3f um), %zu touching pairs, %d sweeps, %.2f s\n",
               r.solid_fraction, r.core_solid_fraction, r.max_overlap * 1e6, tol * 1e6,
               r.touching_pairs, r.sweeps, r.seconds);
+}
+
+TEST(PackingStatus, ReadsAsAStatusLine) {
+  EXPECT_EQ(synth::packing_status_text({0, 3, 812, 20000, 0.9315, 12.3e-6, 5.5e-6}),
+            "stage 1 of 3, sweep 812 of at most 20000: growing, 93.1 % of full size, deepest overlap 12.30 um");
+  EXPECT_EQ(synth::packing_status_text({1, 3, 2, 20000, 0.9996, 52.3e-6, 5.5e-6}),
+            "stage 2 of 3, sweep 2 of at most 20000: growing, 99.9 % of full size, deepest overlap 52.30 um");
+  EXPECT_EQ(synth::packing_status_text({0, 1, 4000, 20000, 1.0, 12.3e-6, 5.5e-6}),
+            "sweep 4000 of at most 20000: at full size, deepest overlap 12.30 um, to end within 5.50 um");
 }
 
 TEST(PackGrains, ThreeHundredEllipsoidsReachSixtyPercent) {

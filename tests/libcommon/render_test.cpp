@@ -156,9 +156,14 @@ TEST(Render, ShellVolumeIsTheAnnulusVolume) {
   sh.thickness = 0.3e-4;
   sh.z0 = 0.5e-4;
   sh.z1 = 2.5e-4;
-  const Volume<float> f = render_shell(sh, {30, 41, 41}, kVoxel, {0, 0, 0}, RenderParams{});
+  std::vector<double> progress;
+  const Volume<float> f =
+      render_shell(sh, {30, 41, 41}, kVoxel, {0, 0, 0}, RenderParams{}, [&](double done) { progress.push_back(done); });
   const double exact = M_PI * (1.5e-4 * 1.5e-4 - 1.2e-4 * 1.2e-4) * 2e-4;
   EXPECT_NEAR(sum(f) * 1e-15 / exact, 1.0, 0.01);
+  // Every slice is reported once, those the shell misses too.
+  ASSERT_EQ(progress.size(), 30u);
+  EXPECT_DOUBLE_EQ(*std::max_element(progress.begin(), progress.end()), 1.0);
 }
 
 TEST(Render, BlurConservesTheTotal) {

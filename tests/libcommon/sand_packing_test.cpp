@@ -62,11 +62,11 @@ TEST(PackInStages, RoughSandMeetsTheToleranceWithItsTrueShapes) {
   p.seed = 3;
   p.contact_tolerance = 0.02;  // the bundled scene's: 3 um for the smallest grain
   synth::PackingReport r;
-  std::vector<double> progress;
+  std::vector<synth::PackingStatus> statuses;
   std::vector<PackedGrain> packed;
   try {
     packed = synth::pack_in_stages({pointers(deg7), pointers(deg11), shapes}, c, p, &r,
-                                   [&](double f) { progress.push_back(f); });
+                                   [&](const synth::PackingStatus& s) { statuses.push_back(s); });
   } catch (const Error& e) {
     FAIL() << e.message();
   }
@@ -93,9 +93,15 @@ TEST(PackInStages, RoughSandMeetsTheToleranceWithItsTrueShapes) {
   EXPECT_LE(max_ov, tol * 1.01);
   EXPECT_LE(max_wall, tol * 1.01);
   EXPECT_GE(touching, packed.size());
-  ASSERT_FALSE(progress.empty());
-  EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
-  EXPECT_DOUBLE_EQ(progress.back(), 1.0);
+  // Every stage reports its sweeps, in order, each stage from its first.
+  ASSERT_FALSE(statuses.empty());
+  for (std::size_t k = 0; k < statuses.size(); ++k) {
+    ASSERT_EQ(statuses[k].stages, 3u);
+    const bool first = k == 0 || statuses[k].stage != statuses[k - 1].stage;
+    ASSERT_EQ(statuses[k].sweep, first ? 1 : statuses[k - 1].sweep + 1) << k;
+    if (first) ASSERT_EQ(statuses[k].stage, k == 0 ? 0u : statuses[k - 1].stage + 1) << k;
+  }
+  EXPECT_EQ(statuses.back().stage, 2u);
   const double d50 = d50_of_volumes(volumes);
   const auto shells = synth::solid_fraction_by_wall_distance(shapes, packed, c,
                                                              {0.0, 0.25 * d50, 0.5 * d50, d50, HUGE_VAL});

@@ -17,6 +17,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interrupt.hpp"
+#include "graintwin/core/interval.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/stages_run.hpp"
 #include "graintwin/mesh/ellipsoid_grain.hpp"
@@ -230,7 +231,7 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
                   const std::vector<std::string>& history,
                   const std::function<std::function<void(double)>(const std::string&)>& progress) {
     // The exact grains' rigid model, run through the scene's triaxial test.
-    const auto mesh_progress = progress("meshing the exact grains");
+    auto mesh_progress = progress("meshing the exact grains");
     std::mutex progress_lock;
     std::size_t meshed = 0;
     const std::size_t n = grains.tables.size();
@@ -238,6 +239,7 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
       const std::lock_guard<std::mutex> hold(progress_lock);  // called from the meshing threads
       if (mesh_progress) mesh_progress(static_cast<double>(++meshed) / static_cast<double>(n));
     }));
+    mesh_progress = nullptr;  // the display ends here
     throw_if_interrupted();
     fdem::Scene scene = fdem::read_scene(params.scene, std::shared_ptr<const fdem::Model>(model_in));
     set_strains(*scene.triaxial, strains);
@@ -258,23 +260,33 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
     const std::string scene_text((std::istreambuf_iterator<char>(scene_file)), std::istreambuf_iterator<char>());
     nlohmann::json parameters = fdem::run_parameters(scene, where, scene_text, start, schedule, omp_get_max_threads(), "");
     fdem::ResultsWriter writer(results, solver, parameters.dump());
-    // Progress: the consolidations run until they settle, so only shearing's share of its strain is known.
-    const auto shear_progress = progress("simulated triaxial test, shearing");
+    // Progress: the consolidations run until they settle, so only shearing's share of its strain is
+    // known; until it starts, a status line every half minute says how far they are from settling.
+    std::function<void(double)> shear_progress;  // made when shearing starts: its clock starts there
+    std::string phase;
     bool shearing = false;
     double shear_start_height = 0.0;
+    Interval status(kStatusLineSeconds);
     fdem::TriaxialRunHooks hooks;
-    hooks.phase = [&](const std::string& phase, std::size_t) {
-      spdlog::info("simulated loading: {}", phase);
+    hooks.phase = [&](const std::string& name, std::size_t) {
+      spdlog::info("simulated loading: {}", name);
+      phase = name;
       shearing = phase == "shearing";
+      if (shearing) shear_progress = progress("simulated triaxial test, shearing");
+      status = Interval(kStatusLineSeconds);
     };
-    hooks.step = [&](const fdem::TriaxialMeasure& m, const fdem::StepReport&, const fdem::TriaxialRunProgress&) {
+    hooks.step = [&](const fdem::TriaxialMeasure& m, const fdem::StepReport& r, const fdem::TriaxialRunProgress& at) {
       if (shearing && shear_start_height == 0.0) shear_start_height = m.height;
       if (shearing && shear_progress && solver.step_count() % 256 == 0)
         shear_progress(std::clamp(std::log(shear_start_height / m.height) / scene.triaxial->target_axial_strain, 0.0, 1.0));
+      if (!shearing && status.due())
+        spdlog::info("simulated loading: {}, {} in: {}", phase, format_duration(status.elapsed()),
+                     fdem::consolidation_status(*scene.triaxial, m, r, at.procedure));
       throw_if_interrupted();
     };
     const std::optional<fdem::TriaxialRunSummary> summary =
         fdem::run_triaxial_scene(solver, scene, schedule, 0, writer, hooks, [](const fdem::TriaxialRunProgress&) {});
+    shear_progress = nullptr;
     parameters["triaxial"] = fdem::triaxial_summary_json(*summary);
     parameters["steps"] = solver.step_count();
     writer.set_parameters(parameters.dump());

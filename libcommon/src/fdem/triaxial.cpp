@@ -19,8 +19,6 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 /// Rings of membrane beyond each platen (clamped to it).
 constexpr int kClampedRings = 2;
-/// Consolidation is over when the stresses and the kinetic energy stay settled this many steps.
-constexpr std::size_t kSettledSteps = 100;
 
 bool quasi_static(const StepReport& r) {
   return r.energies.kinetic < kQuasiStaticRatio * (r.energies.contact_elastic + r.energies.strain);

@@ -66,6 +66,27 @@ void check_step_ceiling(const StepEstimate& estimate, double max_steps, const Sc
                                where, estimate.steps, estimate.how, max_steps, dt, cause));
 }
 
+std::string consolidation_status(const TriaxialSpec& spec, const TriaxialMeasure& m, const StepReport& r,
+                                 const TriaxialProgress& at) {
+  using Phase = TriaxialProgress::Phase;
+  const double kpa = 1e-3, sigma = spec.options.confining_pressure;
+  const std::string energy = fmt::format("kinetic / elastic energy {:.3g}", r.energies.kinetic_ratio());
+  if (at.phase == Phase::shearing)
+    return fmt::format("step {}: axial {:.4g} kPa, lateral {:.4g} kPa; {}", at.step, kpa * m.axial_stress,
+                       kpa * m.lateral_stress, energy);
+  const std::string target = fmt::format("within {:g} % of {:.4g} kPa", 100 * spec.options.stress_tolerance, kpa * sigma);
+  const std::string stresses =
+      at.phase == Phase::wall
+          ? fmt::format("in the wall: axial {:.4g} kPa, lateral {:.4g} kPa (settle {})", kpa * m.axial_stress,
+                        kpa * m.lateral_stress, target)
+      : at.phase == Phase::membrane_fixed
+          ? std::string("membrane held while the grains settle against it")
+          : fmt::format("membrane released: axial {:.4g} kPa (settles {}), pressure {:.4g} kPa (ramped to {:.4g} kPa)",
+                        kpa * m.axial_stress, target, kpa * m.lateral_stress, kpa * sigma);
+  return fmt::format("step {} of at most {}, {}; {} (settles below {:g}); settled for {} of {} steps", at.step,
+                     spec.consolidation_steps, stresses, energy, kQuasiStaticRatio, at.settled, kSettledSteps);
+}
+
 void save_progress(io::H5File& file, const TriaxialRunProgress& p) {
   file.ensure_group(ck::triaxial);
   const TriaxialProgress& q = p.procedure;

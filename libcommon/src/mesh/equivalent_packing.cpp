@@ -14,7 +14,7 @@ namespace graintwin::mesh {
 
 EquivalentSample pack_equivalent_sample(const std::vector<const shape::GrainShape*>& library, int degree,
                                         const EquivalentPackingOptions& o,
-                                        const std::function<void(double fraction_done)>& progress) {
+                                        const synth::PackingObserver& observe) {
   if (!(o.solid_fraction > 0.0 && o.solid_fraction <= synth::kDensestPacking))
     throw UsageError(fmt::format("the solid fraction {:.3g} of an equivalent sample must be in (0, {:g}]: {:g} is the densest "
                                  "arrangement of equal spheres",
@@ -78,7 +78,7 @@ EquivalentSample pack_equivalent_sample(const std::vector<const shape::GrainShap
   s.container.height = 2.0 * o.aspect * s.container.radius;
   synth::PackingParams p;
   p.seed = o.seed;
-  s.poses = synth::pack_in_stages(stages, s.container, p, &s.report, progress);
+  s.poses = synth::pack_in_stages(stages, s.container, p, &s.report, observe);
   return s;
 }
 

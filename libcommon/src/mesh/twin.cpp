@@ -57,10 +57,10 @@ EquivalentPackingOptions scan_packing_options(EquivalentPackingOptions options, 
 }
 
 EquivalentTwin pack_equivalent_twin(const std::vector<const shape::GrainShape*>& library, int degree,
-                                    const EquivalentPackingOptions& options, const std::function<void(double)>& progress) {
+                                    const EquivalentPackingOptions& options, const synth::PackingObserver& observe) {
   EquivalentTwin twin;
   try {
-    twin.sample = pack_equivalent_sample(library, degree, options, progress);
+    twin.sample = pack_equivalent_sample(library, degree, options, observe);
   } catch (const DataError& e) {
     throw DataError(fmt::format("the equivalent sample did not pack at solid fraction {:.3f} ({}); lower --solid-fraction, "
                                 "draw more grains with --grains for a wider cylinder (rough grains jam near 0.58 in "

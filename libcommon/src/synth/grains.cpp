@@ -174,15 +174,23 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
   return set;
 }
 
-std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size) {
+std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size,
+                                                const std::function<void(double)>& progress) {
   if (degree < 0 || degree > set.sh_degree)
     throw UsageError("smoothed_tables: degree " + std::to_string(degree) + " is outside 0.." +
                      std::to_string(set.sh_degree) + ", the grains' SH degree");
-  std::vector<shape::RadialTable> out(set.tables.size());
+  const std::size_t n = set.tables.size();
+  std::vector<shape::RadialTable> out(n);
   const Eigen::Index kept = shape::sh_count(degree);
-  parallel_for_each_index(out.size(), [&](std::size_t i) {
+  std::atomic<std::size_t> done{0};
+  parallel_for_each_index(n, [&](std::size_t i) {
     const Eigen::VectorXd c = set.coeffs_body.row(static_cast<Eigen::Index>(i)).head(kept).transpose();
     out[i] = shape::radial_table_from_sh(c, degree, table_nodes(0.5 * set.diameters[i] / voxel_size));
+    const std::size_t d = ++done;
+    if (progress) {
+#pragma omp critical(smoothing_progress)
+      progress(static_cast<double>(d) / static_cast<double>(n));
+    }
   });
   return out;
 }

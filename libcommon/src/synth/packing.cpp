@@ -32,17 +32,22 @@
 // result does not depend on the thread count.
 #include "graintwin/synth/packing.hpp"
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include "graintwin/core/enum_names.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/geometry.hpp"
+#include "graintwin/core/interval.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "packing_geometry.hpp"
 #include "packing_pairs.hpp"
@@ -139,16 +144,16 @@ class Packer {
   }
 
   // pack_grains(): random start at a reduced scale, growth, relaxation.
-  std::vector<PackedGrain> pack(PackingReport* report, const std::function<void(double)>& progress) {
+  std::vector<PackedGrain> pack(PackingReport* report, const PackingObserver& observe) {
     const auto t0 = std::chrono::steady_clock::now();
     place_initial();
-    relax(progress);
-    return finish_run(report, progress, t0);
+    relax(observe);
+    return finish_run(report, t0);
   }
 
   // relax_grains(): the given poses at full size, relaxation only.
   std::vector<PackedGrain> relax_from(const std::vector<PackedGrain>& poses, PackingReport* report,
-                                      const std::function<void(double)>& progress) {
+                                      const PackingObserver& observe) {
     const auto t0 = std::chrono::steady_clock::now();
     x_.resize(n_);
     q_.resize(n_);
@@ -165,14 +170,12 @@ class Packer {
     }
     // Grains shrunk about their centres first (initial_scale > 0) regrow quasi-statically.
     s_ = s0_ = p_.initial_scale > 0.0 ? p_.initial_scale : 1.0;
-    relax(progress);
-    return finish_run(report, progress, t0);
+    relax(observe);
+    return finish_run(report, t0);
   }
 
  private:
-  std::vector<PackedGrain> finish_run(PackingReport* report,
-                                      const std::function<void(double)>& progress,
-                                      std::chrono::steady_clock::time_point t0) {
+  std::vector<PackedGrain> finish_run(PackingReport* report, std::chrono::steady_clock::time_point t0) {
     std::vector<PackedGrain> out(n_);
     for (std::size_t i = 0; i < n_; ++i) {
       out[i].position = x_[i];
@@ -185,7 +188,6 @@ class Packer {
       report->seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
-    if (progress) progress(1.0);
     return out;
   }
 
@@ -425,7 +427,7 @@ class Packer {
     s_ = s_new;
   }
 
-  void relax(const std::function<void(double)>& progress) {
+  void relax(const PackingObserver& observe) {
     travel_.assign(n_, 0.0);
     vel_.assign(n_, Eigen::Vector3d::Zero());
     spin_.assign(n_, Eigen::Vector3d::Zero());
@@ -436,13 +438,6 @@ class Packer {
     fire_dt_ = kTune.fire_dt_start;
     build_pairs();
     const double allow_growing = kTune.growth_overlap * req_mean_;
-    // Progress: growth (log of the scale) up to 0.9, then the fall of the worst overlap (log)
-    // toward the tolerance; a pure relaxation spends the whole range on the latter.
-    const bool grows = s0_ < 1.0;
-    const double log_range = grows ? std::log(1.0 / s0_) : 1.0;
-    const double settle_base = grows ? 0.9 : 0.0;
-    double worst_start = 0.0;
-    double shown = 0.0;
     double g = kTune.growth_first;
     bool hold = false;
     int sweep = 0;
@@ -490,17 +485,7 @@ class Packer {
         }
       }
       fire_step();
-      if (progress) {
-        double f = 0.9 * std::log(s_ / s0_) / log_range;
-        if (full) {
-          if (worst_start == 0.0) worst_start = std::max(st.worst(), 2.0 * tol_);
-          const double settled = std::log(worst_start / std::max(st.worst(), tol_)) /
-                                 std::log(worst_start / tol_);
-          f = settle_base + (1.0 - settle_base) * std::clamp(settled, 0.0, 0.99);
-        }
-        shown = std::max(shown, f);  // never backwards, though the worst overlap may rise
-        progress(shown);
-      }
+      if (observe) observe({0, 1, sweep, p_.max_sweeps, s_, st.worst(), tol_});
     }
   }
 
@@ -574,19 +559,38 @@ class Packer {
 
 std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*>& shapes,
                                      const Container& c, const PackingParams& p,
-                                     PackingReport* report,
-                                     const std::function<void(double)>& progress) {
+                                     PackingReport* report, const PackingObserver& observe) {
   if (shapes.empty()) {
     if (report) *report = PackingReport{};
     return {};
   }
   Packer packer(shapes, c, p);
-  return packer.pack(report, progress);
+  return packer.pack(report, observe);
+}
+
+std::string packing_status_text(const PackingStatus& s) {
+  std::string text = s.stages > 1 ? fmt::format("stage {} of {}, ", s.stage + 1, s.stages) : std::string();
+  text += fmt::format("sweep {} of at most {}: ", s.sweep, s.max_sweeps);
+  if (s.scale < 1.0)  // rounded down: a growing packing never reads 100 %
+    return text + fmt::format("growing, {:.1f} % of full size, deepest overlap {:.2f} um",
+                              std::floor(1000.0 * s.scale) / 10.0, 1e6 * s.worst_overlap);
+  return text + fmt::format("at full size, deepest overlap {:.2f} um, to end within {:.2f} um", 1e6 * s.worst_overlap,
+                            1e6 * s.tolerance);
+}
+
+PackingObserver log_packing_status(const std::string& what) {
+  return [what, every = Interval(kStatusLineSeconds),
+          stage = std::numeric_limits<std::size_t>::max()](const PackingStatus& s) mutable {
+    const bool begins = s.stage != stage;
+    stage = s.stage;
+    if (every.due() || begins)
+      spdlog::info("{}, {} in: {}", what, format_duration(every.elapsed()), packing_status_text(s));
+  };
 }
 
 PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
                            std::vector<PackedGrain>& poses, const Container& c,
-                           const PackingParams& p, const std::function<void(double)>& progress) {
+                           const PackingParams& p, const PackingObserver& observe) {
   if (shapes.size() != poses.size()) {
     throw UsageError("relax_grains: " + std::to_string(shapes.size()) + " shapes but " +
                      std::to_string(poses.size()) + " poses; pass one pose per grain");
@@ -594,7 +598,7 @@ PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
   PackingReport report;
   if (shapes.empty()) return report;
   Packer packer(shapes, c, p);
-  poses = packer.relax_from(poses, &report, progress);
+  poses = packer.relax_from(poses, &report, observe);
   return report;
 }
 

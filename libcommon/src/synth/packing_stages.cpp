@@ -1,6 +1,5 @@
 // Packing in stages: the grains grown with smoother shapes first (pack_grains), then each later
 // stage's shapes put in at the poses reached and relaxed (relax_grains).
-#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <string>
@@ -18,7 +17,7 @@ constexpr double kStageRegrowScale = 0.98;
 
 std::vector<PackedGrain> pack_in_stages(
     const std::vector<std::vector<const shape::RadialTable*>>& stages, const Container& c,
-    const PackingParams& p, PackingReport* report, const std::function<void(double)>& progress) {
+    const PackingParams& p, PackingReport* report, const PackingObserver& observe) {
   for (std::size_t k = 1; k < stages.size(); ++k) {  // before any work, though the stages check again
     if (stages[k].size() != stages[0].size()) {
       throw UsageError("pack_in_stages: stage " + std::to_string(k) + " has " + std::to_string(stages[k].size()) +
@@ -26,12 +25,12 @@ std::vector<PackedGrain> pack_in_stages(
                        "; pass one shape per grain in every stage");
     }
   }
-  return pack_in_stages(stages.size(), [&stages](std::size_t k) { return stages[k]; }, c, p, report, progress);
+  return pack_in_stages(stages.size(), [&stages](std::size_t k) { return stages[k]; }, c, p, report, observe);
 }
 
 std::vector<PackedGrain> pack_in_stages(std::size_t stage_count, const StageShapes& stage_shapes,
                                         const Container& c, const PackingParams& p, PackingReport* report,
-                                        const std::function<void(double)>& progress) {
+                                        const PackingObserver& observe) {
   if (stage_count == 0) {
     throw UsageError("pack_in_stages: no stages; pass at least the grains' true shapes");
   }
@@ -47,11 +46,12 @@ std::vector<PackedGrain> pack_in_stages(std::size_t stage_count, const StageShap
     return shapes;
   };
   const auto t0 = std::chrono::steady_clock::now();
-  // Progress: the growth takes most of the time, the relaxations share the rest evenly.
-  const double growth_share = stage_count == 1 ? 1.0 : 0.7;
-  auto part = [&](double lo, double hi) -> std::function<void(double)> {
-    if (!progress) return {};
-    return [&progress, lo, hi](double f) { progress(lo + (hi - lo) * f); };
+  auto observe_stage = [&](std::size_t k) -> PackingObserver {
+    if (!observe) return {};
+    return [&observe, k, stage_count](PackingStatus s) {
+      s.stage = k, s.stages = stage_count;
+      observe(s);
+    };
   };
   auto in_stage = [&](std::size_t k, auto&& run) {
     try {
@@ -64,24 +64,21 @@ std::vector<PackedGrain> pack_in_stages(std::size_t stage_count, const StageShap
   };
   PackingReport r;
   std::vector<PackedGrain> poses =
-      in_stage(0, [&] { return pack_grains(shapes_of(0), c, p, &r, part(0.0, growth_share)); });
+      in_stage(0, [&] { return pack_grains(shapes_of(0), c, p, &r, observe_stage(0)); });
   int sweeps = r.sweeps;
   const double initial_scale = r.initial_scale;
-  const double relax_share = (1.0 - growth_share) / std::max<double>(1.0, stage_count - 1.0);
   // Each later stage starts shrunk a little and regrows: at full size the new bumps would have to
   // be pushed out of a jammed packing; shrunk, they find room and the grains re-jam slowly.
   PackingParams regrow = p;
   regrow.initial_scale = kStageRegrowScale;
   for (std::size_t k = 1; k < stage_count; ++k) {
-    const double lo = growth_share + (k - 1) * relax_share;
-    r = in_stage(k, [&] { return relax_grains(shapes_of(k), poses, c, regrow, part(lo, lo + relax_share)); });
+    r = in_stage(k, [&] { return relax_grains(shapes_of(k), poses, c, regrow, observe_stage(k)); });
     sweeps += r.sweeps;
   }
   r.sweeps = sweeps;
   r.initial_scale = initial_scale;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (report) *report = r;
-  if (progress) progress(1.0);
   return poses;
 }
 

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -307,7 +308,7 @@ GrainImages render_grains(const std::vector<PlacedGrain>& grains, const Shape3& 
 }
 
 Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& voxel_size, const Vec3& origin,
-                           const RenderParams& params) {
+                           const RenderParams& params, const std::function<void(double)>& progress) {
   Volume<float> out(shape, voxel_size, origin);
   const auto offsets = subsample_offsets(params.supersample > 0 ? params.supersample : 4, voxel_size);
   const double h = 0.5 * std::sqrt(voxel_size[0] * voxel_size[0] + voxel_size[1] * voxel_size[1] +
@@ -318,28 +319,35 @@ Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& 
     const double r_in = shell.inner_radius(std::atan2(y - shell.centre_y, x - shell.centre_x), z);
     return rho >= r_in && rho <= r_in + shell.thickness;
   };
+  std::atomic<std::size_t> slices_done{0};
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t z = 0; z < shape[0]; ++z) {
     const double wz = origin[0] + static_cast<double>(z) * voxel_size[0];
-    if (wz < shell.z0 - h || wz > shell.z1 + h) continue;
-    for (std::size_t y = 0; y < shape[1]; ++y) {
-      const double wy = origin[1] + static_cast<double>(y) * voxel_size[1];
-      for (std::size_t x = 0; x < shape[2]; ++x) {
-        const double wx = origin[2] + static_cast<double>(x) * voxel_size[2];
-        const double rho = std::hypot(wx - shell.centre_x, wy - shell.centre_y);
-        const double r_in = shell.inner_radius(std::atan2(wy - shell.centre_y, wx - shell.centre_x),
-                                               std::clamp(wz, shell.z0, shell.z1));
-        const double in_depth = std::min(rho - r_in, r_in + shell.thickness - rho);
-        if (in_depth < -2.0 * h) continue;
-        const bool whole_z = wz > shell.z0 + h && wz < shell.z1 - h;
-        if (in_depth > 2.0 * h && whole_z) {  // 2h: r_in may vary across the voxel
-          out(z, y, x) = 1.0f;
-          continue;
+    if (wz >= shell.z0 - h && wz <= shell.z1 + h) {
+      for (std::size_t y = 0; y < shape[1]; ++y) {
+        const double wy = origin[1] + static_cast<double>(y) * voxel_size[1];
+        for (std::size_t x = 0; x < shape[2]; ++x) {
+          const double wx = origin[2] + static_cast<double>(x) * voxel_size[2];
+          const double rho = std::hypot(wx - shell.centre_x, wy - shell.centre_y);
+          const double r_in = shell.inner_radius(std::atan2(wy - shell.centre_y, wx - shell.centre_x),
+                                                 std::clamp(wz, shell.z0, shell.z1));
+          const double in_depth = std::min(rho - r_in, r_in + shell.thickness - rho);
+          if (in_depth < -2.0 * h) continue;
+          const bool whole_z = wz > shell.z0 + h && wz < shell.z1 - h;
+          if (in_depth > 2.0 * h && whole_z) {  // 2h: r_in may vary across the voxel
+            out(z, y, x) = 1.0f;
+            continue;
+          }
+          int n = 0;
+          for (const auto& o : offsets) n += inside(wx + o.x(), wy + o.y(), wz + o.z());
+          out(z, y, x) = static_cast<float>(n) / static_cast<float>(offsets.size());
         }
-        int n = 0;
-        for (const auto& o : offsets) n += inside(wx + o.x(), wy + o.y(), wz + o.z());
-        out(z, y, x) = static_cast<float>(n) / static_cast<float>(offsets.size());
       }
+    }
+    const std::size_t done = ++slices_done;
+    if (progress) {
+#pragma omp critical(shell_progress)
+      progress(static_cast<double>(done) / static_cast<double>(shape[0]));
     }
   }
   return out;

@@ -180,7 +180,7 @@ std::vector<LoadedState> prescribed_states(const SeriesParams& p, const LoadingP
       } else {
         walls.box_size.z() = s.top_z;
       }
-      relaxed = relax_grains(tables, s.poses, walls, pp);
+      relaxed = relax_grains(tables, s.poses, walls, pp, log_packing_status(fmt::format("state {}: relaxation", k)));
       spdlog::info("state {} (strain {:.4g}): overlaps relaxed in {} sweeps, max overlap {:.3g} um", k, eps,
                    relaxed.sweeps, relaxed.max_overlap * 1e6);
     }
@@ -272,6 +272,8 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
                container_kind_name(p.container.kind));
 
   // --- packing (state 0) ---
+  // How long a packing takes is not known in advance (it grows and relaxes until its overlaps
+  // settle), so it logs status lines rather than a share done.
   PackingParams pp = p.packing;
   pp.seed = p.seed;
   PackingReport report;
@@ -281,13 +283,15 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   auto stage_shapes = [&](std::size_t k) {
     smooth = {};  // the last stage's copy goes before the next is made
     if (k + 1 == stage_count) return tables;
-    smooth = smoothed_tables(grains, p.pack_degrees[k], voxel);
+    const int degree = p.pack_degrees[k];
+    smooth = smoothed_tables(grains, degree, voxel,
+                             progress(fmt::format("packing stage {}: grains low-passed to SH degree {}", k + 1, degree)));
     std::vector<const shape::RadialTable*> shapes;
     for (const auto& t : smooth) shapes.push_back(&t);
     return shapes;
   };
   const std::vector<PackedGrain> packed =
-      pack_in_stages(stage_count, stage_shapes, p.container, pp, &report, progress("packing"));
+      pack_in_stages(stage_count, stage_shapes, p.container, pp, &report, log_packing_status("packing"));
   const std::vector<double> shell_edges{0.0, 0.25 * d_ref, 0.5 * d_ref, d_ref, HUGE_VAL};
   const std::vector<double> shells = solid_fraction_by_wall_distance(tables, packed, p.container, shell_edges);
   spdlog::info("packed: solid fraction {:.4f} (by distance from the walls: {:.3f} within d50/4, {:.3f} d50/4-d50/2, "
@@ -340,7 +344,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
       shell.thickness = p.membrane_thickness;
       shell.z0 = state.base_z;
       shell.z1 = state.top_z;
-      membrane = render_shell(shell, shape, vs, origin, p.render);
+      membrane = render_shell(shell, shape, vs, origin, p.render, progress(fmt::format("render scan {}: membrane", k)));
     }
     const Volume<std::uint16_t> scan = simulate_scan(images.fraction, p.membrane_thickness > 0.0 ? &membrane : nullptr,
                                                      scanner_for_scan(p, lp, box, k));

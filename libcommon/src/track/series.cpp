@@ -27,11 +27,13 @@ std::string tracks_parameters_json(const ChainOptions& co, const RotationOptions
 }
 
 TracksFile track_series(const std::vector<std::filesystem::path>& paths, const ChainOptions& chain,
-                        const RotationOptions& rotation, std::function<void(double)> match_progress,
-                        std::function<void(double)> rotation_progress) {
+                        const RotationOptions& rotation,
+                        const std::function<std::function<void(double)>(const std::string&)>& progress) {
+  const auto step = [&](const char* name) { return progress ? progress(name) : std::function<void(double)>(); };
   std::vector<shape::ShapesFile> shapes;
   std::vector<ScanGrains> scans;
   TracksFile content;
+  std::function<void(double)> reading = step("reading");
   for (const std::filesystem::path& p : paths) {
     try {
       shapes.push_back(shape::read_shapes_file(p));
@@ -44,13 +46,13 @@ TracksFile track_series(const std::vector<std::filesystem::path>& paths, const C
     content.scans.push_back(p.string());
     content.d50.push_back(scans.back().d50);
     content.scan_labels.push_back(scans.back().label);
+    if (reading) reading(static_cast<double>(shapes.size()) / static_cast<double>(paths.size()));
   }
-  content.tracks = chain_tracks(scans, chain, match_progress);
-  match_progress = nullptr;
+  reading = nullptr;
+  content.tracks = chain_tracks(scans, chain, step("matching"));
   std::vector<const shape::ShapesFile*> ptrs;
   for (const auto& s : shapes) ptrs.push_back(&s);
-  content.kinematics = track_kinematics(content.tracks, ptrs, rotation, rotation_progress);
-  rotation_progress = nullptr;
+  content.kinematics = track_kinematics(content.tracks, ptrs, rotation, step("rotations"));
   content.parameters_json = tracks_parameters_json(chain, rotation);
   return content;
 }

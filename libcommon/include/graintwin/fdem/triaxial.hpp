@@ -139,6 +139,8 @@ using TriaxialObserver = std::function<void(const TriaxialMeasure&, const StepRe
 /// Kinetic energy below this share of the elastic energy (contact and strain) counts as
 /// quasi-static (docs/methods.md, FDEM).
 inline constexpr double kQuasiStaticRatio = 0.05;
+/// A consolidation is over when the stresses and the kinetic energy stay settled this many steps.
+inline constexpr std::size_t kSettledSteps = 100;
 /// The inertial number of a sample sheared at `strain_rate` (1/s): strain rate x d50 x
 /// sqrt(density / mean stress); quasi-static below 1e-3.
 double inertial_number(double strain_rate, double d50, double density, double mean_stress);

@@ -71,6 +71,15 @@ StepEstimate estimate_steps(const Scene& scene, const Solver& solver, double dt)
 void check_step_ceiling(const StepEstimate& estimate, double max_steps, const Scene& scene, const StepLimits& limits,
                         double dt, const std::string& where);
 
+/// A status line for a step of a consolidation, whose length is not known in advance: the step
+/// against [triaxial] consolidation_steps, the stresses against sigma_3 and the tolerance that
+/// settles them, the kinetic energy against the quasi-static ratio, and the settled steps against
+/// the kSettledSteps that end it, e.g. "step 1200 of at most 200000, in the wall: axial 11.2 kPa,
+/// lateral 7.29 kPa (settle within 1 % of 300 kPa); kinetic / elastic energy 6.12 (settles below
+/// 0.05); settled for 0 of 100 steps". For logs; a shearing step gets its stresses and energy.
+std::string consolidation_status(const TriaxialSpec& spec, const TriaxialMeasure& m, const StepReport& r,
+                                 const TriaxialProgress& at);
+
 /// Runs the test on `solver` (which must have contact, and platens "bottom" and "top") at time
 /// step `dt`, a series row every `row_every` steps. UsageError before any step on a model the
 /// test cannot run; DataError when a consolidation does not settle.

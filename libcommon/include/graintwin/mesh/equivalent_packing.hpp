@@ -39,10 +39,11 @@ struct EquivalentSample {
 
 /// Draws and packs the sample from `library` (SH coefficients of degree `degree` about each
 /// grain's centroid). Deterministic for a seed. UsageError for options out of range, DataError when
-/// no library grain is usable or the grains do not pack (the packer's message).
+/// no library grain is usable or the grains do not pack (the packer's message). `observe` gets the
+/// packing's status after every sweep (synth::pack_in_stages).
 EquivalentSample pack_equivalent_sample(const std::vector<const shape::GrainShape*>& library, int degree,
                                         const EquivalentPackingOptions& options,
-                                        const std::function<void(double fraction_done)>& progress = {});
+                                        const synth::PackingObserver& observe = {});
 
 /// Moves a mesh made about the grain's body origin (its centroid at 0) to its pose in the sample.
 void place_mesh(TetMesh& mesh, const synth::PackedGrain& pose);

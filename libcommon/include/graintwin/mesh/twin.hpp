@@ -68,9 +68,9 @@ struct EquivalentTwin {
   std::vector<shape::GrainShape> grains;
 };
 /// Packs the sample from `library` (SH degree `degree`); DataError with the fixes when it does not
-/// pack; InterruptedError when interrupted.
+/// pack; InterruptedError when interrupted. `observe` gets the packing's status after every sweep.
 EquivalentTwin pack_equivalent_twin(const std::vector<const shape::GrainShape*>& library, int degree,
-                                    const EquivalentPackingOptions& options, const std::function<void(double)>& progress = {});
+                                    const EquivalentPackingOptions& options, const synth::PackingObserver& observe = {});
 
 /// What the twin meshes, in model order.
 struct TwinGrains {

@@ -78,7 +78,9 @@ SolidGrainRecord solid_grain_record(const GrainSolid& solid, shape::RadialTable 
 /// The grains' surfaces low-passed to SH degree `degree` (coefficients above it dropped; for angular
 /// grains, of their SH fit; same body frame and origin), tabulated like make_grains() does at `voxel_size`: smooth stand-ins for
 /// packing with the roughness off (pack_in_stages()). UsageError unless 0 <= degree <= sh_degree.
-std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size);
+/// `progress` (optional) gets the fraction of grains done, one call at a time.
+std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree, double voxel_size,
+                                                const std::function<void(double)>& progress = {});
 
 /// SH coefficients of the grain rotated by `body_to_world` (same degree), exact up to rounding:
 /// the rotated surface is re-expanded by least squares on a fixed well-conditioned direction set.

@@ -107,6 +107,28 @@ struct PackingReport {
   double seconds = 0.0;             ///< wall-clock time of pack_grains
 };
 
+/// Where a packing stands after a sweep. How long a packing takes is not known in advance: the
+/// grains grow as fast as their overlaps let them, then relax until the deepest overlap is within
+/// the tolerance (or jam), so this, not a share of the work, is what it reports.
+struct PackingStatus {
+  std::size_t stage = 0, stages = 1;  ///< pack_in_stages: this stage (from 0) of how many
+  int sweep = 0, max_sweeps = 0;      ///< sweeps of this stage so far, and the most it may take
+  double scale = 1.0;                 ///< the grains' size, of their full size
+  double worst_overlap = 0.0;         ///< m, the deepest pair or wall overlap after the sweep
+  double tolerance = 0.0;             ///< m, what every overlap must end within
+};
+/// Called after every sweep, from the calling thread.
+using PackingObserver = std::function<void(const PackingStatus&)>;
+
+/// A status line, e.g. "stage 1 of 3, sweep 812 of at most 20000: growing, 93.1 % of full size,
+/// deepest overlap 12.30 um" or "sweep 4000 of at most 20000: at full size, deepest overlap
+/// 12.30 um, to end within 5.50 um" (the stage only when there are several).
+std::string packing_status_text(const PackingStatus& status);
+
+/// An observer that logs (info) `what`, the time since it was made and packing_status_text when a
+/// stage begins and every kStatusLineSeconds after: the status lines of a packing in a run's log.
+PackingObserver log_packing_status(const std::string& what);
+
 /// Places grains (shapes[i] scaled to their final size, body origin = centroid) inside the
 /// container without interpenetration beyond the tolerance, densely: every pair overlaps by at most
 /// the tolerance, and every grain surface lies inside the container within the tolerance. The
@@ -115,12 +137,11 @@ struct PackingReport {
 /// and grain count (see the note on walls above).
 /// Throws UsageError for empty/invalid shapes or container, DataError when the grains cannot fit
 /// (over kDensestPacking of the container, a grain larger than the container, or no convergence: jammed
-/// before full size or overlaps not relaxed within max_sweeps). `progress` (optional) is called
-/// from the calling thread with the fraction done in [0, 1].
+/// before full size or overlaps not relaxed within max_sweeps). `observe` (optional) gets the
+/// status after every sweep.
 std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*>& shapes,
                                      const Container& c, const PackingParams& p,
-                                     PackingReport* report = nullptr,
-                                     const std::function<void(double fraction_done)>& progress = {});
+                                     PackingReport* report = nullptr, const PackingObserver& observe = {});
 
 /// Removes the overlaps of grains at given poses (e.g. after prescribed loading kinematics): the
 /// relaxation of pack_grains() at full size inside the container, until every pair and wall
@@ -131,8 +152,7 @@ std::vector<PackedGrain> pack_grains(const std::vector<const shape::RadialTable*
 /// relaxation). Throws as pack_grains() does; p.seed is not used.
 PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
                            std::vector<PackedGrain>& poses, const Container& c,
-                           const PackingParams& p,
-                           const std::function<void(double fraction_done)>& progress = {});
+                           const PackingParams& p, const PackingObserver& observe = {});
 
 /// Packing with the roughness off, then on: the geometric counterpart of the DEM practice of
 /// compacting a sample with low interparticle friction and restoring it afterwards, the usual way
@@ -150,13 +170,12 @@ PackingReport relax_grains(const std::vector<const shape::RadialTable*>& shapes,
 /// room to push the new bumps out: tried, it jammed). The last stage must hold the true shapes: the packing guarantees its
 /// tolerance for them. The report is the last relaxation's (solid fraction of the true shapes,
 /// overlaps, contacts, core fraction) with sweeps and seconds summed over all stages and the
-/// growth's initial_scale. One stage is pack_grains(). Throws as pack_grains() and relax_grains()
-/// do (a DataError names the stage that jammed), UsageError for no stages or stages of unequal
-/// length.
+/// growth's initial_scale. One stage is pack_grains(). `observe` gets every sweep's status with
+/// its stage. Throws as pack_grains() and relax_grains() do (a DataError names the stage that
+/// jammed), UsageError for no stages or stages of unequal length.
 std::vector<PackedGrain> pack_in_stages(
     const std::vector<std::vector<const shape::RadialTable*>>& stages, const Container& c,
-    const PackingParams& p, PackingReport* report = nullptr,
-    const std::function<void(double fraction_done)>& progress = {});
+    const PackingParams& p, PackingReport* report = nullptr, const PackingObserver& observe = {});
 
 /// Stage k's shapes (one per grain, as in pack_in_stages() above), made when that stage starts;
 /// the pointers must stay valid until the next call. Lets a caller hold one stage's tables at a
@@ -167,8 +186,7 @@ using StageShapes = std::function<std::vector<const shape::RadialTable*>(std::si
 /// passing them all at once.
 std::vector<PackedGrain> pack_in_stages(std::size_t stage_count, const StageShapes& stage_shapes,
                                         const Container& c, const PackingParams& p,
-                                        PackingReport* report = nullptr,
-                                        const std::function<void(double fraction_done)>& progress = {});
+                                        PackingReport* report = nullptr, const PackingObserver& observe = {});
 
 /// Solid fraction by distance from the nearest wall (the cylinder's side, base or top, or a box
 /// face): element k is the fraction of the container's volume between edges[k] and edges[k + 1]

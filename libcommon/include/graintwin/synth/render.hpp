@@ -68,9 +68,10 @@ struct Shell {
 };
 /// Fraction of each voxel inside the shell. Voxels its surfaces may cross are point-sampled,
 /// params.supersample^3 times, or 4^3 with the analytic default: the shell's rim, where a
-/// cylinder meets a plane inside one voxel, has no single secant plane.
+/// cylinder meets a plane inside one voxel, has no single secant plane. `progress` (optional) gets
+/// the fraction of z slices done, one call at a time.
 Volume<float> render_shell(const Shell& shell, const Shape3& shape, const Vec3& voxel_size, const Vec3& origin,
-                           const RenderParams& params);
+                           const RenderParams& params, const std::function<void(double)>& progress = {});
 
 /// The scanner: grey = void + (grain - void) f_grain + (membrane - void) f_membrane, then cupping,
 /// rings, blur, noise, and the map to uint16.

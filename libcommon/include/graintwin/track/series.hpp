@@ -14,12 +14,12 @@ namespace graintwin::track {
 /// The tracks of the scans whose kind=shapes files are `paths` (in scan order): each file read
 /// (errors name it; DataError when it holds no grain), consecutive scans matched and chained
 /// (chain_tracks with `chain`), then every track's displacements (m) and rotations
-/// (track_kinematics with `rotation`). `parameters_json` records the options. `match_progress`
-/// and `rotation_progress` (may be empty) get the fraction of each stage done; each is released
-/// when its stage ends (a progress bar held only by it then finishes).
+/// (track_kinematics with `rotation`). `parameters_json` records the options. `progress` (may be
+/// empty) makes the progress callback of each step ("reading", "matching", "rotations") as the step
+/// starts, and releases it when the step ends (a display held only by it then finishes).
 TracksFile track_series(const std::vector<std::filesystem::path>& paths, const ChainOptions& chain,
-                        const RotationOptions& rotation, std::function<void(double)> match_progress = {},
-                        std::function<void(double)> rotation_progress = {});
+                        const RotationOptions& rotation,
+                        const std::function<std::function<void(double)>(const std::string&)>& progress = {});
 
 /// The options of a run as the JSON object stored in /tracks/parameters: method, window, volume
 /// filter, gap, backward check and rotation settings, and the improved matcher's own settings.
