@@ -207,4 +207,18 @@ TEST(FdemSolver, MassScalingLiftsTheFastestGrainsToTheNextGrainsStep) {
   const Solver after(m, {});
   EXPECT_NEAR(after.time_step_limits().contact_stable, steps[3], 1e-9 * steps[3]);
   EXPECT_NEAR(after.body(4).mass, before.body(4).mass * scaling.factors[0], 1e-12 * after.body(4).mass);
+  // A solver whose masses are refreshed in place holds what the one built again holds, bit for bit.
+  Solver refreshed(unscaled, {});
+  const MassScaling again = scale_fastest_grains(unscaled, refreshed, 0.2);
+  refreshed.refresh_masses(again.scaled);
+  for (std::size_t g = 0; g < 5; ++g) {
+    EXPECT_EQ(refreshed.body(g).mass, after.body(g).mass) << g;
+    EXPECT_EQ(refreshed.body(g).inertia, after.body(g).inertia) << g;
+  }
+  ASSERT_EQ(refreshed.contact_node_mass().size(), after.contact_node_mass().size());
+  for (std::size_t i = 0; i < after.contact_node_mass().size(); ++i) {
+    ASSERT_EQ(refreshed.node_mass()[i], after.node_mass()[i]) << i;
+    ASSERT_EQ(refreshed.contact_node_mass()[i], after.contact_node_mass()[i]) << i;
+  }
+  EXPECT_EQ(refreshed.time_step_limits().contact_stable, after.time_step_limits().contact_stable);
 }

@@ -292,6 +292,13 @@ std::span<const RigidLoad> ContactModel::rigid_loads() const { return state_->lo
 
 std::span<const ContactRecord> ContactModel::contacts() const { return state_->records; }
 
+void ContactModel::set_node_masses(std::span<const double> node_mass) {
+  if (node_mass.size() != state_->node_mass.size())
+    throw DataError(fmt::format("fdem contact: {} node masses for {} model nodes; pass one lumped mass per node.",
+                                node_mass.size(), state_->node_mass.size()));
+  state_->node_mass.assign(node_mass.begin(), node_mass.end());
+}
+
 double ContactModel::stable_time_step() const {
   const std::vector<double> steps = grain_time_steps();
   return steps.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(steps.begin(), steps.end());

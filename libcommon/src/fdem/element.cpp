@@ -321,10 +321,15 @@ Eigen::Matrix3d ElasticElements::average_cauchy_stress(std::span<const Eigen::Ve
 
 std::vector<double> lumped_masses(const Model& model) {
   std::vector<double> mass(model.nodes.size(), 0.0);
+  add_lumped_masses(model, 0, model.element_count(), mass);
+  return mass;
+}
+
+void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass) {
   std::vector<Eigen::Vector3d> points;
   std::vector<double> weights;
   double N[10];
-  for (std::size_t e = 0; e < model.element_count(); ++e) {
+  for (std::size_t e = element_begin; e < element_end; ++e) {
     const int n = checked_node_count(model, e);
     const double rho = model.materials[model.grains[model.element_grain[e]].material].density;
     const std::uint32_t* nodes = element_nodes(model, e);
@@ -345,7 +350,6 @@ std::vector<double> lumped_masses(const Model& model) {
     for (double d : diagonal) total += d;
     for (int a = 0; a < 10; ++a) mass[nodes[a]] += diagonal[a] * element_mass / total;
   }
-  return mass;
 }
 
 BodyProperties body_properties(const Model& model, std::size_t grain) {

@@ -99,6 +99,20 @@ void Solver::set_grain_velocity(std::size_t g, const Eigen::Vector3d& velocity, 
   }
 }
 
+void Solver::refresh_masses(std::span<const std::uint32_t> grains) {
+  if (state_.step != 0) throw UsageError("masses can only be refreshed before the first step");
+  const Model& m = *model_;
+  for (std::uint32_t g : grains) {
+    const Grain& grain = m.grains.at(g);
+    std::fill(mass_.begin() + grain.node_begin, mass_.begin() + grain.node_end, 0.0);
+    add_lumped_masses(m, grain.element_begin, grain.element_end, mass_);
+    bodies_[g] = body_properties(m, g);
+    if (grain.kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
+  }
+  contact_mass_ = contact_masses(m, mass_, bodies_, options_.rigid_contact_nodes);
+  if (contact_) contact_->set_node_masses(contact_mass_);
+}
+
 void Solver::stop_grains() {
   for (auto& v : state_.v) v.setZero();
   for (RigidBodyState& b : state_.bodies) {
@@ -180,9 +194,15 @@ StepReport Solver::step(double dt) {
   const bool first = state_.step == 0;
   const double a = 0.5 * options_.damping * dt;  // damping over half a step
   const Eigen::Vector3d g_acc = options_.gravity;
-  // Per-grain sums, added in grain order afterwards so the totals do not depend on the threads.
-  std::vector<double> strain(grains, 0.0), kinetic(grains, 0.0), damped(grains, 0.0), gravity_work(grains, 0.0);
-  std::vector<char> bad(grains, 0);
+  // Per-grain sums, added in grain order afterwards so the totals do not depend on the threads
+  // (kept between steps: a step allocates nothing).
+  std::vector<double>& strain = step_sums_.strain;
+  std::vector<double>& kinetic = step_sums_.kinetic;
+  std::vector<double>& damped = step_sums_.damped;
+  std::vector<double>& gravity_work = step_sums_.gravity_work;
+  std::vector<char>& bad = step_sums_.bad;
+  for (auto* sum : {&strain, &kinetic, &damped, &gravity_work}) sum->assign(grains, 0.0);
+  bad.assign(grains, 0);
   // Threads only pay off beyond a few thousand nodes: a barrier per loop costs more on small scenes.
   const bool parallel = m.nodes.size() > 4096;
   using Clock = std::chrono::steady_clock;

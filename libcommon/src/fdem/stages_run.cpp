@@ -40,10 +40,7 @@ RunStart start_run(const Scene& scene, Model& model, const std::string& where) {
   }
   // On the settled model: the grains that set the time step made heavier.
   start.scaling = scale_fastest_grains(model, *start.solver, scene.mass_scaled_share);
-  if (start.scaling.grains > 0) {
-    start.solver.reset();
-    start.solver = std::make_unique<Solver>(model, options);
-  }
+  if (start.scaling.grains > 0) start.solver->refresh_masses(start.scaling.scaled);
   if (scene.overlaps.keep && start.solver->contact_model())
     start.solver->contact_model()->keep_initial_overlaps(start.overlaps.remaining);
   return start;

@@ -204,6 +204,8 @@ class ContactModel {
   /// starts them, and add_wall_forces and add_ball_forces after it.
   std::span<const RigidLoad> rigid_loads() const;
   /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
+  /// Replaces the node masses the contact laws damp with (one per model node).
+  void set_node_masses(std::span<const double> node_mass);
   std::span<const ContactRecord> contacts() const;
   /// Contact limit on the time step, s: min over surface nodes of 2 sqrt(m / k_n) x safety (0.2).
   double stable_time_step() const;

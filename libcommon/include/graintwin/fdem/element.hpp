@@ -112,6 +112,8 @@ class ElasticElements {
 /// every node gets a positive mass and the total is exact: straight-edged, corners m/36 and
 /// mid-edge nodes 4m/27). Rigid grains' nodes get the lumping of their mesh kind.
 std::vector<double> lumped_masses(const Model& model);
+/// Adds the lumped masses of elements [element_begin, element_end) to `mass` (one per model node).
+void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass);
 
 /// Mass properties of one grain's mesh, exact for straight and curved elements.
 struct BodyProperties {

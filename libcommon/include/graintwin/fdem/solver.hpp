@@ -153,6 +153,11 @@ class Solver {
   /// Stops every grain: node velocities and rigid bodies' momenta to zero (the forming procedure
   /// stops the grains before the membrane replaces the wall).
   void stop_grains();
+  /// The model's density of `grains` changed (mass scaling): their node masses, rigid-body
+  /// properties and contact masses are computed again, as a new Solver of the model would have them
+  /// (before the first step; building one again would redo every grain's elements and the contact
+  /// trees).
+  void refresh_masses(std::span<const std::uint32_t> grains);
   /// Steps `boundary` with the grains from the next step on (not owned; nullptr removes it).
   /// UsageError without contact (a boundary acts through it).
   void set_boundary(Boundary* boundary);
@@ -227,6 +232,11 @@ class Solver {
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   std::vector<double> platen_stiffness_;       ///< per platen, last step, N/m
   StepTimes times_;
+  /// Per grain, the step's energy terms before their ordered sum (scratch of step()).
+  struct StepSums {
+    std::vector<double> strain, kinetic, damped, gravity_work;
+    std::vector<char> bad;
+  } step_sums_;
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
   mutable SolverState state_;
   mutable bool rigid_nodes_stale_ = false;
