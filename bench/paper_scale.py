@@ -12,9 +12,11 @@ bytes it wrote. Between consecutive cases it gives each stage's growth exponent:
 time against the reference scan's grain count on log-log axes (1 is linear; N log N from 300 to
 16 000 grains shows as about 1.2).
 
-The simulate stage is left out unless named in --stages: at thousands of grains the triaxial test
-takes hours (docs/fdem_triaxial.md). Each run writes into a new folder under --scratch (printed)
-and touches nothing else.
+The simulate stage (fdemrun's triaxial test of the twin to 10 % axial strain) runs when named in
+--stages; its row also gets fdemrun's own accounts of the steps (grain-steps per second and per
+thread, the share of contact and of the membrane, the membrane's cost per ball and step) and of
+writing the frames. Each run writes into a new folder under --scratch (printed) and touches
+nothing else.
 
     python3 bench/paper_scale.py [--diameters 6 12] [--stages inspect segment contacts shapes track mesh]
         [--build build] [--scratch /tmp/graintwin_paper_scale] [--no-publish]
@@ -77,8 +79,23 @@ def bench_case(name, inp, stages, build, run_dir, synth=None):
         wall, cpu, rss = run_stage(name, stage, out, build, inp=inp)
         rows[stage] = {"wall_s": wall, "cpu_s": cpu, "peak_bytes": rss, "output_bytes": folder_bytes(out) - before}
         print(f"{name:14s} {stage:9s} wall {wall:8.1f} s  cpu {cpu:8.1f} s  peak {rss / 2**30:6.2f} GiB", flush=True)
+        if stage == "simulate":
+            rows[stage]["accounts"] = simulate_accounts(os.path.join(out, "logs", "fdemrun.log"))
     scans = sorted(d for d in os.listdir(out) if d.startswith("scan_"))
     return {"grains": grains_of(os.path.join(out, scans[0], "labels.h5")), "scans": len(scans), "stages": rows}
+
+
+def simulate_accounts(log_path):
+    """fdemrun's closing accounts ("time: ...", "output: ...") and its membrane size, from its log."""
+    accounts = {}
+    with open(log_path) as f:
+        for line in f:
+            for key in ("time", "output", "membrane"):
+                marker = f"[info] {key}: "
+                # The membrane's size line names its balls; its status lines while consolidating do not.
+                if marker in line and (key != "membrane" or " balls of radius " in line):
+                    accounts[key] = line.split(marker, 1)[1].strip()
+    return accounts
 
 
 def exponent(a, b, stage):
@@ -111,6 +128,17 @@ def table(results, stages):
             cells.append("-" if e is None else f"{e:.2f}")
         lines.append(f"| {stage} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def simulate_lines(results):
+    """fdemrun's own accounts of each case's simulate stage, as a list."""
+    rows = [(n, r["stages"]["simulate"].get("accounts", {})) for n, r in results.items() if "simulate" in r["stages"]]
+    if not rows:
+        return ""
+    text = "\nThe simulate stage by fdemrun's own accounts (its log's closing lines):\n"
+    for n, acc in rows:
+        text += f"- {n}: {acc.get('time', '?')}; {acc.get('membrane', '')}; writing {acc.get('output', '?')}.\n"
+    return text
 
 
 def main():
@@ -154,7 +182,7 @@ def main():
         "growth exponent of CPU time (per scan for the stages run once per scan and for synth, per pair of scans for "
         "track) against the reference "
         "scan's grains between consecutive cases. "
-        f"Packing: {packing}.\n\n" + table(results, a.stages) + "\n")
+        f"Packing: {packing}.\n\n" + table(results, a.stages) + "\n" + simulate_lines(results))
     finish("paper_scale", text, run_dir, results, not a.no_publish)
 
 
