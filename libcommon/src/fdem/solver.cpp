@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/schema.hpp"
@@ -62,11 +63,11 @@ Solver::Solver(const Model& model, const SolverOptions& options)
     : model_(&model), options_(options), elements_(model), mass_(lumped_masses(model)) {
   if (model.grains.empty()) throw UsageError("the FDEM model has no grain; add grains to the scene");
   const std::size_t grains = model.grains.size();
-  bodies_.reserve(grains);
+  bodies_.resize(grains);
   inverse_inertia_.resize(grains);
   state_.bodies.resize(grains);
+  parallel_for_each_index(grains, [&](std::size_t g) { bodies_[g] = body_properties(model, g); });
   for (std::size_t g = 0; g < grains; ++g) {
-    bodies_.push_back(body_properties(model, g));
     state_.bodies[g].position = bodies_[g].centroid;
     if (model.grains[g].kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
     const Material& material = model.materials[model.grains[g].material];
