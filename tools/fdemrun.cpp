@@ -4,7 +4,6 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -115,14 +114,14 @@ struct Checkpoints {
 
   void save(const TriaxialRunProgress* triaxial) const {
     if (path.empty()) return;
-    const auto start = std::chrono::steady_clock::now();
+    const double start = monotonic_seconds();
     io::AtomicOutput ckpt(path, true);
     write_checkpoint(ckpt.temp_path(), solver, digest, [&](io::H5File& f) {
       if (triaxial) save_progress(f, *triaxial);
     });
     ckpt.replace_now();
     ++written;
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    seconds += monotonic_seconds() - start;
   }
   /// Where a failed run can be continued from.
   void add_context(Error& e) const {
@@ -282,9 +281,9 @@ int main(int argc, char** argv) {
     double vtk_seconds = 0;
     const auto add_vtk_frame = [&] {
       if (!frames) return;
-      const auto start = std::chrono::steady_clock::now();
+      const double start = monotonic_seconds();
       frames->add(solver);
-      vtk_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      vtk_seconds += monotonic_seconds() - start;
     };
     if (scene.triaxial) {
       TriaxialRunHooks hooks;

@@ -241,6 +241,25 @@ TEST(Triaxial, ACheckpointWithTheWallOrTheMembraneContinuesBitForBit) {
       EXPECT_EQ(before[k].b, after[k].b);
       EXPECT_EQ(before[k].force, after[k].force);
       EXPECT_EQ(before[k].point, after[k].point);
+      EXPECT_EQ(before[k].stiffness, after[k].stiffness);
+    }
+    // The servos read the stiffness the checkpoint kept.
+    EXPECT_EQ(restarted.platen_stiffness(platens.top), run.platen_stiffness(platens.top));
+    EXPECT_EQ(restarted.platen_stiffness(platens.bottom), run.platen_stiffness(platens.bottom));
+    EXPECT_EQ(restored.wall_stiffness(), boundary.wall_stiffness());
+    if (!membrane) {
+      EXPECT_GT(boundary.wall_stiffness(), 0);
+      // A wall stiffness that is not a finite, non-negative number is refused.
+      {
+        io::H5File f = io::H5File::create(dir / "bad_wall.h5");
+        run.save(f, "/state");
+        const CylinderWallState& w = boundary.wall();
+        f.set_attr("/state/boundary", "wall", std::vector<double>{w.radius, w.radial_velocity, 0.0, std::nan("")});
+      }
+      Solver refused(model, so);
+      TriaxialBoundary refused_boundary(model, o, kEdge);
+      refused.set_boundary(&refused_boundary);
+      EXPECT_THROW(refused.load(io::H5File::open(dir / "bad_wall.h5"), "/state"), DataError);
     }
     for (std::size_t g = 0; g < model.grains.size(); ++g) EXPECT_EQ(run.grain_stress(g), restarted.grain_stress(g)) << g;
     for (int k = 0; k < 200; ++k) {

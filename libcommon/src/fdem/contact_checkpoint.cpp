@@ -2,6 +2,8 @@
 // the last step's contact records, saved and loaded with their consistency checks.
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "contact_state.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/h5file.hpp"
@@ -150,6 +152,9 @@ void ContactModel::load(const io::H5File& file, const std::string& group) {
       const double* v = values.data() + columns * i;
       records[i] = {pair[2 * i], pair[2 * i + 1], {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, v[9],
                     columns == 11 ? v[10] : 0.0};
+      // A servo reads the stiffness: a negative or non-finite one would stall or free it.
+      if (!(records[i].stiffness >= 0) || !std::isfinite(records[i].stiffness))
+        throw bad(fmt::format("has contact record {} with stiffness {} (must be finite and >= 0)", i, records[i].stiffness));
     }
   }
   // Checkpoints written before initial overlaps could be kept have none.

@@ -2,11 +2,11 @@
 
 #include <fmt/format.h>
 
-#include <chrono>
 #include <cmath>
 #include <limits>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interval.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/table_checks.hpp"
@@ -78,7 +78,7 @@ void ResultsWriter::add_row(const Solver& solver, const StepReport& report, std:
 }
 
 void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boundary, std::optional<double> axial_strain) {
-  const auto start = std::chrono::steady_clock::now();
+  const double start = monotonic_seconds();
   const std::string group = frame_group(frames_++);
   file_.ensure_group(group);
   file_.set_attr(group, sr::frame_time, solver.time());
@@ -124,7 +124,7 @@ void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boun
   file_.write(group + "/" + sr::contact_normal, normal.data(), {M, 3}, units("1"));
   file_.write(group + "/" + sr::contact_force, force.data(), {M, 3}, units("N"));
   file_.write(group + "/" + sr::contact_overlap, overlap.data(), {M}, units("m"));
-  frame_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  frame_seconds_ += monotonic_seconds() - start;
 }
 
 void ResultsWriter::finish(const std::vector<std::string>& history) {

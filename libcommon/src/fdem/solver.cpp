@@ -3,7 +3,6 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -11,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interval.hpp"
 #include "graintwin/core/parallel.hpp"
 #include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
@@ -206,14 +206,12 @@ StepReport Solver::step(double dt) {
   bad.assign(grains, 0);
   // Threads only pay off beyond a few thousand nodes: a barrier per loop costs more on small scenes.
   const bool parallel = m.nodes.size() > 4096;
-  using Clock = std::chrono::steady_clock;
-  const auto seconds_since = [](Clock::time_point& t) {
-    const Clock::time_point now = Clock::now();
-    const double s = std::chrono::duration<double>(now - t).count();
-    t = now;
+  double mark = monotonic_seconds();
+  const auto seconds_since = [&mark] {  // seconds since the last call (the step's previous phase)
+    const double now = monotonic_seconds(), s = now - mark;
+    mark = now;
     return s;
   };
-  Clock::time_point mark = Clock::now();
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
@@ -223,7 +221,7 @@ StepReport Solver::step(double dt) {
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
   }
 
-  times_.elements += seconds_since(mark);
+  times_.elements += seconds_since();
   StepReport report;
   if (contact_) {
     // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
@@ -233,11 +231,11 @@ StepReport Solver::step(double dt) {
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
   }
   sum_platen_contacts();
-  times_.contact += seconds_since(mark);
+  times_.contact += seconds_since();
   BoundaryStep boundary;
   if (boundary_) {
     boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
-    const double seconds = seconds_since(mark);
+    const double seconds = seconds_since();
     times_.boundary += seconds;
     if (const std::size_t bodies = boundary_->bodies()) times_.body_steps += bodies, times_.body_seconds += seconds;
   }
@@ -318,7 +316,7 @@ StepReport Solver::step(double dt) {
   check_health(e);
   state_.time += dt;
   ++state_.step;
-  times_.motion += seconds_since(mark);
+  times_.motion += seconds_since();
   ++times_.steps;
   return report;
 }

@@ -219,6 +219,9 @@ void TriaxialBoundary::load(const io::H5File& file, const std::string& group) {
   wall_.radial_velocity = wall[1];
   wall_force_ = wall[2];
   wall_stiffness_ = wall.size() == 4 ? wall[3] : 0.0;
+  if (!(wall_stiffness_ >= 0) || !std::isfinite(wall_stiffness_))
+    throw DataError(file.path().string() + ": checkpoint " + group + " has a wall stiffness of " +
+                    std::to_string(wall_stiffness_) + " N/m (must be finite and >= 0); restart with the scene that wrote it");
   set_platens(platens[0], platens[1], platens[2], platens[3]);
   pressure_ = values(ck::pressure, 1)[0];
   membrane_.reset();
