@@ -10,6 +10,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/statistics.hpp"
 #include "graintwin/shape/radial_table.hpp"
+#include "graintwin/shape/sh_basis.hpp"
 #include "graintwin/synth/grains.hpp"
 #include "graintwin/synth/packing.hpp"
 #include "graintwin/synth/psd.hpp"
@@ -143,6 +144,28 @@ TEST(SmoothedTables, LowPassKeepsTheFormAndRejectsBadDegrees) {
   }
   EXPECT_THROW(synth::smoothed_tables(grains, 16, gp.voxel_size), UsageError);
   EXPECT_THROW(synth::smoothed_tables(grains, -1, gp.voxel_size), UsageError);
+}
+
+TEST(SmoothedTables, AtFullDegreeRemakeASandSetsTablesBitForBit) {
+  // ctsynth frees a sand set's tables while the smoothed packing stages run and remakes them this
+  // way for the last stage: the packing and the scans must not see the difference.
+  synth::GrainSetParams gp;
+  gp.seed = 11;
+  const synth::GrainSet grains = synth::make_grains(gp, {0.35e-3, 0.55e-3, 0.9e-3});
+  ASSERT_TRUE(grains.tables_are_sh_surfaces);
+  const auto remade = synth::smoothed_tables(grains, grains.sh_degree, gp.voxel_size);
+  ASSERT_EQ(remade.size(), grains.tables.size());
+  const auto dirs = shape::fibonacci_directions(2000);
+  for (std::size_t i = 0; i < remade.size(); ++i) {
+    EXPECT_EQ(remade[i].nodes_per_edge(), grains.tables[i].nodes_per_edge());
+    EXPECT_EQ(remade[i].volume(), grains.tables[i].volume());
+    for (const auto& d : dirs) ASSERT_EQ(remade[i].radius(d), grains.tables[i].radius(d));
+  }
+  // Other shapes' tables are not their SH fits.
+  for (const auto shape : {synth::GrainShape::ellipsoid, synth::GrainShape::angular, synth::GrainShape::sphere}) {
+    gp.shape = shape;
+    EXPECT_FALSE(synth::make_grains(gp, {0.5e-3}).tables_are_sh_surfaces);
+  }
 }
 
 TEST(SolidFractionByWallDistance, OneSphereFillsItsBandExactly) {

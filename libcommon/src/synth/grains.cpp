@@ -117,6 +117,7 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
     set.solids.resize(n);
   }
   set.non_star.resize(n);
+  set.tables_are_sh_surfaces = p.shape == GrainShape::sand;
   std::atomic<std::size_t> done{0};
   auto report_done = [&] {
     const std::size_t d = ++done;
@@ -179,7 +180,7 @@ std::vector<shape::RadialTable> smoothed_tables(const GrainSet& set, int degree,
   if (degree < 0 || degree > set.sh_degree)
     throw UsageError("smoothed_tables: degree " + std::to_string(degree) + " is outside 0.." +
                      std::to_string(set.sh_degree) + ", the grains' SH degree");
-  const std::size_t n = set.tables.size();
+  const std::size_t n = set.diameters.size();  // the set's tables may be freed meanwhile
   std::vector<shape::RadialTable> out(n);
   const Eigen::Index kept = shape::sh_count(degree);
   std::atomic<std::size_t> done{0};

@@ -383,7 +383,7 @@ void check_grey_levels(const ScannerParams& p, bool with_membrane) {
   }
 }
 
-Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,
+Volume<std::uint16_t> simulate_scan(Volume<float> grain_fraction, const Volume<float>* membrane_fraction,
                                     const ScannerParams& p) {
   const Shape3 s = grain_fraction.shape();
   if (membrane_fraction && membrane_fraction->shape() != s)
@@ -392,7 +392,8 @@ Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const V
     if (!(v >= 0.0 && std::isfinite(v)))
       throw UsageError("noise, photons, blur, rings and beam hardening must be finite and not negative");
   const double contrast = p.grey_grain - p.grey_void;
-  Volume<float> grey(s, grain_fraction.voxel_size(), grain_fraction.origin());
+  // The grey image takes the fraction's place voxel by voxel: a scan holds one float image, not two.
+  Volume<float>& grey = grain_fraction;
   // Ring artifacts: a few thin concentric rings about the rotation axis with random radii and signs.
   std::vector<std::pair<double, double>> rings;  // (radius m, signed amplitude)
   if (p.ring_amplitude > 0.0) {

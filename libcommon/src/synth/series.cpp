@@ -228,8 +228,8 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   const double voxel = p.voxel_size;
   const Vec3 voxels{std::ceil((bound.hi[2] - bound.lo[2]) / voxel), std::ceil((bound.hi[1] - bound.lo[1]) / voxel),
                     std::ceil((bound.hi[0] - bound.lo[0]) / voxel)};  // z y x, as reals until they are known to fit
-  // What the series holds at once: the grains' tables (and one smoothed copy while a packing stage runs)
-  // and one scan being rendered.
+  // What the series holds at once: the grains' tables (and one smoothed copy while a packing stage
+  // runs, unless the tables are SH surfaces, freed meanwhile) and one scan being rendered.
   const double target = p.solid_fraction * p.container.volume();
   double mean_grain_volume = 0.0, typical_d = p.psd.d50;
   if (library) {
@@ -238,8 +238,9 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   }
   const double grains_expected = library ? target / mean_grain_volume : expected_grain_count(p.psd, target);
   const double scan_bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel;
+  const bool tables_freed_while_smoothed = !library && p.grains.shape == GrainShape::sand;
   const double grain_table_bytes = grains_expected * grain_bytes(typical_d, voxel, p.grains.sand.degree) *
-                                   (p.pack_degrees.empty() ? 1.0 : 2.0);
+                                   (p.pack_degrees.empty() || tables_freed_while_smoothed ? 1.0 : 2.0);
   // The advice names first what dominates: millions of tiny grains are fixed by the PSD, not the voxels.
   check_memory(scan_bytes + grain_table_bytes, "ctsynth",
                fmt::format("scans of {:.3g} x {:.3g} x {:.3g} voxels (z, y, x) and about {:.3g} grains", voxels[0],
@@ -256,7 +257,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
 
   // --- grains ---
   std::mt19937_64 rng(p.seed);
-  const GrainSet grains = make_grain_set(p, library.get(), rng, progress("grain shapes"));
+  GrainSet grains = make_grain_set(p, library.get(), rng, progress("grain shapes"));
   throw_if_interrupted();
   // The grains' d50 from their exact volumes, the truth's (as validate reads it). Lengths in units
   // of d50 (wall shells, the band width) take the PSD's d50, or the library's drawn one.
@@ -265,7 +266,6 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   const double d50 = d50_of_volumes(grain_volumes);
   const double d_ref = library ? d50 : p.psd.d50;
   log_grains(p, grains, library.get(), d50, d_ref);
-  const auto tables = grains.table_pointers();
   const auto solids = grains.solid_pointers();
   const double grain_volume = std::accumulate(grain_volumes.begin(), grain_volumes.end(), 0.0);
   spdlog::info("the grains' exact volume fills {:.4f} of the {}", grain_volume / p.container.volume(),
@@ -278,11 +278,21 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   pp.seed = p.seed;
   PackingReport report;
   // The smoothed stages' tables are made as each stage starts, so one stage's copy lives at a time.
+  // Tables that are the grains' SH surfaces are freed while the smoothed stages run and made again
+  // for the last one, bit for bit: one table per grain at any time (a paper-sized sample's 26 000
+  // grains hold 8.7 GB of tables).
   std::vector<shape::RadialTable> smooth;
   const std::size_t stage_count = p.pack_degrees.size() + 1;
+  const bool free_tables = stage_count > 1 && grains.tables_are_sh_surfaces;
+  if (free_tables) grains.tables = {};
   auto stage_shapes = [&](std::size_t k) {
     smooth = {};  // the last stage's copy goes before the next is made
-    if (k + 1 == stage_count) return tables;
+    if (k + 1 == stage_count) {
+      if (free_tables)
+        grains.tables = smoothed_tables(grains, grains.sh_degree, voxel,
+                                        progress(fmt::format("packing stage {}: the grains' exact tables", k + 1)));
+      return grains.table_pointers();
+    }
     const int degree = p.pack_degrees[k];
     smooth = smoothed_tables(grains, degree, voxel,
                              progress(fmt::format("packing stage {}: grains low-passed to SH degree {}", k + 1, degree)));
@@ -292,6 +302,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   };
   const std::vector<PackedGrain> packed =
       pack_in_stages(stage_count, stage_shapes, p.container, pp, &report, log_packing_status("packing"));
+  const auto tables = grains.table_pointers();
   const std::vector<double> shell_edges{0.0, 0.25 * d_ref, 0.5 * d_ref, d_ref, HUGE_VAL};
   const std::vector<double> shells = solid_fraction_by_wall_distance(tables, packed, p.container, shell_edges);
   spdlog::info("packed: solid fraction {:.4f} (by distance from the walls: {:.3f} within d50/4, {:.3f} d50/4-d50/2, "
@@ -337,18 +348,20 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
       placed[i] = {tables[i], poses[i].position, poses[i].orientation, static_cast<std::uint32_t>(i + 1), solids[i]};
     GrainImages images = render_grains(placed, shape, vs, origin, p.render, progress("render scan " + std::to_string(k)));
     throw_if_interrupted();
-    Volume<float> membrane;
-    if (p.membrane_thickness > 0.0) {
-      Shell shell;
-      shell.inner_radius = state.membrane_inner_radius;
-      shell.thickness = p.membrane_thickness;
-      shell.z0 = state.base_z;
-      shell.z1 = state.top_z;
-      membrane = render_shell(shell, shape, vs, origin, p.render, progress(fmt::format("render scan {}: membrane", k)));
+    {  // the membrane's image and the scan go before the truth is measured
+      Volume<float> membrane;
+      if (p.membrane_thickness > 0.0) {
+        Shell shell;
+        shell.inner_radius = state.membrane_inner_radius;
+        shell.thickness = p.membrane_thickness;
+        shell.z0 = state.base_z;
+        shell.z1 = state.top_z;
+        membrane = render_shell(shell, shape, vs, origin, p.render, progress(fmt::format("render scan {}: membrane", k)));
+      }
+      const Volume<std::uint16_t> scan = simulate_scan(
+          std::move(images.fraction), p.membrane_thickness > 0.0 ? &membrane : nullptr, scanner_for_scan(p, lp, box, k));
+      io::write_volume_file(dir / scan_name("scan", k), scan, history, "1");
     }
-    const Volume<std::uint16_t> scan = simulate_scan(images.fraction, p.membrane_thickness > 0.0 ? &membrane : nullptr,
-                                                     scanner_for_scan(p, lp, box, k));
-    io::write_volume_file(dir / scan_name("scan", k), scan, history, "1");
 
     // Ground truth.
     GroundTruth truth;
@@ -413,7 +426,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
     throw_if_interrupted();
   }
   SeriesSummary summary;
-  summary.grains = grains.tables.size();
+  summary.grains = grains.diameters.size();
   summary.non_star_grains = static_cast<std::size_t>(std::count_if(
       grains.non_star.begin(), grains.non_star.end(), [&](const NonStarMeasures& m) { return misses_much(m, voxel); }));
   summary.packed_solid_fraction = report.solid_fraction;

@@ -50,6 +50,10 @@ struct GrainSet {
   std::vector<std::shared_ptr<const GrainSolid>> solids;
   /// What a radial description misses of each grain (zeros where the table is the grain).
   std::vector<NonStarMeasures> non_star;
+  /// True when every table is its grain's SH surface (sand): smoothed_tables(set, sh_degree, v) with
+  /// the set's voxel size v makes the same tables bit for bit, so a caller short of memory may free
+  /// them for a while.
+  bool tables_are_sh_surfaces = false;
   std::vector<const shape::RadialTable*> table_pointers() const;
   std::vector<const GrainSolid*> solid_pointers() const;
 };

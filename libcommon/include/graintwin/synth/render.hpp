@@ -97,11 +97,14 @@ struct ScannerParams {
 /// --grey-scale and --grey-offset put beyond 65535, where every such voxel would saturate.
 void check_grey_levels(const ScannerParams& params, bool with_membrane);
 
-/// Peak bytes per voxel of rendering and simulating one scan: grain fraction (float) and labels
-/// (uint32), membrane fraction and grey image (float), the uint16 scan.
-constexpr double kScanBytesPerVoxel = 4 + 4 + 4 + 4 + 2;
+/// Peak bytes per voxel of rendering and simulating one scan: grain fraction (float, which becomes
+/// the grey image) and labels (uint32), membrane fraction (float), the uint16 scan.
+constexpr double kScanBytesPerVoxel = 4 + 4 + 4 + 2;
 
-Volume<std::uint16_t> simulate_scan(const Volume<float>& grain_fraction, const Volume<float>* membrane_fraction,
+/// The scan of a grain fraction image (and a membrane's, optional): grey levels, rings, beam
+/// hardening, blur, photon and read noise, uint16. The fraction is taken by value and turned into
+/// the grey image in place: move it in when it is no longer needed.
+Volume<std::uint16_t> simulate_scan(Volume<float> grain_fraction, const Volume<float>* membrane_fraction,
                                     const ScannerParams& params);
 
 }  // namespace graintwin::synth
