@@ -55,15 +55,27 @@ def make_series(diameter_mm, solid_fraction, build, folder):
     unless None): the synth stage's figures."""
     height_mm = diameter_mm * HEIGHT_OVER_DIAMETER
     os.makedirs(os.path.dirname(folder), exist_ok=True)
-    cmd = [os.path.join(build, "bin", "ctsynth"), SCENE, folder, "-q",
+    cmd = [os.path.join(build, "bin", "ctsynth"), SCENE, folder,
            "--diameter", f"{diameter_mm:g}mm", "--height", f"{height_mm:.4g}mm"]
     if solid_fraction:
         cmd += ["--solid-fraction", f"{solid_fraction:g}"]
-    wall, cpu, rss = run_measured(cmd)
+    log = folder + ".ctsynth.log"  # beside the series: its status lines tell how a long packing goes
+    print(f"ctsynth's log: {log}", flush=True)
+    wall, cpu, rss = run_measured(cmd, log=log)
     with open(os.path.join(folder, "series.json")) as f:
-        packing = json.load(f)["packing"]
+        series = json.load(f)
     return {"wall_s": wall, "cpu_s": cpu, "peak_bytes": rss, "output_bytes": folder_bytes(folder),
-            "packing_s": packing["seconds"], "sweeps": packing["sweeps"]}
+            "packing_s": series["packing"]["seconds"], "sweeps": series["packing"]["sweeps"],
+            "packed_grains": series["grains"]}
+
+
+def packing_text(name, synth):
+    """The packing's sweeps and time, and its cost per grain and sweep: a sweep costs the same per
+    grain at any size (a cell grid finds the pairs), so the packing grows as N times its sweeps."""
+    text = f"{name}: {synth['sweeps']} sweeps in {synth['packing_s']:.0f} s"
+    if synth.get("packed_grains"):
+        text += f" ({1e6 * synth['packing_s'] / synth['sweeps'] / synth['packed_grains']:.1f} us per grain and sweep)"
+    return text
 
 
 def grains_of(labels_path):
@@ -179,8 +191,7 @@ def main():
         print(f"{name:14s} synth     wall {synth['wall_s']:8.1f} s  cpu {synth['cpu_s']:8.1f} s  "
               f"peak {synth['peak_bytes'] / 2**30:6.2f} GiB", flush=True)
         results[name] = bench_case(name, series, a.stages, build, run_dir, synth)
-    packing = ", ".join(f"{n}: {r['stages']['synth']['sweeps']} sweeps in {r['stages']['synth']['packing_s']:.0f} s"
-                        for n, r in results.items() if "synth" in r["stages"])
+    packing = ", ".join(packing_text(n, r["stages"]["synth"]) for n, r in results.items() if "synth" in r["stages"])
     text = (
         "Every stage's cost as the sample grows (`python3 bench/paper_scale.py`; "
         f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). sand_small is the bundled series (its "

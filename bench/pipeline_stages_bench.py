@@ -29,15 +29,21 @@ PATH_NAMES = ("gmsh remeshed", "kept surface", "ellipsoid")
 ORIGIN_NAMES = ("SH fit", "voxels", "ellipsoid")
 
 
-def run_measured(cmd):
+def run_measured(cmd, log=None):
     """Runs cmd from the source folder: its wall and CPU seconds (user + system of all its
     processes) and the peak resident memory, in bytes, of the largest of them (wait4's rusage
-    covers every process the command waited for). Exits with the command's stderr if it fails."""
+    covers every process the command waited for). Its stderr goes to the file `log` when given
+    (to follow a long run), else to memory. Exits with the command's stderr if it fails."""
     t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, cwd=SOURCE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    err = proc.stderr.read()
-    _, status, usage = os.wait4(proc.pid, 0)
+    with open(log, "w") if log else open(os.devnull, "w") as sink:
+        proc = subprocess.Popen(cmd, cwd=SOURCE, stdout=subprocess.DEVNULL,
+                                stderr=sink if log else subprocess.PIPE, text=True)
+        err = "" if log else proc.stderr.read()
+        _, status, usage = os.wait4(proc.pid, 0)
     if os.waitstatus_to_exitcode(status) != 0:
+        if log:
+            with open(log) as f:
+                err = f.read()
         sys.exit(f"{' '.join(cmd)} failed:\n{err.strip()[-3000:]}")
     return time.perf_counter() - t0, usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024
 
