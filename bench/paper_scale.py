@@ -128,8 +128,8 @@ def table(results, stages):
     names = list(results)
     head = "| stage | " + " | ".join(f"{n} ({results[n]['grains']} grains, {results[n]['scans']} scans): wall s / CPU s / peak GiB / output MB" for n in names)
     pairs = list(zip(names, names[1:]))
-    head += "".join(f" | exponent {a} -> {b}" for a, b in pairs) + " |"
-    lines = [head, "|---|" + "---|" * (len(names) + len(pairs))]
+    head += "".join(f" | exponent {a} -> {b}" for a, b in pairs) + " | exponent, smallest -> largest case run |"
+    lines = [head, "|---|" + "---|" * (len(names) + len(pairs) + 1)]
     for stage in ["synth"] + stages:
         cells = []
         for n in names:
@@ -139,8 +139,42 @@ def table(results, stages):
         for a, b in pairs:
             e = exponent(results[a], results[b], stage)
             cells.append("-" if e is None else f"{e:.2f}")
+        ran = [n for n in names if stage in results[n]["stages"]]  # the cases in grain order
+        e = exponent(results[ran[0]], results[ran[-1]], stage) if len(ran) > 1 else None
+        cells.append("-" if e is None else f"{e:.2f} ({results[ran[0]]['grains']} -> {results[ran[-1]]['grains']})")
         lines.append(f"| {stage} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def targets_lines(results):
+    """The largest case against the paper-scale targets (2 cores, 16 000 grains), met or by how much
+    missed; a target whose stages did not run at that size says so."""
+    name, case = max(results.items(), key=lambda item: item[1]["grains"])
+    st, scans = case["stages"], case["scans"]
+
+    def verdict(seconds, limit_s):
+        return "met" if seconds <= limit_s else f"missed by {seconds / limit_s:.2f} x"
+
+    lines = [f"\nTargets at 16 000 grains on 2 cores, against the largest case ({name}, {case['grains']} grains):"]
+    if "synth" in st:
+        r = st["synth"]
+        lines.append(f"- ctsynth, three scans, at most 30 min and 12 GB: {r['wall_s'] / 60:.1f} min "
+                     f"({verdict(r['wall_s'], 1800)}), {r['peak_bytes'] / 1e9:.1f} GB "
+                     f"({'met' if r['peak_bytes'] <= 12e9 else 'missed'}).")
+    ct = ["segment", "contacts", "shapes", "track"]
+    if all(k in st for k in ct) and scans >= 2:
+        two = sum(st[k]["wall_s"] * 2 / scans for k in ct[:3]) + st["track"]["wall_s"] / (scans - 1)
+        peak = max(st[k]["peak_bytes"] for k in ct)
+        lines.append(f"- segment, contacts, shapes and track for two scans, at most 5 min and 10 GB: {two / 60:.1f} min "
+                     f"(scaled from {scans} scans; {verdict(two, 300)}), {peak / 1e9:.1f} GB "
+                     f"({'met' if peak <= 10e9 else 'missed'}).")
+    if "mesh" in st:
+        lines.append(f"- mesh, at most 20 min: {st['mesh']['wall_s'] / 60:.1f} min ({verdict(st['mesh']['wall_s'], 1200)}).")
+    for stage, target in (("simulate", "the rigid triaxial test to 18 % in at most 2 h"),
+                          ("forces", "forces, micro and report in at most 2 min together")):
+        if stage not in st:
+            lines.append(f"- {target}: not run at this size.")
+    return "\n".join(lines) + "\n"
 
 
 # The triaxial twin's rate the project aims for at paper scale, membrane included (issue 25).
@@ -162,6 +196,21 @@ def simulate_lines(results):
     return text
 
 
+def merge_results(paths):
+    """The cases of several runs' paper_scale.json, ordered by grains: a case in several keeps the
+    latest run's stages and the earlier runs' others (e.g. a simulate stage run only once)."""
+    merged = {}
+    for path in paths:
+        with open(path) as f:
+            for name, case in json.load(f).items():
+                if name in merged:
+                    stages = {**merged[name]["stages"], **case["stages"]}
+                    merged[name] = {**case, "stages": stages}
+                else:
+                    merged[name] = case
+    return dict(sorted(merged.items(), key=lambda item: item[1]["grains"]))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--diameters", nargs="+", type=float, default=[6.0, 12.0],
@@ -172,15 +221,16 @@ def main():
     ap.add_argument("--build", default=os.path.join(SOURCE, "build"))
     ap.add_argument("--scratch", default="/tmp/graintwin_paper_scale")
     ap.add_argument("--no-publish", action="store_true")
-    ap.add_argument("--results", help="a finished run's paper_scale.json: publish its figures again, run nothing")
+    ap.add_argument("--results", nargs="+",
+                    help="finished runs' paper_scale.json: publish their figures again, run nothing; with several, "
+                         "their cases are merged (a later file's stages win, stages it lacks are kept)")
     a = ap.parse_args()
     build = os.path.abspath(a.build)
     os.makedirs(a.scratch, exist_ok=True)
     run_dir = tempfile.mkdtemp(prefix="paper_scale-", dir=a.scratch)
     print(f"outputs in {run_dir}", flush=True)
     if a.results:
-        with open(a.results) as f:
-            results = json.load(f)
+        results = merge_results(a.results)
         a.stages = [s for s in a.stages if any(s in r["stages"] for r in results.values())]
     else:
         results = {"sand_small": bench_case("sand_small", None, a.stages, build, run_dir)}
@@ -192,6 +242,8 @@ def main():
               f"peak {synth['peak_bytes'] / 2**30:6.2f} GiB", flush=True)
         results[name] = bench_case(name, series, a.stages, build, run_dir, synth)
     packing = ", ".join(packing_text(n, r["stages"]["synth"]) for n, r in results.items() if "synth" in r["stages"])
+    merged = (f" Figures merged from {len(a.results)} runs of this bench (--results), the latest on the date above; "
+              "a stage's row comes from the latest run that ran it." if a.results and len(a.results) > 1 else "")
     text = (
         "Every stage's cost as the sample grows (`python3 bench/paper_scale.py`; "
         f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). sand_small is the bundled series (its "
@@ -202,7 +254,7 @@ def main():
         "growth exponent of CPU time (per scan for the stages run once per scan and for synth, per pair of scans for "
         "track) against the reference "
         "scan's grains between consecutive cases. "
-        f"Packing: {packing}.\n\n" + table(results, a.stages) + "\n" + simulate_lines(results))
+        f"Packing: {packing}.{merged}\n\n" + table(results, a.stages) + "\n" + targets_lines(results) + simulate_lines(results))
     finish("paper_scale", text, run_dir, results, not a.no_publish)
 
 
