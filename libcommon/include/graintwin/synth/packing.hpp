@@ -24,7 +24,9 @@
 // 300 smooth 1.3:1 ellipsoids reach 0.60 (packing test): bumps lock into each other's hollows.
 // pack_in_stages() grows them with the roughness off and adds it back: the bundled series, 310
 // grains at 0.5804 in 3.6 mm, 6 687 sweeps in 318 s wall (2.5 min CPU with the rest of ctsynth);
-// 3 037 grains at 0.60 in a cylinder 6 mm by 12.5 mm, 1 920 sweeps in 252 s (2 cores, loaded).
+// 3 037 grains at 0.60 in a cylinder 6 mm by 12.5 mm, 1 920 sweeps in 252 s (2 cores, loaded);
+// 15 226 grains at 0.60 in 10.2 mm by 21.25 mm, 943 sweeps in 440 s (2 cores, idle). A sweep costs
+// 26-31 us per grain at any size; the sweeps are set by the last stage's slowest few grains.
 //
 // Walls and density: a hard wall leaves a looser layer about half a grain thick beside it, so
 // the solid fraction over the whole container is lower than in the bulk of the packing, the more
