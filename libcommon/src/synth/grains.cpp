@@ -117,7 +117,7 @@ GrainSet make_grains(const GrainSetParams& p, const std::vector<double>& diamete
     set.solids.resize(n);
   }
   set.non_star.resize(n);
-  set.tables_are_sh_surfaces = p.shape == GrainShape::sand;
+  set.tables_are_sh_surfaces = synth::tables_are_sh_surfaces(p.shape);
   std::atomic<std::size_t> done{0};
   auto report_done = [&] {
     const std::size_t d = ++done;

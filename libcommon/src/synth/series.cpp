@@ -285,7 +285,7 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
   }
   const double grains_expected = library ? target / mean_grain_volume : expected_grain_count(p.psd, target);
   const double scan_bytes = voxels[0] * voxels[1] * voxels[2] * kScanBytesPerVoxel;
-  const bool tables_freed_while_smoothed = !library && p.grains.shape == GrainShape::sand;
+  const bool tables_freed_while_smoothed = !library && tables_are_sh_surfaces(p.grains.shape);
   const double grain_table_bytes = grains_expected * grain_bytes(typical_d, voxel, p.grains.sand.degree) *
                                    (p.pack_degrees.empty() || tables_freed_while_smoothed ? 1.0 : 2.0);
   // The advice names first what dominates: millions of tiny grains are fixed by the PSD, not the voxels.

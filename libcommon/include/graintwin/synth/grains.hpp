@@ -34,6 +34,10 @@ struct GrainSetParams {
   std::uint64_t seed = 1;
 };
 
+/// Whether make_grains() tabulates grains of this shape as their SH surfaces (sand), so that
+/// smoothed_tables() at the full degree remakes their tables bit for bit.
+inline bool tables_are_sh_surfaces(GrainShape shape) { return shape == GrainShape::sand; }
+
 struct GrainSet {
   int sh_degree = 0;
   std::vector<double> diameters;          ///< volume-equivalent (m), as drawn
@@ -50,9 +54,9 @@ struct GrainSet {
   std::vector<std::shared_ptr<const GrainSolid>> solids;
   /// What a radial description misses of each grain (zeros where the table is the grain).
   std::vector<NonStarMeasures> non_star;
-  /// True when every table is its grain's SH surface (sand): smoothed_tables(set, sh_degree, v) with
-  /// the set's voxel size v makes the same tables bit for bit, so a caller short of memory may free
-  /// them for a while.
+  /// True when every table is its grain's SH surface (tables_are_sh_surfaces(shape)):
+  /// smoothed_tables(set, sh_degree, v) with the set's voxel size v makes the same tables bit for
+  /// bit, so a caller short of memory may free them for a while.
   bool tables_are_sh_surfaces = false;
   std::vector<const shape::RadialTable*> table_pointers() const;
   std::vector<const GrainSolid*> solid_pointers() const;
