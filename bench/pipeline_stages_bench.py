@@ -48,11 +48,11 @@ def run_measured(cmd, log=None):
     return time.perf_counter() - t0, usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024
 
 
-def run_stage(series, stage, out, build, inp=None):
+def run_stage(series, stage, out, build, inp=None, make_options=()):
     """One Makefile.pipeline stage of a series from sample_volumes/ (or from the folder `inp`),
-    measured by run_measured()."""
+    measured by run_measured(); `make_options` go to make as they are (variables, -o FILE)."""
     cmd = ["make", "-s", "-f", "Makefile.pipeline", f"SERIES={series}", f"OUT={out}", f"BIN={build}/bin"]
-    return run_measured(cmd + ([f"IN={inp}"] if inp else []) + [stage])
+    return run_measured(cmd + ([f"IN={inp}"] if inp else []) + list(make_options) + [stage])
 
 
 def grains_of(labels_path):
