@@ -84,7 +84,7 @@ def make_series(diameter_mm, solid_fraction, build, folder):
         series = json.load(f)
     return {"wall_s": wall, "cpu_s": cpu, "peak_bytes": rss, "output_bytes": folder_bytes(folder),
             "packing_s": series["packing"]["seconds"], "sweeps": series["packing"]["sweeps"],
-            "packed_grains": series["grains"]}
+            "packed_grains": series["grains"], "solid_fraction": series["packing"]["solid_fraction"]}
 
 
 def packing_text(name, synth):
@@ -319,9 +319,14 @@ def main():
         results = {}
         for name, case in earlier.items():
             series = os.path.join(a.cases_from, "series", name)
+            synth = case["stages"].get("synth")
+            if synth and "solid_fraction" not in synth and os.path.isdir(series):  # runs before it was recorded
+                with open(os.path.join(series, "series.json")) as f:
+                    synth["solid_fraction"] = json.load(f)["packing"]["solid_fraction"]
             rerun = bench_case(name, series if os.path.isdir(series) else None, a.stages, build, run_dir,
                                earlier=os.path.join(a.cases_from, name), scene=scene)
-            results[name] = {**case, "stages": {**case["stages"], **rerun["stages"]}}
+            results[name] = {**case, "stages": {**case["stages"], **rerun["stages"]},
+                             "rerun": {"stages": a.stages, "date": time.strftime("%Y-%m-%d")}}
     else:
         results = {"sand_small": bench_case("sand_small", None, a.stages, build, run_dir, scene=scene)}
     for d in ([] if a.results or a.cases_from else a.diameters):
@@ -334,12 +339,22 @@ def main():
     packing = ", ".join(packing_text(n, r["stages"]["synth"]) for n, r in results.items() if "synth" in r["stages"])
     merged = (f" Figures merged from {len(a.results)} runs of this bench (--results), the latest on the date above; "
               "a stage's row comes from the latest run that ran it." if a.results and len(a.results) > 1 else "")
+    reruns = {(tuple(r["rerun"]["stages"]), r["rerun"]["date"]) for r in results.values() if "rerun" in r}
+    merged += "".join(f" The stages {', '.join(st)} were run again on {date} on the same cases (--cases-from); the other "
+                      "stages' figures are from the run that made them." for st, date in sorted(reruns))
+    packed = [f"{n} {r['stages']['synth']['solid_fraction']:.3f}" for n, r in results.items()
+              if "solid_fraction" in r["stages"].get("synth", {})]
+    solid = (f"packed to solid fraction {', '.join(packed)}" if packed else
+             f"at solid fraction {a.solid_fraction or 0.628:g}")
+    strains = sorted({r["stages"]["simulate"].get("axial_strain", 0.10) for r in results.values() if "simulate" in r["stages"]})
+    sheared = (f" The simulate stage shears the twin to {' and '.join(f'{100 * e:g}' for e in strains)} % axial strain."
+               if strains else "")
     text = (
         "Every stage's cost as the sample grows (`python3 bench/paper_scale.py`; "
         f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}). sand_small is the bundled series (its "
         "synth stage is not rerun); the others are pipelines/scenes/paper_scale.toml in a cylinder of the "
-        f"named diameter (height 25:12 of it; 12 mm is the experiment's) at solid fraction {a.solid_fraction or 0.628:g}, "
-        "three scans each (sand_small has four). Per stage: wall "
+        f"named diameter (height 25:12 of it; 12 mm is the experiment's) {solid}, "
+        f"three scans each (sand_small has four).{sheared} Per stage: wall "
         "and CPU seconds, the peak resident memory of its largest process and the bytes it wrote; then the "
         "growth exponent of CPU time (per scan for the stages run once per scan and for synth, per pair of scans for "
         "track) against the reference "
