@@ -21,8 +21,8 @@ frames. Each run writes into a new folder under --scratch (printed) and touches 
 --cases-from takes the cases of an earlier run of this bench instead of making them: its series,
 and its stage outputs linked (make is told not to remake them), so that later stages alone can be
 run again on the same grains, e.g. the simulate stage to 18 % at 16 000 grains without the 40
-minutes of synth and the CT stages before it. Only the stages after mesh can be rerun so; the
-earlier run's figures of the other stages are published beside the new ones.
+minutes of synth and the CT stages before it. Only micro, simulate, forces, validate and report
+can be rerun so; the earlier run's figures of the other stages are published beside the new ones.
 
     python3 bench/paper_scale.py [--diameters 6 12] [--stages inspect segment contacts shapes track mesh]
         [--simulate-strain 0.18] [--cases-from RUN] [--build build] [--scratch /tmp/graintwin_paper_scale]
@@ -305,7 +305,8 @@ def main():
     ap.add_argument("--simulate-strain", type=float,
                     help="axial strain the simulate stage shears to (default the pipeline's scene's; 0.18 is the experiment's)")
     ap.add_argument("--cases-from",
-                    help="an earlier run's folder of this bench: rerun --stages (after mesh only) on its cases, "
+                    help="an earlier run's folder of this bench: rerun --stages (micro, simulate, forces, validate, "
+                         "report) on its cases, "
                          "publish its figures of the other stages beside them")
     ap.add_argument("--results", nargs="+",
                     help="finished runs' paper_scale.json: publish their figures again, run nothing; with several, "
@@ -331,6 +332,9 @@ def main():
             sys.exit(f"paper_scale: {a.cases_from} is not a finished run of this bench ({e.strerror}); name the folder it printed")
         results = {}
         for name, case in earlier.items():
+            if not os.path.isdir(os.path.join(a.cases_from, name)):
+                sys.exit(f"paper_scale: {os.path.join(a.cases_from, name)} is missing; --cases-from needs the earlier run's "
+                         "folder as it left it")
             series = os.path.join(a.cases_from, "series", name)
             synth = case["stages"].get("synth")
             if synth and "solid_fraction" not in synth and os.path.isdir(series):  # runs before it was recorded
