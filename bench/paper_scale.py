@@ -117,8 +117,15 @@ def scene_strain(path):
         return tomllib.load(f)["triaxial"]["target_axial_strain"]
 
 
+def pipeline_scene(series):
+    """The triaxial scene Makefile.pipeline's simulate stage picks for `series` (its SIM_SCENE)."""
+    own = os.path.join(SOURCE, "pipelines", "scenes", series, "triaxial.toml")
+    return own if os.path.exists(own) else TRIAXIAL_SCENE
+
+
 def link_earlier(earlier, out, stages):
-    """Links the earlier case folder's entries into `out`, but the outputs of `stages` and its logs;
+    """Links the earlier case folder's files into `out` (its folders made anew, so that whatever
+    make writes lands in `out`, never in the earlier run), but the outputs of `stages` and its logs;
     returns make's -o options for every linked file, so that make never remakes (writes) them."""
     rerun = {entry for stage in stages for entry in RERUNNABLE_OUTPUTS[stage]}
     os.makedirs(os.path.join(out, "logs"))
@@ -127,9 +134,12 @@ def link_earlier(earlier, out, stages):
         if entry in rerun or entry == "logs":
             continue
         source = os.path.join(earlier, entry)
-        os.symlink(os.path.abspath(source), os.path.join(out, entry))
         files = [source] if not os.path.isdir(source) else [os.path.join(r, f) for r, _, fs in os.walk(source) for f in fs]
-        keep_old += [option for f in files for option in ("-o", os.path.join(out, os.path.relpath(f, earlier)))]
+        for f in files:
+            linked = os.path.join(out, os.path.relpath(f, earlier))
+            os.makedirs(os.path.dirname(linked), exist_ok=True)
+            os.symlink(os.path.abspath(f), linked)
+            keep_old += ["-o", linked]
     return keep_old
 
 
@@ -149,7 +159,7 @@ def bench_case(name, inp, stages, build, run_dir, synth=None, earlier=None, scen
         print(f"{name:14s} {stage:9s} wall {wall:8.1f} s  cpu {cpu:8.1f} s  peak {rss / 2**30:6.2f} GiB", flush=True)
         if stage == "simulate":
             rows[stage]["accounts"] = simulate_accounts(os.path.join(out, "logs", "fdemrun.log"))
-            rows[stage]["axial_strain"] = scene_strain(scene or TRIAXIAL_SCENE)
+            rows[stage]["axial_strain"] = scene_strain(scene or pipeline_scene(name))
     scans = sorted(d for d in os.listdir(out) if d.startswith("scan_"))
     return {"grains": grains_of(os.path.join(out, scans[0], "labels.h5")), "scans": len(scans), "stages": rows}
 
@@ -312,11 +322,15 @@ def main():
                     help="finished runs' paper_scale.json: publish their figures again, run nothing; with several, "
                          "their cases are merged (a later file's stages win, stages it lacks are kept)")
     a = ap.parse_args()
+    if a.results and a.cases_from:
+        ap.error("--results republishes finished runs and --cases-from runs stages again: give one of them")
+    if a.simulate_strain is not None and not 0 < a.simulate_strain < 1:  # NaN fails this too
+        ap.error(f"--simulate-strain {a.simulate_strain} is not an axial strain in (0, 1); the experiment's is 0.18")
     build = os.path.abspath(a.build)
     os.makedirs(a.scratch, exist_ok=True)
     run_dir = tempfile.mkdtemp(prefix="paper_scale-", dir=a.scratch)
     print(f"outputs in {run_dir}", flush=True)
-    scene = simulate_scene(a.simulate_strain, run_dir) if a.simulate_strain else None
+    scene = simulate_scene(a.simulate_strain, run_dir) if a.simulate_strain is not None else None
     if a.results:
         results = merge_results(a.results)
         a.stages = [s for s in a.stages if any(s in r["stages"] for r in results.values())]
@@ -376,7 +390,7 @@ def main():
         "growth exponent of CPU time (per scan for the stages run once per scan and for synth, per pair of scans for "
         "track) against the reference "
         "scan's grains between consecutive cases. "
-        f"Packing: {packing}.{merged}\n\n" + table(results, a.stages) + "\n" + targets_lines(results) + simulate_lines(results))
+        f"{f'Packing: {packing}.' if packing else ''}{merged}\n\n" + table(results, a.stages) + "\n" + targets_lines(results) + simulate_lines(results))
     finish("paper_scale", text, run_dir, results, not a.no_publish)
 
 
