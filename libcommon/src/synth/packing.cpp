@@ -10,16 +10,33 @@
 // 2. Sweeps. Each sweep grows s by a factor 1 + g (unless held), evaluates every candidate pair
 //    (a Verlet list, rebuilt when grains have moved by half the skin) and every grain near a
 //    wall, then moves the grains by one FIRE step (Bitzek et al., PRL 97, 170201, 2006) on the
-//    overlap energy E = 1/2 sum w (depth + eps)^2 (unit stiffness, unit masses,
-//    rotations in arc-length units so that an off-centre contact turns the grain). The sum runs
-//    over the contact regions of every pair (a rough grain can touch another at several bumps;
-//    each region seen from either grain, w = 1/2, so a convex contact seen from both counts once)
-//    and over the wall contacts (w = 1). The growth rate g adapts so that the mean depth of the
-//    overlapping pairs stays near 1 % of the mean grain radius: the packing is compressed
-//    quasi-statically, which is what lets it become dense (a fast compression jams early, loose).
+//    overlap energy E = sum w e(depth + eps) (rotations in arc-length units so that an off-centre
+//    contact turns the grain). The sum runs over the contact regions of every pair (a rough grain
+//    can touch another at several bumps; each region seen from either grain, w = 1/2, so a convex
+//    contact seen from both counts once) and over the wall contacts (w = 1). The growth rate g
+//    adapts so that the mean depth of the overlapping pairs stays near 1 % of the mean grain
+//    radius: the packing is compressed quasi-statically, which is what lets it become dense (a
+//    fast compression jams early, loose).
 // 3. At full size the FIRE steps go on until every pair and wall depth is within the tolerance;
 //    the state is then checked once more with every candidate pair evaluated afresh, as precisely
 //    as pair_contact() does.
+// What makes the full-size relaxation end sooner (measured in docs/ctsynth.md, Limits): its
+// overlaps are held by the packing's residual pressure, which falls only as the grains rearrange,
+// and the test is on the deepest few of thousands. So
+// - at full size the contact law e'(x) = x up to half the tolerance, slope Tune::deep_stiffness
+//   beyond: the deepest contacts carry their force with less depth, and the packing ends at a
+//   higher residual pressure (while growing the law stays linear: the growth control's target
+//   depth was set with it);
+// - each grain's inertia is its contact stiffness over Tune::unit_contacts (at least 1): a grain
+//   held by stiff contacts moves at the pace of one held by a few unit ones (a Jacobi
+//   preconditioner);
+// - FIRE's restart is per grain: a grain whose power F.v turns negative stops, the others keep
+//   their momentum. The global restart stopped every grain about every 12th sweep, so the slow
+//   collective motion that lowers the pressure never gathered speed; now a negative total power
+//   only halves the step;
+// - a confirmation that finds the exact depths deeper than the sweep's estimate waits until the
+//   estimate is below the tolerance by that difference, rather than paying for an exact
+//   evaluation every sweep while the estimate hovers at the tolerance.
 // A packing that stops growing (2000 sweeps without 0.1 % growth) or, at full size, stops
 // relaxing (3000 sweeps without a 1 % smaller worst overlap) is jammed: DataError.
 //
@@ -89,6 +106,10 @@ struct Tune {
   double fire_dt_start = 0.1;       // FIRE time step (unit stiffness and masses) ...
   double fire_dt_max = 0.5;         // ... its cap (stable for ~12 contacts per grain) ...
   double fire_dt_min = 0.01;        // ... and floor
+  double fire_alpha_start = 0.1;    // FIRE's velocity mixing at the start
+  double deep_knee = 0.5;           // contact law: slope 1 up to this depth (in tolerances) ...
+  double deep_stiffness = 4.0;      // ... and this slope beyond
+  double unit_contacts = 12.0;      // a grain's inertia: its contact stiffness over this, >= 1
   double target_gap = 0.2;          // contacts push until this gap, in tolerances
   double growth_overlap = 0.01;     // mean overlap while growing, of the mean equivalent radius
   double growth_first = 0.02;       // first relative growth per sweep
@@ -320,15 +341,27 @@ class Packer {
     return st;
   }
 
-  // Contact forces of the overlap energy (unit stiffness, metres): F_i sums (depth + eps) n over
-  // the grain's contacts, G_i sums arm x F / L_i, the generalised force of the arc-length rotation
-  // coordinate phi = theta L_i (L_i = s r_eq,i); pairs in the grain's list order, then walls.
+  // Force of one contact of the overlap energy at x = depth + eps (metres): slope 1, then
+  // kTune.deep_stiffness beyond the knee; contact_stiffness is its slope.
+  double contact_force(double x) const {
+    return x + (deep_stiffness() - 1.0) * std::max(0.0, x - kTune.deep_knee * tol_);
+  }
+  double contact_stiffness(double x) const { return x > kTune.deep_knee * tol_ ? deep_stiffness() : 1.0; }
+  double deep_stiffness() const { return s_ >= 1.0 ? kTune.deep_stiffness : 1.0; }
+
+  // Contact forces of the overlap energy (metres): F_i sums w f(depth + eps) n over the grain's
+  // contacts, G_i sums arm x F / L_i, the generalised force of the arc-length rotation coordinate
+  // phi = theta L_i (L_i = s r_eq,i); pairs in the grain's list order, then walls. The grain's
+  // inverse inertia follows from the sum of w f' (see the head of this file).
   void compute_forces() {
     const double eps = kTune.target_gap * tol_;
 #pragma omp parallel for schedule(static) if (n_ > 4 * kParallelGrains)
     for (std::size_t i = 0; i < n_; ++i) {
       Eigen::Vector3d f = Eigen::Vector3d::Zero(), tq = Eigen::Vector3d::Zero();
-      auto add = [&](const Eigen::Vector3d& force, const Eigen::Vector3d& at) {
+      double stiffness = 0.0;
+      auto add = [&](double weight, double x, const Eigen::Vector3d& normal, const Eigen::Vector3d& at) {
+        const Eigen::Vector3d force = (weight * contact_force(x)) * normal;
+        stiffness += std::abs(weight) * contact_stiffness(x);
         f += force;
         tq += (at - x_[i]).cross(force);
       };
@@ -343,64 +376,64 @@ class Packer {
           for (int r = 0; r < set->n; ++r) {
             const detail::Side& sd = set->side[r];
             if (sd.depth <= -eps) continue;
-            add((sign * (sd.depth + eps)) * sd.normal, sd.point);
+            add(sign, sd.depth + eps, sd.normal, sd.point);
           }
         }
       }
       for (int k = 0; k < wall_count_[i]; ++k) {
         const WallHit& h = walls_[detail::kMaxWallHits * i + k];
         if (h.depth <= -eps) continue;
-        add((h.depth + eps) * h.normal, h.point);
+        add(1.0, h.depth + eps, h.normal, h.point);
       }
       force_[i] = f;
       torque_[i] = kTune.rotation_gain * tq / (s_ * req_[i]);
+      inverse_inertia_[i] = 1.0 / std::max(1.0, stiffness / kTune.unit_contacts);
     }
   }
 
-  // One FIRE step: velocity mixing toward the force, time step up while the power F.v stays
-  // non-negative, full stop and smaller step when it turns negative; semi-implicit Euler update.
+  // One FIRE step with per-grain restarts: a grain whose power F.v is negative stops, the others
+  // mix their velocity toward their force; the time step grows while the total power stays
+  // non-negative and halves when it turns negative; semi-implicit Euler update.
   void fire_step() {
     compute_forces();
-    double power = 0.0, fnorm2 = 0.0, vnorm2 = 0.0;
+    double power = 0.0, fnorm2 = 0.0;
     for (std::size_t i = 0; i < n_; ++i) {
       power += force_[i].dot(vel_[i]) + torque_[i].dot(spin_[i]);
       fnorm2 += force_[i].squaredNorm() + torque_[i].squaredNorm();
-      vnorm2 += vel_[i].squaredNorm() + spin_[i].squaredNorm();
     }
     if (fnorm2 == 0.0) {  // nothing touches: nothing moves, and the step keeps its size
       std::fill(vel_.begin(), vel_.end(), Eigen::Vector3d::Zero());
       std::fill(spin_.begin(), spin_.end(), Eigen::Vector3d::Zero());
       return;
     }
-    if (power >= 0.0) {
-      const double mix = fire_alpha_ * std::sqrt(vnorm2 / fnorm2);
-      for (std::size_t i = 0; i < n_; ++i) {
-        vel_[i] = (1.0 - fire_alpha_) * vel_[i] + mix * force_[i];
-        spin_[i] = (1.0 - fire_alpha_) * spin_[i] + mix * torque_[i];
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double f2 = force_[i].squaredNorm() + torque_[i].squaredNorm();
+      if (force_[i].dot(vel_[i]) + torque_[i].dot(spin_[i]) < 0.0 || f2 == 0.0) {
+        vel_[i].setZero();
+        spin_[i].setZero();
+        continue;
       }
-      if (++fire_positive_ > 5) {
-        fire_dt_ = std::min(fire_dt_ * 1.1, kTune.fire_dt_max);
-        fire_alpha_ *= 0.99;
-      }
-    } else {
-      std::fill(vel_.begin(), vel_.end(), Eigen::Vector3d::Zero());
-      std::fill(spin_.begin(), spin_.end(), Eigen::Vector3d::Zero());
+      const double mix = fire_alpha_ * std::sqrt((vel_[i].squaredNorm() + spin_[i].squaredNorm()) / f2);
+      vel_[i] = (1.0 - fire_alpha_) * vel_[i] + mix * force_[i];
+      spin_[i] = (1.0 - fire_alpha_) * spin_[i] + mix * torque_[i];
+    }
+    if (power < 0.0) {
       fire_dt_ = std::max(0.5 * fire_dt_, kTune.fire_dt_min);
-      fire_alpha_ = 0.1;
       fire_positive_ = 0;
+    } else if (++fire_positive_ > 5) {
+      fire_dt_ = std::min(fire_dt_ * 1.1, kTune.fire_dt_max);
+      fire_alpha_ *= 0.99;
     }
     const double dt = fire_dt_;
 #pragma omp parallel for schedule(static) if (n_ > 4 * kParallelGrains)
     for (std::size_t i = 0; i < n_; ++i) {
       if (force_[i].squaredNorm() == 0.0 && torque_[i].squaredNorm() == 0.0) {
-        // No contact, no motion: a grain does not fly on through free space on its momentum
-        // (that would turn a local relaxation into a rearrangement).
-        vel_[i].setZero();
-        spin_[i].setZero();
+        // No contact, no motion (zeroed above): a grain does not fly on through free space on
+        // its momentum (that would turn a local relaxation into a rearrangement).
         continue;
       }
-      vel_[i] += dt * force_[i];
-      spin_[i] += dt * torque_[i];
+      vel_[i] += (dt * inverse_inertia_[i]) * force_[i];
+      spin_[i] += (dt * inverse_inertia_[i]) * torque_[i];
       Eigen::Vector3d dx = dt * vel_[i];
       const double max_dx = kTune.max_step * s_ * req_[i];
       const double ndx = dx.norm();
@@ -433,9 +466,13 @@ class Packer {
     spin_.assign(n_, Eigen::Vector3d::Zero());
     force_.assign(n_, Eigen::Vector3d::Zero());
     torque_.assign(n_, Eigen::Vector3d::Zero());
+    inverse_inertia_.assign(n_, 1.0);
     walls_.assign(detail::kMaxWallHits * n_, WallHit{});
     wall_count_.assign(n_, 0);
     fire_dt_ = kTune.fire_dt_start;
+    fire_alpha_ = kTune.fire_alpha_start;
+    fire_positive_ = 0;
+    double confirm_margin = 0.0;  // exact depth - estimate, at the last failed confirmation
     build_pairs();
     const double allow_growing = kTune.growth_overlap * req_mean_;
     double g = kTune.growth_first;
@@ -460,15 +497,17 @@ class Packer {
       Stats st = stats();
       last_worst_ = st.worst();
       if (full) {
-        if (st.worst() <= tol_) {
+        if (st.worst() <= tol_ - confirm_margin) {
           // Confirm with every candidate pair evaluated afresh, as precisely as pair_contact()
           // and wall_penetration() do, so that the report agrees with find_contacts().
+          const double estimate = st.worst();
           evaluate(tol_, true, detail::kExactRefineStep);
           st = stats();
           if (st.worst() <= tol_) {
             finish(st, sweep);
             return;
           }
+          confirm_margin = std::max(confirm_margin, st.worst() - estimate);
         }
         if (st.worst() < 0.99 * worst_mark) {
           worst_mark = st.worst();
@@ -545,7 +584,7 @@ class Packer {
   std::vector<Eigen::Quaterniond> q_;
   std::vector<Eigen::Matrix3d> R_;
   std::vector<Eigen::Vector3d> vel_, spin_, force_, torque_;
-  std::vector<double> travel_;
+  std::vector<double> travel_, inverse_inertia_;
   double fire_dt_ = 0.1, fire_alpha_ = 0.1;
   int fire_positive_ = 0;
   // Candidate pairs, wall hits (kMaxWallHits slots per grain).
