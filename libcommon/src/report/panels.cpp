@@ -10,8 +10,6 @@ namespace graintwin::report {
 
 namespace {
 
-constexpr const char* kNoSimulationMicro =
-    "This run has no micro-mechanics of the simulation frames (simulation_micro.h5): tracks2micro on simulation.h5 makes it.";
 constexpr const char* kNoForces =
     "This run has no force statistics (forces.h5): the forces stage (fdem2forces on simulation.h5) makes them.";
 constexpr const char* kCtNoStress =

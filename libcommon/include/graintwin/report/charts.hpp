@@ -6,6 +6,7 @@
 // curves of the force PDF and of the cluster statistics, rose profiles.
 #include <nlohmann/json_fwd.hpp>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -24,10 +25,34 @@ struct Series {
   std::string group = {};  ///< series of one non-empty group share a colour (data and its fit)
 };
 
+/// One picture of a section plane through the sample (report/sections.hpp): a slice of a label
+/// image (the experiment) or the outlines where the plane cuts the twin's grains (the simulation),
+/// grains filled with one colour per grain identity, or painted with one value each.
+struct SectionView {
+  std::string title;
+  std::string plane = "xz";          ///< "xz": vertical, y = offset; "xy": horizontal, z = offset
+  double offset = 0.0;               ///< m
+  std::array<double, 4> extent{};    ///< u0, u1, v0, v1 (m): the frame drawn, shared by both sides
+  std::string labels_file;           ///< kind=labels: the slice `index` of /labels across the plane's normal
+  std::string volume_file;           ///< kind=volume of the same geometry: grey under the labels (may be empty)
+  std::size_t index = 0;
+  std::vector<std::uint32_t> outline_label;   ///< the twin: the grain of each outline
+  std::vector<std::vector<double>> outline;   ///< the twin: closed outlines u0, v0, u1, v1, ... (m)
+  /// A grain's colour follows its identity: label identity_label[i] takes the colour of
+  /// identity[i] (its label in the reference scan, through the tracks); others their own label's.
+  std::vector<std::uint32_t> identity_label, identity;
+  std::string quantity;              ///< empty: identity colours; else the colour bar's label
+  std::vector<std::uint32_t> value_label;  ///< the grains painted, by label
+  std::vector<double> value;               ///< their values; NaN = not defined (drawn grey)
+  double colour_min = 0.0, colour_max = 0.0;
+  bool colour_log = false;
+};
+
 /// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
 /// kind "rose": each series is a rose profile, x = the polar-angle bin edges in degrees from the
 /// loading axis z (n + 1), y = the value per bin (n), drawn as a closed outline in the x-z plane,
-/// mirrored about both axes (the directions are axes, folded onto the upper hemisphere).
+/// mirrored about both axes (the directions are axes, folded onto the upper hemisphere); kind
+/// "section": `sections` side by side, no series.
 struct Chart {
   std::string file;   ///< PNG name inside the report's image folder
   std::string panel;  ///< charts of one panel share their axis limits
@@ -35,6 +60,7 @@ struct Chart {
   std::string title, x_label, y_label;
   bool x_log = false, y_log = false;
   std::vector<Series> series;
+  std::vector<SectionView> sections;  ///< kind "section": drawn side by side in one PNG
 
   /// Adds a series, keeping only points with finite coordinates (and positive ones on log axes;
   /// vertical lines keep every finite x). Returns false, adding nothing, when no point is left.
