@@ -17,12 +17,14 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <thread>
 
 #include "graintwin/fdem/model_file.hpp"
+#include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "graintwin/micro/micro_file.hpp"
@@ -296,8 +298,11 @@ const std::vector<std::string> kSectionPanels{"section_scan_000", "section_scan_
                                               "section_eps_q_0",  "section_eps_q_1",  "section_eps_q_2"};
 /// Section sides without a picture in the full run: the third increment exists in the simulation only.
 constexpr std::size_t kSectionSidesMissing = 2;
+/// The force-chain network's panels: one per frame of the lattice simulation, the simulation's side only.
+const std::vector<std::string> kNetworkPanels{"force_network_0", "force_network_1", "force_network_2", "force_network_3"};
 
-/// The pixel check of the section pictures, run with Debian's Python: each must show something (not
+/// The pixel check of the pictures of the sample (sections and 3D force networks), run with
+/// Debian's Python: each must show something (not
 /// blank, many colours, at least 2 % of it grains in colour) with the sample inside the frame (the
 /// coloured pixels away from the picture's edges, their centre in its middle). Prints one line per
 /// failure and the count checked.
@@ -308,7 +313,7 @@ import numpy as np
 folder = sys.argv[1]
 checked, failures = 0, []
 for c in json.load(open(folder + "/charts.json"))["charts"]:
-    if c["kind"] != "section":
+    if c["kind"] not in ("section", "network"):
         continue
     rgb = mi.imread(folder + "/" + c["file"])[..., :3]
     h, w, _ = rgb.shape
@@ -399,7 +404,8 @@ TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   // Every side with data has its chart; CT has no forces or stresses, so exactly those four
   // experiment sides (stress ratio, force rose, force PDF, volatility) say so instead.
   const nlohmann::json spec = nlohmann::json::parse(slurp(out / "report_img/charts.json"));
-  EXPECT_EQ(spec["charts"].size(), 2 * kPanels.size() - 4 + 2 * kSectionPanels.size() - kSectionSidesMissing + kBudgetLines.size());
+  EXPECT_EQ(spec["charts"].size(),
+            2 * kPanels.size() - 4 + 2 * kSectionPanels.size() - kSectionSidesMissing + kNetworkPanels.size() + kBudgetLines.size());
   const auto* twin = find_chart(spec, "budget_twin.png");
   ASSERT_NE(twin, nullptr);
   ASSERT_NE(find_series(*twin, "twin"), nullptr);
@@ -464,7 +470,8 @@ TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
   // Every simulation side is missing and says which stage makes it; the experiment keeps its 11,
   // and its sections: three scans, D2min and eps_q of two increments.
   const std::size_t sections = kScans + 2 * (kScans - 1);
-  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + sections);
+  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + sections + 1)
+      << "and the force-chain network's one panel";
   EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4 + sections);
   EXPECT_NE(html.find("No benchmark charts were found"), std::string::npos);
   // No validation.json: the error budget is one sentence.
@@ -480,7 +487,7 @@ TEST_F(Report, AModelOfAnotherRunIsRefusedNamingBothFiles) {
                              (g_runs->full / "simulation.h5").string() + " holds 64 grains but the model " + (out / "model.h5").string());
 }
 
-TEST_F(Report, SectionsShowTheSampleBesideTheTwin) {
+TEST_F(Report, PicturesShowTheSampleBesideTheTwin) {
   ASSERT_EQ(full_report().exit_code, 0) << full_report().err;
   const fs::path img = g_runs->page.parent_path() / "report_img";
   const std::string html = slurp(g_runs->page);
@@ -552,11 +559,33 @@ TEST_F(Report, SectionsShowTheSampleBesideTheTwin) {
       scales.insert({c["sections"][0]["colour_min"].get<double>(), c["sections"][0]["colour_max"].get<double>()});
   ASSERT_EQ(scales.size(), 1u) << "one colour scale for D2min";
   EXPECT_LT(scales.begin()->first, scales.begin()->second);
+  // The force-chain network of frame 1: of the 96 chosen contacts (all pushing), those with at
+  // least their mean normal force, from centroid to centroid, on one scale with the other frames'.
+  const fdem::ResultsFrame frame = fdem::read_results_frame(g_runs->full / "simulation.h5", 1);
+  std::vector<double> normal_force;
+  for (std::size_t i = 0; i < frame.platen.size(); ++i)
+    normal_force.push_back(Eigen::Vector3d(&frame.force[3 * i]).dot(Eigen::Vector3d(&frame.normal[3 * i])));
+  ASSERT_EQ(normal_force.size(), 96u);
+  const double mean = std::accumulate(normal_force.begin(), normal_force.end(), 0.0) / 96.0;
+  const auto strong = std::count_if(normal_force.begin(), normal_force.end(), [&](double f) { return f >= mean; });
+  const auto* network = find_chart(spec, "force_network_1_simulation.png");
+  ASSERT_NE(network, nullptr);
+  EXPECT_EQ((*network)["network"]["force"].size(), std::size_t(strong));
+  EXPECT_EQ((*network)["network"]["segments"].size(), 6 * std::size_t(strong));
+  for (const auto& f : (*network)["network"]["force"]) EXPECT_GE(f.get<double>(), mean);
+  std::set<double> tops;
+  for (const std::string& id : kNetworkPanels) {
+    EXPECT_NE(html.find("<section class=\"panel\" id=\"" + id + "\">"), std::string::npos) << id;
+    const auto* c = find_chart(spec, id + "_simulation.png");
+    ASSERT_NE(c, nullptr) << id;
+    tops.insert((*c)["network"]["force_max"].get<double>());
+  }
+  EXPECT_EQ(tops.size(), 1u) << "one force scale for every frame";
   // Every picture shows something, with the sample inside the frame.
   const auto pixels = test::run_program("/usr/bin/python3", {"-c", kPixelCheck, img.string()});
   EXPECT_EQ(pixels.exit_code, 0) << pixels.out << pixels.err;
-  EXPECT_NE(pixels.out.find(std::to_string(2 * kSectionPanels.size() - kSectionSidesMissing) + " pictures checked"), std::string::npos)
-      << pixels.out;
+  const std::size_t pictures = 2 * kSectionPanels.size() - kSectionSidesMissing + kNetworkPanels.size();
+  EXPECT_NE(pixels.out.find(std::to_string(pictures) + " pictures checked"), std::string::npos) << pixels.out;
 }
 
 TEST_F(Report, HeadlessChromiumLoadsEveryImage) {

@@ -10,7 +10,8 @@ xy styles: line, dashed, points, linepoints, vline (a vertical line at each x). 
 x = polar-angle bin edges in degrees from the loading axis z and y = one value per bin; it is
 drawn as a closed outline in the x-z plane, mirrored about both axes. Charts of one panel share
 their axis limits so experiment and simulation compare at a glance. Kind "section" (pictures of the
-sample: label slices and the twin's outlines) is drawn by report_sections.py. The script computes
+sample: label slices and the twin's outlines) is drawn by report_sections.py, kind "network" (the
+3D force-chain network) by report_network.py with VTK. The script computes
 nothing but limits: every number comes from the JSON.
 """
 import json
@@ -112,6 +113,11 @@ def main():
     for chart in charts:
         if chart["kind"] == "section":
             report_sections.draw(chart, os.path.join(out_dir, chart["file"]))
+            continue
+        if chart["kind"] == "network":
+            import report_network  # VTK and its Xvfb only when a run has a network to draw
+
+            report_network.draw(chart, os.path.join(out_dir, chart["file"]))
             continue
         group = panels[chart["panel"]]
         if chart["kind"] == "rose":

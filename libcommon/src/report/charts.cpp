@@ -62,6 +62,10 @@ nlohmann::json to_json(const SectionView& v) {
           {"colour_log", v.colour_log}};
 }
 
+nlohmann::json to_json(const NetworkView& v) {
+  return {{"segments", v.segments}, {"force", v.force}, {"force_max", v.force_max}, {"radius_max", v.radius_max}, {"bounds", v.bounds}};
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Chart& c) {
@@ -70,8 +74,10 @@ nlohmann::json to_json(const Chart& c) {
     series.push_back({{"name", s.name}, {"style", s.style}, {"x", s.x}, {"y", s.y}, {"group", s.group}});
   nlohmann::json sections = nlohmann::json::array();
   for (const SectionView& v : c.sections) sections.push_back(to_json(v));
-  return {{"file", c.file},       {"panel", c.panel}, {"kind", c.kind},   {"title", c.title},   {"x_label", c.x_label},
-          {"y_label", c.y_label}, {"x_log", c.x_log}, {"y_log", c.y_log}, {"series", series}, {"sections", sections}};
+  nlohmann::json j = {{"file", c.file},       {"panel", c.panel}, {"kind", c.kind},   {"title", c.title},   {"x_label", c.x_label},
+                      {"y_label", c.y_label}, {"x_log", c.x_log}, {"y_log", c.y_log}, {"series", series}, {"sections", sections}};
+  if (c.network) j["network"] = to_json(*c.network);
+  return j;
 }
 
 std::vector<std::size_t> pick_evenly(std::size_t count, std::size_t max_count) {

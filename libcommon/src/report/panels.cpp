@@ -15,7 +15,6 @@ constexpr const char* kNoForces =
 constexpr const char* kCtNoStress =
     "CT scans measure where grains are, not stresses: the experiment's stress ratio is the load cell's record, which the run's "
     "files do not hold. The scans' axial strains are marked on the simulation's curve.";
-constexpr const char* kCtNoForces = "CT scans do not measure contact forces: this chart exists for the simulation only.";
 constexpr const char* kCtNoGrainStress =
     "CT scans do not measure grain stresses, so the volatility of q exists for the simulation only.";
 constexpr const char* kEmpty = "The file holds no finite values to draw here.";

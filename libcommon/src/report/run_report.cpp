@@ -6,6 +6,7 @@
 
 #include <fstream>
 
+#include "graintwin/report/force_network.hpp"
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/sections.hpp"
 
@@ -68,8 +69,9 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
 
   PageContent page;
   page.title = report_title(run_dir, options.title);
-  // The sample itself first (sections), then the statistics.
+  // The sample itself first (sections, force chains), then the statistics.
   page.panels = section_panels(files, experiment, simulation, options.panels);
+  for (Panel& p : force_network_panels(files, simulation, options.panels)) page.panels.push_back(std::move(p));
   for (Panel& p : build_panels(experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
   if (!files.validation.empty()) page.budget = error_budget(validate::read_validation(files.validation));
   std::vector<const Chart*> charts = panel_charts(page.panels);

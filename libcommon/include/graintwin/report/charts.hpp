@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,11 +49,22 @@ struct SectionView {
   bool colour_log = false;
 };
 
+/// A 3D picture of the force-chain network at one frame (drawn with VTK): one tube per
+/// grain-grain contact from centroid to centroid, its radius and colour proportional to the
+/// contact's normal force, seen by a fixed camera.
+struct NetworkView {
+  std::vector<double> segments;    ///< x0, y0, z0, x1, y1, z1 per contact (m)
+  std::vector<double> force;       ///< N, the normal force of each contact (> 0, compressive)
+  double force_max = 0.0;          ///< N, top of the colour scale (bottom 0) and the force of the thickest tube
+  double radius_max = 0.0;         ///< m, tube radius at force_max
+  std::array<double, 6> bounds{};  ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
+};
+
 /// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
 /// kind "rose": each series is a rose profile, x = the polar-angle bin edges in degrees from the
 /// loading axis z (n + 1), y = the value per bin (n), drawn as a closed outline in the x-z plane,
 /// mirrored about both axes (the directions are axes, folded onto the upper hemisphere); kind
-/// "section": `sections` side by side, no series.
+/// "section": `sections` side by side, no series; kind "network": the 3D `network`.
 struct Chart {
   std::string file;   ///< PNG name inside the report's image folder
   std::string panel;  ///< charts of one panel share their axis limits
@@ -61,6 +73,7 @@ struct Chart {
   bool x_log = false, y_log = false;
   std::vector<Series> series;
   std::vector<SectionView> sections;  ///< kind "section": drawn side by side in one PNG
+  std::optional<NetworkView> network;  ///< kind "network"
 
   /// Adds a series, keeping only points with finite coordinates (and positive ones on log axes;
   /// vertical lines keep every finite x). Returns false, adding nothing, when no point is left.
