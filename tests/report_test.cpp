@@ -33,6 +33,7 @@
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/run_data.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "graintwin/track/tracks_file.hpp"
 #include "graintwin/validate/validation_file.hpp"
 #include "support/cli_contract.hpp"
 #include "support/cube_sample.hpp"
@@ -298,10 +299,12 @@ const std::vector<std::string> kSectionPanels{"section_scan_000", "section_scan_
                                               "section_eps_q_0",  "section_eps_q_1",  "section_eps_q_2"};
 /// Section sides without a picture in the full run: the third increment exists in the simulation only.
 constexpr std::size_t kSectionSidesMissing = 2;
+/// The D2min clusters in 3D: one panel per increment, the scans' two beside the simulation's three.
+const std::vector<std::string> kClusterPanels{"clusters_3d_0", "clusters_3d_1", "clusters_3d_2"};
 /// The force-chain network's panels: one per frame of the lattice simulation, the simulation's side only.
 const std::vector<std::string> kNetworkPanels{"force_network_0", "force_network_1", "force_network_2", "force_network_3"};
 
-/// The pixel check of the pictures of the sample (sections and 3D force networks), run with
+/// The pixel check of the pictures of the sample (sections, 3D clusters and force networks), run with
 /// Debian's Python: each must show something (not
 /// blank, many colours, at least 2 % of it grains in colour) with the sample inside the frame (the
 /// coloured pixels away from the picture's edges, their centre in its middle). Prints one line per
@@ -313,7 +316,7 @@ import numpy as np
 folder = sys.argv[1]
 checked, failures = 0, []
 for c in json.load(open(folder + "/charts.json"))["charts"]:
-    if c["kind"] not in ("section", "network"):
+    if c["kind"] not in ("section", "network", "grains"):
         continue
     rgb = mi.imread(folder + "/" + c["file"])[..., :3]
     h, w, _ = rgb.shape
@@ -405,7 +408,8 @@ TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   // experiment sides (stress ratio, force rose, force PDF, volatility) say so instead.
   const nlohmann::json spec = nlohmann::json::parse(slurp(out / "report_img/charts.json"));
   EXPECT_EQ(spec["charts"].size(),
-            2 * kPanels.size() - 4 + 2 * kSectionPanels.size() - kSectionSidesMissing + kNetworkPanels.size() + kBudgetLines.size());
+            2 * kPanels.size() - 4 + 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 +
+                kNetworkPanels.size() + kBudgetLines.size());
   const auto* twin = find_chart(spec, "budget_twin.png");
   ASSERT_NE(twin, nullptr);
   ASSERT_NE(find_series(*twin, "twin"), nullptr);
@@ -468,11 +472,12 @@ TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
   const std::string html = slurp(out / "page.html");
   for (const std::string& id : kPanels) EXPECT_NE(html.find("id=\"" + id + "\""), std::string::npos) << id;
   // Every simulation side is missing and says which stage makes it; the experiment keeps its 11,
-  // and its sections: three scans, D2min and eps_q of two increments.
-  const std::size_t sections = kScans + 2 * (kScans - 1);
-  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + sections + 1)
+  // and its pictures: the sections of three scans, D2min and eps_q of two increments, and the D2min
+  // clusters of two increments in 3D.
+  const std::size_t pictures = kScans + 2 * (kScans - 1) + (kScans - 1);
+  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + pictures + 1)
       << "and the force-chain network's one panel";
-  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4 + sections);
+  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4 + pictures);
   EXPECT_NE(html.find("No benchmark charts were found"), std::string::npos);
   // No validation.json: the error budget is one sentence.
   EXPECT_NE(html.find(report::kNoValidation), std::string::npos);
@@ -581,10 +586,34 @@ TEST_F(Report, PicturesShowTheSampleBesideTheTwin) {
     tops.insert((*c)["network"]["force_max"].get<double>());
   }
   EXPECT_EQ(tops.size(), 1u) << "one force scale for every frame";
+  // D2min in 3D, increment 0: every tracked grain of scan 0 at its tracked centroid, painted with
+  // micro.h5's D2min, the clusters' members highlighted; one colour scale and one camera for all.
+  const track::TrackedCentroids tracked = track::read_tracked_centroids(g_runs->full / "tracks.h5");
+  const auto* clusters = find_chart(spec, "clusters_3d_0_experiment.png");
+  ASSERT_NE(clusters, nullptr);
+  const auto& grains = (*clusters)["grains"];
+  std::size_t row = 0, members = 0;
+  for (std::size_t n = 0; n < m.grains; ++n) {
+    if (m.grain_label[n * states] == 0) continue;
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(grains["centre"][3 * row + a].get<double>(), tracked.centroid[3 * n * tracked.scans + a]);
+    const double d2min = m.grain_d2min[n * increments];
+    if (std::isfinite(d2min)) EXPECT_EQ(grains["value"][row].get<double>(), d2min);
+    EXPECT_EQ(grains["highlighted"][row].get<int>(), m.grain_cluster[n * increments] >= 0 ? 1 : 0);
+    members += m.grain_cluster[n * increments] >= 0;
+    ++row;
+  }
+  EXPECT_EQ(grains["centre"].size(), 3 * row);
+  EXPECT_GT(members, 0u) << "tracks2micro's top fraction makes clusters";
+  std::set<std::string> cameras;
+  for (const std::string& id : kClusterPanels)
+    for (const char* side : {"_experiment.png", "_simulation.png"})
+      if (const auto* c = find_chart(spec, id + side))
+        cameras.insert((*c)["grains"]["bounds"].dump() + (*c)["grains"]["colour_min"].dump() + (*c)["grains"]["colour_max"].dump());
+  EXPECT_EQ(cameras.size(), 1u) << "one camera and one colour scale for every 3D picture of D2min";
   // Every picture shows something, with the sample inside the frame.
   const auto pixels = test::run_program("/usr/bin/python3", {"-c", kPixelCheck, img.string()});
   EXPECT_EQ(pixels.exit_code, 0) << pixels.out << pixels.err;
-  const std::size_t pictures = 2 * kSectionPanels.size() - kSectionSidesMissing + kNetworkPanels.size();
+  const std::size_t pictures = 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 + kNetworkPanels.size();
   EXPECT_NE(pixels.out.find(std::to_string(pictures) + " pictures checked"), std::string::npos) << pixels.out;
 }
 

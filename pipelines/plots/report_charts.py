@@ -10,8 +10,8 @@ xy styles: line, dashed, points, linepoints, vline (a vertical line at each x). 
 x = polar-angle bin edges in degrees from the loading axis z and y = one value per bin; it is
 drawn as a closed outline in the x-z plane, mirrored about both axes. Charts of one panel share
 their axis limits so experiment and simulation compare at a glance. Kind "section" (pictures of the
-sample: label slices and the twin's outlines) is drawn by report_sections.py, kind "network" (the
-3D force-chain network) by report_network.py with VTK. The script computes
+sample: label slices and the twin's outlines) is drawn by report_sections.py, kinds "network" (the
+3D force-chain network) and "grains" (D2min clusters in 3D) by report_3d.py with VTK. The script computes
 nothing but limits: every number comes from the JSON.
 """
 import json
@@ -114,10 +114,11 @@ def main():
         if chart["kind"] == "section":
             report_sections.draw(chart, os.path.join(out_dir, chart["file"]))
             continue
-        if chart["kind"] == "network":
-            import report_network  # VTK and its Xvfb only when a run has a network to draw
+        if chart["kind"] in ("network", "grains"):
+            import report_3d  # VTK and its Xvfb only when a run has a 3D picture to draw
 
-            report_network.draw(chart, os.path.join(out_dir, chart["file"]))
+            draw_3d = report_3d.draw_network if chart["kind"] == "network" else report_3d.draw_grains
+            draw_3d(chart, os.path.join(out_dir, chart["file"]))
             continue
         group = panels[chart["panel"]]
         if chart["kind"] == "rose":

@@ -66,6 +66,15 @@ nlohmann::json to_json(const NetworkView& v) {
   return {{"segments", v.segments}, {"force", v.force}, {"force_max", v.force_max}, {"radius_max", v.radius_max}, {"bounds", v.bounds}};
 }
 
+nlohmann::json to_json(const GrainsView& v) {
+  nlohmann::json values = nlohmann::json::array();
+  for (double x : v.value) values.push_back(number_or_null(x));
+  return {{"centre", v.centre},         {"radius", v.radius},         {"value", values},
+          {"highlighted", v.highlighted}, {"membrane", v.membrane},     {"quantity", v.quantity},
+          {"colour_min", number_or_null(v.colour_min)}, {"colour_max", number_or_null(v.colour_max)},
+          {"colour_log", v.colour_log},   {"bounds", v.bounds}};
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Chart& c) {
@@ -77,6 +86,7 @@ nlohmann::json to_json(const Chart& c) {
   nlohmann::json j = {{"file", c.file},       {"panel", c.panel}, {"kind", c.kind},   {"title", c.title},   {"x_label", c.x_label},
                       {"y_label", c.y_label}, {"x_log", c.x_log}, {"y_log", c.y_log}, {"series", series}, {"sections", sections}};
   if (c.network) j["network"] = to_json(*c.network);
+  if (c.grains) j["grains"] = to_json(*c.grains);
   return j;
 }
 

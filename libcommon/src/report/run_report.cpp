@@ -6,6 +6,7 @@
 
 #include <fstream>
 
+#include "graintwin/report/clusters_3d.hpp"
 #include "graintwin/report/force_network.hpp"
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/sections.hpp"
@@ -69,8 +70,9 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
 
   PageContent page;
   page.title = report_title(run_dir, options.title);
-  // The sample itself first (sections, force chains), then the statistics.
+  // The sample itself first (sections, D2min clusters and force chains in 3D), then the statistics.
   page.panels = section_panels(files, experiment, simulation, options.panels);
+  for (Panel& p : cluster_3d_panels(files, experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
   for (Panel& p : force_network_panels(files, simulation, options.panels)) page.panels.push_back(std::move(p));
   for (Panel& p : build_panels(experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
   if (!files.validation.empty()) page.budget = error_budget(validate::read_validation(files.validation));

@@ -60,11 +60,28 @@ struct NetworkView {
   std::array<double, 6> bounds{};  ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
 };
 
+/// A 3D picture of the grains at one state (drawn with VTK), each a sphere of its volume-equivalent
+/// diameter at its centroid: the highlighted ones (the high-D2min clusters) opaque and painted with
+/// their value, the others as grey points that show the sample's shape, the membrane's balls (a
+/// triaxial twin) as pale points.
+struct GrainsView {
+  std::vector<double> centre;              ///< x, y, z per grain (m)
+  std::vector<double> radius;              ///< m
+  std::vector<double> value;               ///< NaN = not defined
+  std::vector<std::uint8_t> highlighted;   ///< 1: a painted sphere; 0: a grey point
+  std::vector<double> membrane;            ///< x, y, z per ball (m); empty without one
+  std::string quantity;                    ///< the colour bar's label
+  double colour_min = 0.0, colour_max = 0.0;
+  bool colour_log = false;
+  std::array<double, 6> bounds{};          ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
+};
+
 /// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
 /// kind "rose": each series is a rose profile, x = the polar-angle bin edges in degrees from the
 /// loading axis z (n + 1), y = the value per bin (n), drawn as a closed outline in the x-z plane,
 /// mirrored about both axes (the directions are axes, folded onto the upper hemisphere); kind
-/// "section": `sections` side by side, no series; kind "network": the 3D `network`.
+/// "section": `sections` side by side, no series; kinds "network" and "grains": the 3D `network`
+/// or `grains`.
 struct Chart {
   std::string file;   ///< PNG name inside the report's image folder
   std::string panel;  ///< charts of one panel share their axis limits
@@ -74,6 +91,7 @@ struct Chart {
   std::vector<Series> series;
   std::vector<SectionView> sections;  ///< kind "section": drawn side by side in one PNG
   std::optional<NetworkView> network;  ///< kind "network"
+  std::optional<GrainsView> grains;    ///< kind "grains"
 
   /// Adds a series, keeping only points with finite coordinates (and positive ones on log axes;
   /// vertical lines keep every finite x). Returns false, adding nothing, when no point is left.

@@ -1,8 +1,12 @@
-// The report's force-chain network (report/force_network): a frame's contacts that push their
-// grains apart become segments between the grains' centroids, with their normal forces; the
-// strong network keeps those at or above the mean force.
+// The report's 3D pictures: the force-chain network (report/force_network: a frame's contacts
+// that push their grains apart become segments between the grains' centroids, with their normal
+// forces; the strong network keeps those at or above the mean force) and the camera box of the
+// D2min clusters (report/clusters_3d).
 #include <gtest/gtest.h>
 
+#include <limits>
+
+#include "graintwin/report/clusters_3d.hpp"
 #include "graintwin/report/force_network.hpp"
 
 using namespace graintwin;
@@ -28,4 +32,11 @@ TEST(ReportForceNetwork, TheStrongNetworkKeepsTheContactsAtOrAboveTheMeanForce) 
   ASSERT_EQ(strong.force, (std::vector<double>{3.0, 6.0}));
   EXPECT_EQ(strong.from[1], Eigen::Vector3d(6, 0, 0));
   EXPECT_TRUE(strong_network(ForceNetwork{}).force.empty());
+}
+
+TEST(ReportClusters3d, TheCameraBoxHoldsEverySphereWhole) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const auto b = sphere_bounds({0, 0, 0, 4, 1, -2}, {1.0, 0.5}, {inf, -inf, inf, -inf, inf, -inf});
+  EXPECT_EQ(b, (std::array<double, 6>{-1.0, 4.5, -1.0, 1.5, -2.5, 1.0}));
+  EXPECT_EQ(sphere_bounds({}, {}, b), b);
 }
