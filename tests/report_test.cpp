@@ -508,6 +508,7 @@ TEST_F(Report, PicturesShowTheSampleBesideTheTwin) {
   const auto* scan = find_chart(spec, "section_scan_001_experiment.png");
   ASSERT_NE(scan, nullptr);
   ASSERT_EQ((*scan)["sections"].size(), 2u);
+  EXPECT_EQ((*scan)["title"], "scan_001, axial strain 2.0 %") << "the applied strain, -ln 0.98";
   const auto& horizontal = (*scan)["sections"][0];
   const auto& vertical = (*scan)["sections"][1];
   EXPECT_EQ(horizontal["plane"], "xy");

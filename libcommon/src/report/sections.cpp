@@ -171,7 +171,14 @@ constexpr const char* kNoModel =
 
 std::string mm(double metres) { return fmt::format("{:.2f} mm", 1e3 * metres); }
 
-std::string percent(double strain) { return std::isfinite(strain) ? fmt::format("{:.1f} %", 100.0 * strain) : "unknown"; }
+std::string percent(double strain) { return fmt::format("{:.1f} %", 100.0 * strain); }
+
+/// ", axial strain A" (or "A -> B"), or nothing when a strain is not known (a single scan without
+/// --scan-strains or tracks; a frame of a scene without a triaxial test).
+std::string strains(double from, double to = 0.0, bool increment = false) {
+  if (!std::isfinite(from) || (increment && !std::isfinite(to))) return "";
+  return ", axial strain " + percent(from) + (increment ? " -> " + percent(to) : "");
+}
 
 /// The frame (u0, u1, v0, v1) of a plane in an image's extent (x0, x1, y0, y1, z0, z1).
 std::array<double, 4> image_frame(const std::array<double, 6>& e, SectionPlane plane) {
@@ -350,7 +357,7 @@ std::vector<Panel> section_panels(const RunFiles& files, const ExperimentData& e
             {}, {}};
     Chart ce;
     ce.kind = "section", ce.panel = p.id, ce.file = p.id + "_experiment.png";
-    ce.title = scan + ", axial strain " + percent(scan_strain(e, t));
+    ce.title = scan + strains(scan_strain(e, t));
     SectionView h = image_view(files, t, planes[t], SectionPlane::xy, planes[t].mid_z);
     SectionView v = image_view(files, t, planes[t], SectionPlane::xz, axis_y);
     h.title = "horizontal, z = " + mm(planes[t].mid_z), v.title = "vertical through the axis, y = " + mm(axis_y);
@@ -368,7 +375,7 @@ std::vector<Panel> section_panels(const RunFiles& files, const ExperimentData& e
       const TwinFrame& f = twin->frame(t);
       Chart cs;
       cs.kind = "section", cs.panel = p.id, cs.file = p.id + "_simulation.png";
-      cs.title = fmt::format("frame {}, axial strain {}", t, percent(f.axial_strain));
+      cs.title = fmt::format("frame {}{}", t, strains(f.axial_strain));
       SectionView th = outline_view(f.horizontal, SectionPlane::xy, f.horizontal_z, horizontal_frame);
       SectionView tv = outline_view(f.vertical, SectionPlane::xz, twin->axis_y(), vertical_frame);
       th.title = "horizontal, z = " + mm(f.horizontal_z), tv.title = "vertical through the axis, y = " + mm(twin->axis_y());
@@ -407,8 +414,7 @@ std::vector<Panel> section_panels(const RunFiles& files, const ExperimentData& e
         const std::size_t t = inc.from;
         Chart c;
         c.kind = "section", c.panel = p.id, c.file = p.id + "_experiment.png";
-        c.title = fmt::format("{} -> {}, axial strain {} -> {}", e.scans[t].name, e.scans[inc.to].name, percent(scan_strain(e, t)),
-                              percent(scan_strain(e, inc.to)));
+        c.title = fmt::format("{} -> {}{}", e.scans[t].name, e.scans[inc.to].name, strains(scan_strain(e, t), scan_strain(e, inc.to), true));
         SectionView v = image_view(files, t, planes[t], SectionPlane::xz, axis_y);
         v.title = "vertical through the axis, y = " + mm(axis_y);
         paint(v, *e.micro, t, k, (*e.micro).*q.values);
@@ -426,8 +432,7 @@ std::vector<Panel> section_panels(const RunFiles& files, const ExperimentData& e
         const TwinFrame& f = twin->frame(inc.from);
         Chart c;
         c.kind = "section", c.panel = p.id, c.file = p.id + "_simulation.png";
-        c.title = fmt::format("frame {} -> {}, axial strain {} -> {}", inc.from, inc.to, percent(f.axial_strain),
-                              percent(twin->axial_strain(inc.to)));
+        c.title = fmt::format("frame {} -> {}{}", inc.from, inc.to, strains(f.axial_strain, twin->axial_strain(inc.to), true));
         SectionView v = outline_view(f.vertical, SectionPlane::xz, twin->axis_y(), vertical_frame);
         v.title = "vertical through the axis, y = " + mm(twin->axis_y());
         paint(v, *s.micro, inc.from, k, (*s.micro).*q.values);
