@@ -485,11 +485,15 @@ TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
   EXPECT_FALSE(fs::exists(out / "page_img/bench"));
 }
 
-TEST_F(Report, AModelOfAnotherRunIsRefusedNamingBothFiles) {
+TEST_F(Report, FilesOfAnotherRunAreRefusedNamingThem) {
   test::TempDir out;
   fdem::write_model_file(out / "model.h5", test::cube_sample(1e-3), {"a cube"});
   test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), "--model", (out / "model.h5").string()}, 1,
                              (g_runs->full / "simulation.h5").string() + " holds 64 grains but the model " + (out / "model.h5").string());
+  // The simulation's micro-mechanics (four frames) in place of the three scans'.
+  const fs::path frames = g_runs->full / "simulation_micro.h5";
+  test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), "--micro", frames.string()}, 2,
+                             frames.string() + " follows 4 scans but the run has 3; rerun the micro stage");
 }
 
 TEST_F(Report, PicturesShowTheSampleBesideTheTwin) {
