@@ -19,6 +19,8 @@ PACKAGES=(
   # Python from Debian for the h5py interoperability checks, reference baselines and plots;
   # VTK's own reader checks that ParaView opens what we write
   python3 python3-numpy python3-h5py python3-matplotlib python3-vtk9
+  # the X server VTK renders the report's 3D pictures on, without a screen
+  xvfb
   # a headless browser that renders the report page in its test (every chart must decode)
   chromium
 )

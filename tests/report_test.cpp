@@ -16,17 +16,24 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <numeric>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "graintwin/fdem/model_file.hpp"
+#include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/volume_io.hpp"
+#include "graintwin/micro/micro_file.hpp"
 #include "graintwin/report/charts.hpp"
 #include "graintwin/report/error_budget.hpp"
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/run_data.hpp"
 #include "graintwin/segment/labels_file.hpp"
+#include "graintwin/track/tracks_file.hpp"
 #include "graintwin/validate/validation_file.hpp"
 #include "support/cli_contract.hpp"
 #include "support/cube_sample.hpp"
@@ -61,9 +68,20 @@ std::vector<test::Ball> scan_balls(int t) {
   return balls;
 }
 
+/// The label image of scan t, placed where the lattice simulation's cubes are (11 voxels per 1.5 mm
+/// site spacing, the lattice's first ball centre at its first site), as a pipeline's twin is built
+/// at its reference scan's positions. Longer in y, so the vertical plane through the image's middle
+/// (y = 19.5 voxels) runs through the third row of balls and of cubes, not between rows.
+Volume<std::uint32_t> scan_labels(int t) {
+  constexpr double kVoxel = 1.5e-3 / 11.0;
+  Volume<std::uint32_t> labels = test::label_balls({48, 54, 48}, scan_balls(t), {kVoxel, kVoxel, kVoxel});
+  labels.set_origin({-7.0 * kVoxel, -7.0 * kVoxel, -7.0 * kVoxel});
+  return labels;
+}
+
 void write_labels(const fs::path& path, int t) {
   segment::LabelsFile c;
-  c.labels = test::label_balls({48, 48, 48}, scan_balls(t));
+  c.labels = scan_labels(t);
   c.grains = segment::grain_table(c.labels);
   std::size_t solid = 0;
   for (std::uint32_t v : c.labels.values()) solid += v != 0;
@@ -73,6 +91,18 @@ void write_labels(const fs::path& path, int t) {
                          double(c.labels.size() - solid) / double(solid)};
   c.parameters_json = "{}";
   segment::write_labels_file(path, c, {"phantom labels of scan " + std::to_string(t)});
+}
+
+/// Scan t itself (kind=volume): grey values of its labels' geometry, bright grains in a darker
+/// ground with a gentle ramp, so the sections have grey under the labels.
+void write_scan(const fs::path& path, int t) {
+  const Volume<std::uint32_t> labels = scan_labels(t);
+  Volume<std::uint8_t> grey(labels.shape(), labels.voxel_size(), labels.origin());
+  const auto [nz, ny, nx] = labels.shape();
+  for (std::size_t z = 0; z < nz; ++z)
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x) grey(z, y, x) = std::uint8_t((labels(z, y, x) ? 170 : 40) + (x + y) % 16);
+  io::write_volume_file(path, AnyVolume(std::move(grey)), {"phantom scan " + std::to_string(t)});
 }
 
 /// The simulation's triaxial series: eps_1 from 0 to 6 %, dilation, a hardening stress ratio.
@@ -165,6 +195,7 @@ void run_ok(const std::string& tool, const std::vector<std::string>& args) {
 struct Runs {
   test::TempDir dir;
   fs::path full, experiment, series_json;
+  std::vector<std::string> volumes;  ///< the scans themselves, outside the run (as the series' are)
   fs::path page;           ///< the report of `full` with --scan-strains
   test::ToolResult made;   ///< how making it went
 };
@@ -181,6 +212,8 @@ void make_runs() {
     const fs::path scan = r.full / ("scan_00" + std::to_string(t));
     fs::create_directories(scan);
     write_labels(scan / "labels.h5", t);
+    r.volumes.push_back((r.dir / ("scan_00" + std::to_string(t) + ".h5")).string());
+    write_scan(r.volumes.back(), t);
     run_ok("labels2contacts", {(scan / "labels.h5").string(), (scan / "contacts.h5").string()});
     // Low SH degree and principal-axis rotations: the report reads no shape detail, and it is faster.
     run_ok("labels2shapes", {(scan / "labels.h5").string(), (scan / "shapes.h5").string(), "--degree", "6"});
@@ -196,6 +229,7 @@ void make_runs() {
   run_ok("tracks2micro", micro_args);
   fs::copy(r.full, r.experiment, fs::copy_options::recursive);
   write_simulation(r.full / "simulation.h5");
+  fdem::write_model_file(r.full / "model.h5", test::lattice_model({}), {"the lattice's model (test)"});
   write_budget(r.full / "validation.json");
   // The boxes sit 1.5 mm apart with equivalent radii of 0.62 mm: link neighbours into clusters.
   run_ok("tracks2micro", {(r.full / "simulation.h5").string(), (r.full / "simulation_micro.h5").string(), "--contact-factor", "1.3"});
@@ -211,7 +245,9 @@ const test::ToolResult& full_report() {
   if (r.page.empty()) {
     fs::create_directories(r.dir / "out");
     r.page = r.dir / "out/report.html";
-    r.made = run_tool("report", {r.full.string(), r.page.string(), "--scan-strains", r.series_json.string()});
+    std::vector<std::string> args{r.full.string(), r.page.string(), "--scan-strains", r.series_json.string(), "--volumes"};
+    args.insert(args.end(), r.volumes.begin(), r.volumes.end());
+    r.made = run_tool("report", args);
   }
   return r.made;
 }
@@ -255,6 +291,49 @@ const nlohmann::json* find_series(const nlohmann::json& chart, const std::string
 const std::vector<std::string> kPanels{"stress_ratio", "volumetric_strain", "psd",  "coordination", "rose_normals",
                                         "rose_branches", "rose_forces", "rdf", "displacement", "d2min_pdf",
                                         "eps_q_pdf", "cluster_sizes", "cluster_rg", "force_pdf", "volatility"};
+
+/// The section panels of the full run: one per scan, then D2min and eps_q for each increment (the
+/// scans have two, the simulation's four frames three).
+const std::vector<std::string> kSectionPanels{"section_scan_000", "section_scan_001", "section_scan_002",
+                                              "section_d2min_0",  "section_d2min_1",  "section_d2min_2",
+                                              "section_eps_q_0",  "section_eps_q_1",  "section_eps_q_2"};
+/// Section sides without a picture in the full run: the third increment exists in the simulation only.
+constexpr std::size_t kSectionSidesMissing = 2;
+/// The D2min clusters in 3D: one panel per increment, the scans' two beside the simulation's three.
+const std::vector<std::string> kClusterPanels{"clusters_3d_0", "clusters_3d_1", "clusters_3d_2"};
+/// The force-chain network's panels: one per frame of the lattice simulation, the simulation's side only.
+const std::vector<std::string> kNetworkPanels{"force_network_0", "force_network_1", "force_network_2", "force_network_3"};
+
+/// The pixel check of the pictures of the sample (sections, 3D clusters and force networks), run with
+/// Debian's Python: each must show something (not
+/// blank, many colours, at least 2 % of it grains in colour) with the sample inside the frame (the
+/// coloured pixels away from the picture's edges, their centre in its middle). Prints one line per
+/// failure and the count checked.
+constexpr const char* kPixelCheck = R"(
+import json, sys
+import matplotlib.image as mi
+import numpy as np
+folder = sys.argv[1]
+checked, failures = 0, []
+for c in json.load(open(folder + "/charts.json"))["charts"]:
+    if c["kind"] not in ("section", "network", "grains"):
+        continue
+    rgb = mi.imread(folder + "/" + c["file"])[..., :3]
+    h, w, _ = rgb.shape
+    colours = len(np.unique((255 * rgb).astype(np.uint8).reshape(-1, 3), axis=0))
+    coloured = (rgb.max(axis=2) - rgb.min(axis=2)) > 0.15
+    ys, xs = np.nonzero(coloured)
+    checked += 1
+    if colours < 16 or coloured.mean() < 0.02:
+        failures.append(f"{c['file']}: {colours} colours, {100 * coloured.mean():.1f} % in colour")
+    elif ys.min() < 2 or xs.min() < 2 or ys.max() > h - 3 or xs.max() > w - 3:
+        failures.append(f"{c['file']}: the sample reaches the picture's edge")
+    elif not (0.2 * w < xs.mean() < 0.8 * w and 0.2 * h < ys.mean() < 0.8 * h):
+        failures.append(f"{c['file']}: the sample lies off the middle ({xs.mean():.0f}, {ys.mean():.0f}) of {w} x {h}")
+print("\n".join(failures))
+print(checked, "pictures checked")
+sys.exit(1 if failures else 0)
+)";
 
 }  // namespace
 
@@ -328,7 +407,9 @@ TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   // Every side with data has its chart; CT has no forces or stresses, so exactly those four
   // experiment sides (stress ratio, force rose, force PDF, volatility) say so instead.
   const nlohmann::json spec = nlohmann::json::parse(slurp(out / "report_img/charts.json"));
-  EXPECT_EQ(spec["charts"].size(), 2 * kPanels.size() - 4 + kBudgetLines.size());
+  EXPECT_EQ(spec["charts"].size(),
+            2 * kPanels.size() - 4 + 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 +
+                kNetworkPanels.size() + kBudgetLines.size());
   const auto* twin = find_chart(spec, "budget_twin.png");
   ASSERT_NE(twin, nullptr);
   ASSERT_NE(find_series(*twin, "twin"), nullptr);
@@ -390,14 +471,155 @@ TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string html = slurp(out / "page.html");
   for (const std::string& id : kPanels) EXPECT_NE(html.find("id=\"" + id + "\""), std::string::npos) << id;
-  // Every simulation side is missing and says which stage makes it; the experiment keeps its 11.
-  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size());
-  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4);
+  // Every simulation side is missing and says which stage makes it; the experiment keeps its 11,
+  // and its pictures: the sections of three scans, D2min and eps_q of two increments, and the D2min
+  // clusters of two increments in 3D.
+  const std::size_t pictures = kScans + 2 * (kScans - 1) + (kScans - 1);
+  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + pictures + 1)
+      << "and the force-chain network's one panel";
+  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4 + pictures);
   EXPECT_NE(html.find("No benchmark charts were found"), std::string::npos);
   // No validation.json: the error budget is one sentence.
   EXPECT_NE(html.find(report::kNoValidation), std::string::npos);
   EXPECT_EQ(count_of(html, "class=\"budget\""), 0u);
   EXPECT_FALSE(fs::exists(out / "page_img/bench"));
+}
+
+TEST_F(Report, FilesOfAnotherRunAreRefusedNamingThem) {
+  test::TempDir out;
+  fdem::write_model_file(out / "model.h5", test::cube_sample(1e-3), {"a cube"});
+  test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), "--model", (out / "model.h5").string()}, 1,
+                             (g_runs->full / "simulation.h5").string() + " holds 64 grains but the model " + (out / "model.h5").string());
+  // The simulation's micro-mechanics (four frames) in place of the three scans'.
+  const fs::path frames = g_runs->full / "simulation_micro.h5";
+  test::expect_clean_failure("report", out, {g_runs->full.string(), (out / "r.html").string(), "--micro", frames.string()}, 2,
+                             frames.string() + " follows 4 scans but the run has 3; rerun the micro stage");
+}
+
+TEST_F(Report, PicturesShowTheSampleBesideTheTwin) {
+  ASSERT_EQ(full_report().exit_code, 0) << full_report().err;
+  const fs::path img = g_runs->page.parent_path() / "report_img";
+  const std::string html = slurp(g_runs->page);
+  // The sample itself comes first, before the statistics.
+  for (const std::string& id : kSectionPanels) {
+    const std::size_t at = html.find("<section class=\"panel\" id=\"" + id + "\">");
+    ASSERT_NE(at, std::string::npos) << id;
+    EXPECT_LT(at, html.find("id=\"stress_ratio\"")) << id;
+  }
+  const nlohmann::json spec = nlohmann::json::parse(slurp(img / "charts.json"));
+  // Scan 1: its label image over its grey values, horizontal and vertical through the axis, its
+  // grains in the colours of their tracked identities in scan 0.
+  const auto* scan = find_chart(spec, "section_scan_001_experiment.png");
+  ASSERT_NE(scan, nullptr);
+  ASSERT_EQ((*scan)["sections"].size(), 2u);
+  EXPECT_EQ((*scan)["title"], "scan_001, axial strain 2.0 %") << "the applied strain, -ln 0.98";
+  const auto& horizontal = (*scan)["sections"][0];
+  const auto& vertical = (*scan)["sections"][1];
+  EXPECT_EQ(horizontal["plane"], "xy");
+  EXPECT_EQ(vertical["plane"], "xz");
+  EXPECT_EQ(vertical["labels_file"], (g_runs->full / "scan_001/labels.h5").string());
+  EXPECT_EQ(vertical["volume_file"], g_runs->volumes[1]);
+  EXPECT_NEAR(vertical["index"].get<double>(), 26.5, 0.5) << "the middle of the 54 voxels (the phantom has no cylinder)";
+  EXPECT_GT(vertical["identity"].size(), 50u);
+  // The twin at frame 1 cut by the same planes: the vertical one through the lattice's third row
+  // of cubes (4 x 4 squares), the horizontal one through a layer of 16; every outline in the frame
+  // both sides share.
+  const auto* twin = find_chart(spec, "section_scan_001_simulation.png");
+  ASSERT_NE(twin, nullptr);
+  ASSERT_EQ((*twin)["sections"].size(), 2u);
+  for (int v = 0; v < 2; ++v) {
+    const auto& view = (*twin)["sections"][v];
+    EXPECT_EQ(view["outline"].size(), 16u) << view["plane"];
+    EXPECT_EQ(view["extent"], (*scan)["sections"][v]["extent"]);
+    const auto extent = view["extent"].get<std::array<double, 4>>();
+    for (const auto& loop : view["outline"])
+      for (std::size_t i = 0; i + 1 < loop.size(); i += 2) {
+        EXPECT_GE(loop[i].get<double>(), extent[0]);
+        EXPECT_LE(loop[i].get<double>(), extent[1]);
+        EXPECT_GE(loop[i + 1].get<double>(), extent[2]);
+        EXPECT_LE(loop[i + 1].get<double>(), extent[3]);
+      }
+  }
+  // D2min of increment 1 painted on scan 1's grains with micro.h5's values, on one scale with the
+  // simulation's and every other increment's.
+  const micro::MicroTables m = micro::read_micro_tables(g_runs->full / "micro.h5");
+  const auto* d2 = find_chart(spec, "section_d2min_1_experiment.png");
+  ASSERT_NE(d2, nullptr);
+  const auto& painted = (*d2)["sections"][0];
+  std::map<std::uint32_t, nlohmann::json> value_of;
+  for (std::size_t i = 0; i < painted["value_label"].size(); ++i) value_of[painted["value_label"][i]] = painted["value"][i];
+  const std::size_t states = m.states.size(), increments = m.increments.size();
+  std::size_t compared = 0;
+  for (std::size_t n = 0; n < m.grains; ++n) {
+    const std::uint32_t label = m.grain_label[n * states + 1];
+    if (label == 0) continue;
+    ASSERT_TRUE(value_of.count(label)) << label;
+    const double d2min = m.grain_d2min[n * increments + 1];
+    if (!std::isfinite(d2min)) {
+      EXPECT_TRUE(value_of[label].is_null()) << label;
+      continue;
+    }
+    EXPECT_EQ(value_of[label].get<double>(), d2min) << label;
+    ++compared;
+  }
+  EXPECT_GT(compared, 40u);
+  std::set<std::pair<double, double>> scales;
+  for (const auto& c : spec["charts"])
+    if (c["file"].get<std::string>().rfind("section_d2min_", 0) == 0)
+      scales.insert({c["sections"][0]["colour_min"].get<double>(), c["sections"][0]["colour_max"].get<double>()});
+  ASSERT_EQ(scales.size(), 1u) << "one colour scale for D2min";
+  EXPECT_LT(scales.begin()->first, scales.begin()->second);
+  // The force-chain network of frame 1: of the 96 chosen contacts (all pushing), those with at
+  // least their mean normal force, from centroid to centroid, on one scale with the other frames'.
+  const fdem::ResultsFrame frame = fdem::read_results_frame(g_runs->full / "simulation.h5", 1);
+  std::vector<double> normal_force;
+  for (std::size_t i = 0; i < frame.platen.size(); ++i)
+    normal_force.push_back(Eigen::Vector3d(&frame.force[3 * i]).dot(Eigen::Vector3d(&frame.normal[3 * i])));
+  ASSERT_EQ(normal_force.size(), 96u);
+  const double mean = std::accumulate(normal_force.begin(), normal_force.end(), 0.0) / 96.0;
+  const auto strong = std::count_if(normal_force.begin(), normal_force.end(), [&](double f) { return f >= mean; });
+  const auto* network = find_chart(spec, "force_network_1_simulation.png");
+  ASSERT_NE(network, nullptr);
+  EXPECT_EQ((*network)["network"]["force"].size(), std::size_t(strong));
+  EXPECT_EQ((*network)["network"]["segments"].size(), 6 * std::size_t(strong));
+  for (const auto& f : (*network)["network"]["force"]) EXPECT_GE(f.get<double>(), mean);
+  std::set<double> tops;
+  for (const std::string& id : kNetworkPanels) {
+    EXPECT_NE(html.find("<section class=\"panel\" id=\"" + id + "\">"), std::string::npos) << id;
+    const auto* c = find_chart(spec, id + "_simulation.png");
+    ASSERT_NE(c, nullptr) << id;
+    tops.insert((*c)["network"]["force_max"].get<double>());
+  }
+  EXPECT_EQ(tops.size(), 1u) << "one force scale for every frame";
+  // D2min in 3D, increment 0: every tracked grain of scan 0 at its tracked centroid, painted with
+  // micro.h5's D2min, the clusters' members highlighted; one colour scale and one camera for all.
+  const track::TrackedCentroids tracked = track::read_tracked_centroids(g_runs->full / "tracks.h5");
+  const auto* clusters = find_chart(spec, "clusters_3d_0_experiment.png");
+  ASSERT_NE(clusters, nullptr);
+  const auto& grains = (*clusters)["grains"];
+  std::size_t row = 0, members = 0;
+  for (std::size_t n = 0; n < m.grains; ++n) {
+    if (m.grain_label[n * states] == 0) continue;
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(grains["centre"][3 * row + a].get<double>(), tracked.centroid[3 * n * tracked.scans + a]);
+    const double d2min = m.grain_d2min[n * increments];
+    if (std::isfinite(d2min)) EXPECT_EQ(grains["value"][row].get<double>(), d2min);
+    EXPECT_EQ(grains["highlighted"][row].get<int>(), m.grain_cluster[n * increments] >= 0 ? 1 : 0);
+    members += m.grain_cluster[n * increments] >= 0;
+    ++row;
+  }
+  EXPECT_EQ(grains["centre"].size(), 3 * row);
+  EXPECT_GT(members, 0u) << "tracks2micro's top fraction makes clusters";
+  std::set<std::string> cameras;
+  for (const std::string& id : kClusterPanels)
+    for (const char* side : {"_experiment.png", "_simulation.png"})
+      if (const auto* c = find_chart(spec, id + side))
+        cameras.insert((*c)["grains"]["bounds"].dump() + (*c)["grains"]["colour_min"].dump() + (*c)["grains"]["colour_max"].dump());
+  EXPECT_EQ(cameras.size(), 1u) << "one camera and one colour scale for every 3D picture of D2min";
+  // Every picture shows something, with the sample inside the frame.
+  const auto pixels = test::run_program("/usr/bin/python3", {"-c", kPixelCheck, img.string()});
+  EXPECT_EQ(pixels.exit_code, 0) << pixels.out << pixels.err;
+  const std::size_t pictures = 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 + kNetworkPanels.size();
+  EXPECT_NE(pixels.out.find(std::to_string(pictures) + " pictures checked"), std::string::npos) << pixels.out;
 }
 
 TEST_F(Report, HeadlessChromiumLoadsEveryImage) {
@@ -428,6 +650,13 @@ TEST(ReportFailures, BadInputsFailCleanly) {
   test::expect_clean_failure("report", out, {run.path().string(), page, "--shapes", labels, labels}, 2, "give one per scan");
   test::expect_clean_failure("report", out, {run.path().string(), page, "--scan-strains", labels}, 2, "pass a series.json");
   test::expect_clean_failure("report", out, {run.path().string(), page, "--micro", (run / "none.h5").string()}, 2, "none.h5 does not exist");
+  // The scans under the labels: of kind volume, one per scan, of the labels' geometry.
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--volumes", labels}, 2,
+                             "pass the scan the labels were segmented from");
+  io::write_volume_file(run / "small.h5", AnyVolume(Volume<std::uint8_t>({10, 10, 10})), {"a small scan"});
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--volumes", (run / "small.h5").string()}, 2,
+                             "--volumes " + (run / "small.h5").string() + " is not the scan of " + labels);
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--volumes", labels, labels}, 2, "give one per scan");
   const fs::path broken = run / "broken.py";
   std::ofstream(broken) << "import sys\nsys.exit('matplotlib is missing here')\n";
   test::expect_clean_failure("report", out, {run.path().string(), page, "--chart-script", broken.string()}, 1, "matplotlib is missing here");

@@ -22,7 +22,10 @@ int main(int argc, char** argv) {
       "Makefile.pipeline wrote into RUNDIR: every scan_*/labels.h5 with its contacts.h5 and shapes.h5, tracks.h5, micro.h5, "
       "model.h5, and the simulation side simulation.h5 (fdemrun), forces.h5 (fdem2forces) and simulation_micro.h5 "
       "(tracks2micro on the simulation frames); options name any of them explicitly. Panels, experiment left and "
-      "simulation right: stress ratio and volumetric strain against axial strain (the simulation's triaxial series, the "
+      "simulation right: sections of each scan with its labels (over the scan's grey values with --volumes) beside the same "
+      "planes through the FDEM twin's grains; D2min and eps_q of every grain painted on the vertical section through the axis "
+      "for each increment, on one colour scale; the high-D2min clusters in 3D for each increment, scans beside the twin; the "
+      "twin's strong force-chain network in 3D at each frame (3D pictures by VTK on a private Xvfb); stress ratio and volumetric strain against axial strain (the simulation's triaxial series, the "
       "scans' strains as points), PSD, coordination numbers, roses of contact normals, branch vectors and mean normal "
       "force, g(r), incremental displacement distributions, PDFs of D2min and eps_q, cluster size distribution with its "
       "power-law fit, R_g against s with d_f, force PDF with its strong and weak fits, volatility of grain stress against "
@@ -40,6 +43,9 @@ int main(int argc, char** argv) {
   app.add_option("--labels", given.labels, "The scans' labels files in order (kind=labels), in place of RUNDIR/scan_*/labels.h5");
   app.add_option("--contacts", given.contacts, "The scans' contacts files in order (kind=contacts), one per scan");
   app.add_option("--shapes", given.shapes, "The scans' shapes files in order (kind=shapes), one per scan");
+  app.add_option("--volumes", given.volumes,
+                 "The scans themselves in order (kind=volume, ct2labels' inputs), one per scan: the sections draw the labels over "
+                 "their grey values (without them, over white)");
   app.add_option("--tracks", given.tracks, "Tracks file (kind=tracks) in place of RUNDIR/tracks.h5");
   app.add_option("--micro", given.micro, "Micro-mechanics of the scans (kind=micro) in place of RUNDIR/micro.h5");
   app.add_option("--model", given.model, "FDEM model (kind=fdem_model) in place of RUNDIR/model.h5");

@@ -9,8 +9,10 @@ group}]; series of one non-empty group share a colour (a fit and its data).
 xy styles: line, dashed, points, linepoints, vline (a vertical line at each x). A rose series has
 x = polar-angle bin edges in degrees from the loading axis z and y = one value per bin; it is
 drawn as a closed outline in the x-z plane, mirrored about both axes. Charts of one panel share
-their axis limits so experiment and simulation compare at a glance. The script computes nothing
-but limits: every number comes from the JSON.
+their axis limits so experiment and simulation compare at a glance. Kind "section" (pictures of the
+sample: label slices and the twin's outlines) is drawn by report_sections.py, kinds "network" (the
+3D force-chain network) and "grains" (D2min clusters in 3D) by report_3d.py with VTK. The script computes
+nothing but limits: every number comes from the JSON.
 """
 import json
 import math
@@ -21,6 +23,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+import report_sections  # noqa: E402  (beside this script)
 
 STYLES = {
     "line": dict(linestyle="-", marker=None),
@@ -107,6 +111,15 @@ def main():
     for c in charts:
         panels.setdefault(c["panel"], []).append(c)
     for chart in charts:
+        if chart["kind"] == "section":
+            report_sections.draw(chart, os.path.join(out_dir, chart["file"]))
+            continue
+        if chart["kind"] in ("network", "grains"):
+            import report_3d  # VTK and its Xvfb only when a run has a 3D picture to draw
+
+            draw_3d = report_3d.draw_network if chart["kind"] == "network" else report_3d.draw_grains
+            draw_3d(chart, os.path.join(out_dir, chart["file"]))
+            continue
         group = panels[chart["panel"]]
         if chart["kind"] == "rose":
             values = [v for c in group for s in c["series"] for v in finite(s["y"], False)]

@@ -39,13 +39,19 @@ inline Eigen::Vector3d lattice_site(const LatticeRun& run, std::size_t i) {
   return run.spacing * Eigen::Vector3d(double(i % s), double(i / s % s), double(i / (s * s)));
 }
 
+/// The lattice's model: rigid cubes of edge `box` centred on the sites, labelled lattice_label.
+inline fdem::Model lattice_model(const LatticeRun& run) {
+  fdem::Model model;
+  const fdem::TetMesh mesh = fdem::box_mesh(Eigen::Vector3d::Constant(run.box), run.box);
+  for (std::size_t i = 0; i < std::size_t(run.side * run.side * run.side); ++i)
+    fdem::add_grain(model, mesh, lattice_site(run, i), fdem::GrainKind::rigid, 0, lattice_label(i));
+  return model;
+}
+
 /// Writes `path`; frame k is taken after k x steps_per_frame steps. Grain volumes are box^3.
 inline void write_lattice_results(const std::filesystem::path& path, const LatticeRun& run) {
-  fdem::Model model;
-  const std::size_t n = std::size_t(run.side * run.side * run.side);
-  const fdem::TetMesh mesh = fdem::box_mesh(Eigen::Vector3d::Constant(run.box), run.box);
-  for (std::size_t i = 0; i < n; ++i)
-    fdem::add_grain(model, mesh, lattice_site(run, i), fdem::GrainKind::rigid, 0, lattice_label(i));
+  fdem::Model model = lattice_model(run);
+  const std::size_t n = model.grains.size();
   fdem::SolverOptions options;
   options.contact.enabled = false;
   fdem::Solver solver(model, options);

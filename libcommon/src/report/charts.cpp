@@ -35,12 +35,59 @@ bool Chart::add(Series s) {
   return true;
 }
 
+namespace {
+
+/// JSON has no NaN: an undefined value is null.
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json to_json(const SectionView& v) {
+  nlohmann::json values = nlohmann::json::array();
+  for (double x : v.value) values.push_back(number_or_null(x));
+  return {{"title", v.title},
+          {"plane", v.plane},
+          {"offset", v.offset},
+          {"extent", v.extent},
+          {"labels_file", v.labels_file},
+          {"volume_file", v.volume_file},
+          {"index", v.index},
+          {"outline_label", v.outline_label},
+          {"outline", v.outline},
+          {"identity_label", v.identity_label},
+          {"identity", v.identity},
+          {"quantity", v.quantity},
+          {"value_label", v.value_label},
+          {"value", values},
+          {"colour_min", number_or_null(v.colour_min)},
+          {"colour_max", number_or_null(v.colour_max)},
+          {"colour_log", v.colour_log}};
+}
+
+nlohmann::json to_json(const NetworkView& v) {
+  return {{"segments", v.segments}, {"force", v.force}, {"force_max", v.force_max}, {"radius_max", v.radius_max}, {"bounds", v.bounds}};
+}
+
+nlohmann::json to_json(const GrainsView& v) {
+  nlohmann::json values = nlohmann::json::array();
+  for (double x : v.value) values.push_back(number_or_null(x));
+  return {{"centre", v.centre},         {"radius", v.radius},         {"value", values},
+          {"highlighted", v.highlighted}, {"membrane", v.membrane},     {"quantity", v.quantity},
+          {"colour_min", number_or_null(v.colour_min)}, {"colour_max", number_or_null(v.colour_max)},
+          {"colour_log", v.colour_log},   {"bounds", v.bounds}};
+}
+
+}  // namespace
+
 nlohmann::json to_json(const Chart& c) {
   nlohmann::json series = nlohmann::json::array();
   for (const Series& s : c.series)
     series.push_back({{"name", s.name}, {"style", s.style}, {"x", s.x}, {"y", s.y}, {"group", s.group}});
-  return {{"file", c.file},       {"panel", c.panel},     {"kind", c.kind},   {"title", c.title}, {"x_label", c.x_label},
-          {"y_label", c.y_label}, {"x_log", c.x_log},     {"y_log", c.y_log}, {"series", series}};
+  nlohmann::json sections = nlohmann::json::array();
+  for (const SectionView& v : c.sections) sections.push_back(to_json(v));
+  nlohmann::json j = {{"file", c.file},       {"panel", c.panel}, {"kind", c.kind},   {"title", c.title},   {"x_label", c.x_label},
+                      {"y_label", c.y_label}, {"x_log", c.x_log}, {"y_log", c.y_log}, {"series", series}, {"sections", sections}};
+  if (c.network) j["network"] = to_json(*c.network);
+  if (c.grains) j["grains"] = to_json(*c.grains);
+  return j;
 }
 
 std::vector<std::size_t> pick_evenly(std::size_t count, std::size_t max_count) {

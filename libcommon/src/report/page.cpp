@@ -141,7 +141,9 @@ std::string report_html(const PageContent& c) {
        "</style>\n</head>\n";
   o << "<body data-images-total=\"" << total_images << "\" data-images-loaded=\"pending\">\n";
   o << "<h1>" << html_escape(c.title) << "</h1>\n"
-    << "<p>Experiment (CT scans) and simulation (FDEM twin) side by side, one panel per chart; the numbers behind every chart are "
+    << "<p>Experiment (CT scans) and simulation (FDEM twin) side by side: first pictures of the sample (sections through the scans "
+       "and the twin, D2min and eps_q on them, the high-D2min clusters and the force-chain network in 3D), then one panel per "
+       "chart; the numbers behind every picture and chart are "
        "in the report's image folder (charts.json). Made by <code>"
     << html_escape(c.generated_by) << "</code>.</p>\n";
   o << "<table class=\"summary\">\n";

@@ -10,14 +10,11 @@ namespace graintwin::report {
 
 namespace {
 
-constexpr const char* kNoSimulationMicro =
-    "This run has no micro-mechanics of the simulation frames (simulation_micro.h5): tracks2micro on simulation.h5 makes it.";
 constexpr const char* kNoForces =
     "This run has no force statistics (forces.h5): the forces stage (fdem2forces on simulation.h5) makes them.";
 constexpr const char* kCtNoStress =
     "CT scans measure where grains are, not stresses: the experiment's stress ratio is the load cell's record, which the run's "
     "files do not hold. The scans' axial strains are marked on the simulation's curve.";
-constexpr const char* kCtNoForces = "CT scans do not measure contact forces: this chart exists for the simulation only.";
 constexpr const char* kCtNoGrainStress =
     "CT scans do not measure grain stresses, so the volatility of q exists for the simulation only.";
 constexpr const char* kEmpty = "The file holds no finite values to draw here.";

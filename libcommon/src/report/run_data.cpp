@@ -92,7 +92,18 @@ std::string check_hint(const std::string& kind) {
   if (kind == schema::kind::micro) return "pass the output of tracks2micro";
   if (kind == schema::kind::fdem_model) return "pass the output of shapes2mesh";
   if (kind == schema::kind::fdem_results) return "pass the output of fdemrun";
+  if (kind == schema::kind::volume) return "pass the scan the labels were segmented from (ct2labels' input)";
   return "pass the output of fdem2forces";
+}
+
+/// A scan named by --volumes must be an image of its labels file's geometry: the sections draw
+/// the labels over its grey values voxel for voxel.
+void check_volume_beside_labels(const fs::path& volume, const fs::path& labels) {
+  const io::ImageHeader grey = io::read_image_header(io::H5File::open(volume), "/volume");
+  const io::ImageHeader label = io::read_image_header(io::H5File::open(labels), "/labels");
+  if (grey.shape != label.shape || grey.voxel_size != label.voxel_size || grey.origin != label.origin)
+    throw UsageError("--volumes " + volume.string() + " is not the scan of " + labels.string() +
+                     " (its image has another size, voxel size or origin); pass the scans in the order of the labels files");
 }
 
 /// The tables of a run file of kind `kind` agree in length and hold only values their tool writes
@@ -164,6 +175,7 @@ RunFiles locate_run_files(const fs::path& run_dir, const RunFiles& given) {
   }
   f.contacts = per_scan(given.contacts, scan_dirs, layout::contacts, "--contacts");
   f.shapes = per_scan(given.shapes, scan_dirs, layout::shapes, "--shapes");
+  if (!given.volumes.empty()) f.volumes = per_scan(given.volumes, scan_dirs, "", "--volumes");
   f.tracks = given_or_found(given.tracks, run_dir / layout::tracks, "--tracks");
   f.micro = given_or_found(given.micro, run_dir / layout::micro, "--micro");
   f.model = given_or_found(given.model, run_dir / layout::model, "--model");
@@ -187,6 +199,10 @@ std::vector<std::pair<std::string, std::vector<std::string>>> check_run_files(co
     check(files.labels[s], schema::kind::labels);
     check(files.contacts[s], schema::kind::contacts);
     check(files.shapes[s], schema::kind::shapes);
+    if (!files.volumes.empty()) {
+      check(files.volumes[s], schema::kind::volume);
+      check_volume_beside_labels(files.volumes[s], files.labels[s]);
+    }
   }
   check(files.tracks, schema::kind::tracks);
   check(files.micro, schema::kind::micro);

@@ -6,7 +6,10 @@
 
 #include <fstream>
 
+#include "graintwin/report/clusters_3d.hpp"
+#include "graintwin/report/force_network.hpp"
 #include "graintwin/report/page.hpp"
+#include "graintwin/report/sections.hpp"
 
 namespace graintwin::report {
 
@@ -67,7 +70,11 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
 
   PageContent page;
   page.title = report_title(run_dir, options.title);
-  page.panels = build_panels(experiment, simulation, options.panels);
+  // The sample itself first (sections, D2min clusters and force chains in 3D), then the statistics.
+  page.panels = section_panels(files, experiment, simulation, options.panels);
+  for (Panel& p : cluster_3d_panels(files, experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
+  for (Panel& p : force_network_panels(files, simulation, options.panels)) page.panels.push_back(std::move(p));
+  for (Panel& p : build_panels(experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
   if (!files.validation.empty()) page.budget = error_budget(validate::read_validation(files.validation));
   std::vector<const Chart*> charts = panel_charts(page.panels);
   for (const BudgetLine& l : page.budget)
@@ -76,7 +83,8 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
   nlohmann::json spec = {{"charts", nlohmann::json::array()}};
   for (const Chart* c : charts) spec["charts"].push_back(to_json(*c));
   const fs::path spec_path = img_dir / "charts.json";
-  std::ofstream(spec_path) << spec.dump(1) << "\n";
+  // Compact: the twin's outlines run to hundreds of thousands of points at 16 000 grains.
+  std::ofstream(spec_path) << spec.dump() << "\n";
   run_chart_script(options.python, options.script, spec_path, img_dir);
   for (const Chart* c : charts) page.images[c->file] = read_binary_file(img_dir / c->file);
   done(3);

@@ -6,7 +6,9 @@
 // curves of the force PDF and of the cluster statistics, rose profiles.
 #include <nlohmann/json_fwd.hpp>
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,10 +26,62 @@ struct Series {
   std::string group = {};  ///< series of one non-empty group share a colour (data and its fit)
 };
 
+/// One picture of a section plane through the sample (report/sections.hpp): a slice of a label
+/// image (the experiment) or the outlines where the plane cuts the twin's grains (the simulation),
+/// grains filled with one colour per grain identity, or painted with one value each.
+struct SectionView {
+  std::string title;
+  std::string plane = "xz";          ///< "xz": vertical, y = offset; "xy": horizontal, z = offset
+  double offset = 0.0;               ///< m
+  std::array<double, 4> extent{};    ///< u0, u1, v0, v1 (m): the frame drawn, shared by both sides
+  std::string labels_file;           ///< kind=labels: the slice `index` of /labels across the plane's normal
+  std::string volume_file;           ///< kind=volume of the same geometry: grey under the labels (may be empty)
+  std::size_t index = 0;
+  std::vector<std::uint32_t> outline_label;   ///< the twin: the grain of each outline
+  std::vector<std::vector<double>> outline;   ///< the twin: closed outlines u0, v0, u1, v1, ... (m)
+  /// A grain's colour follows its identity: label identity_label[i] takes the colour of
+  /// identity[i] (its label in the reference scan, through the tracks); others their own label's.
+  std::vector<std::uint32_t> identity_label, identity;
+  std::string quantity;              ///< empty: identity colours; else the colour bar's label
+  std::vector<std::uint32_t> value_label;  ///< the grains painted, by label
+  std::vector<double> value;               ///< their values; NaN = not defined (drawn grey)
+  double colour_min = 0.0, colour_max = 0.0;
+  bool colour_log = false;
+};
+
+/// A 3D picture of the force-chain network at one frame (drawn with VTK): one tube per
+/// grain-grain contact from centroid to centroid, its radius and colour proportional to the
+/// contact's normal force, seen by a fixed camera.
+struct NetworkView {
+  std::vector<double> segments;    ///< x0, y0, z0, x1, y1, z1 per contact (m)
+  std::vector<double> force;       ///< N, the normal force of each contact (> 0, compressive)
+  double force_max = 0.0;          ///< N, top of the colour scale (bottom 0) and the force of the thickest tube
+  double radius_max = 0.0;         ///< m, tube radius at force_max
+  std::array<double, 6> bounds{};  ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
+};
+
+/// A 3D picture of the grains at one state (drawn with VTK), each a sphere of its volume-equivalent
+/// diameter at its centroid: the highlighted ones (the high-D2min clusters) opaque and painted with
+/// their value, the others as grey points that show the sample's shape, the membrane's balls (a
+/// triaxial twin) as pale points.
+struct GrainsView {
+  std::vector<double> centre;              ///< x, y, z per grain (m)
+  std::vector<double> radius;              ///< m
+  std::vector<double> value;               ///< NaN = not defined
+  std::vector<std::uint8_t> highlighted;   ///< 1: a painted sphere; 0: a grey point
+  std::vector<double> membrane;            ///< x, y, z per ball (m); empty without one
+  std::string quantity;                    ///< the colour bar's label
+  double colour_min = 0.0, colour_max = 0.0;
+  bool colour_log = false;
+  std::array<double, 6> bounds{};          ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
+};
+
 /// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
 /// kind "rose": each series is a rose profile, x = the polar-angle bin edges in degrees from the
 /// loading axis z (n + 1), y = the value per bin (n), drawn as a closed outline in the x-z plane,
-/// mirrored about both axes (the directions are axes, folded onto the upper hemisphere).
+/// mirrored about both axes (the directions are axes, folded onto the upper hemisphere); kind
+/// "section": `sections` side by side, no series; kinds "network" and "grains": the 3D `network`
+/// or `grains`.
 struct Chart {
   std::string file;   ///< PNG name inside the report's image folder
   std::string panel;  ///< charts of one panel share their axis limits
@@ -35,6 +89,9 @@ struct Chart {
   std::string title, x_label, y_label;
   bool x_log = false, y_log = false;
   std::vector<Series> series;
+  std::vector<SectionView> sections;  ///< kind "section": drawn side by side in one PNG
+  std::optional<NetworkView> network;  ///< kind "network"
+  std::optional<GrainsView> grains;    ///< kind "grains"
 
   /// Adds a series, keeping only points with finite coordinates (and positive ones on log axes;
   /// vertical lines keep every finite x). Returns false, adding nothing, when no point is left.

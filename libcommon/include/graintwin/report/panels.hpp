@@ -14,6 +14,9 @@ namespace graintwin::report {
 /// Why a chart is missing when a stage has not run (panels and the error budget say the same).
 inline constexpr const char* kNoSimulation =
     "This run has no simulation results (simulation.h5, kind=fdem_results): the pipeline's simulate stage (fdemrun) makes them.";
+inline constexpr const char* kCtNoForces = "CT scans do not measure contact forces: this chart exists for the simulation only.";
+inline constexpr const char* kNoSimulationMicro =
+    "This run has no micro-mechanics of the simulation frames (simulation_micro.h5): tracks2micro on simulation.h5 makes it.";
 inline constexpr const char* kNoMicro =
     "This run has no micro-mechanics of the scans (micro.h5): the micro stage (tracks2micro) makes it from two scans or more.";
 inline constexpr const char* kNoContacts =

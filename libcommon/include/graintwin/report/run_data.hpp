@@ -3,7 +3,8 @@
 // the files of each scan, the series' tracks and micro-mechanics, the FDEM model, and the
 // simulation side (results, forces, micro-mechanics of the frames). Locating and checking them is
 // cheap (root attributes only) and happens before anything is read; the readers then load only
-// the tables the charts need, never label images or meshes.
+// the tables the charts need, never label images or meshes (the sections, report/sections.hpp,
+// read the model's surfaces and have the chart script read one slice of a label image).
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -25,6 +26,9 @@ namespace fs = std::filesystem;
 struct RunFiles {
   std::vector<std::string> scan_names;  ///< e.g. scan_000, in order
   std::vector<fs::path> labels, contacts, shapes;  ///< one entry per scan (empty = absent)
+  /// The scans themselves (kind=volume, the segment stage's inputs): grey under the labels of the
+  /// sections. Not in the run directory: named by --volumes, one per scan, or none.
+  std::vector<fs::path> volumes;
   fs::path tracks, micro, model;
   fs::path simulation, forces, simulation_micro;
   fs::path scan_strains;  ///< JSON with the scans' applied axial strains (ctsynth's series.json)
