@@ -118,6 +118,10 @@ ContactModel::ContactModel(const Model& model, std::span<const double> node_mass
     const double len = n.norm();
     s.node_facets[k] << (len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero()), s.triangle_area[t] / 3.0;
   }
+  s.reference_corner_normal.assign(s.node_count, Eigen::Vector3d::Zero());
+  for (std::uint32_t v : s.surface_nodes)
+    s.reference_corner_normal[v] = s.corner_normal(v, [&](std::uint32_t node) { return model.nodes[node]; },
+                                                   [&](std::uint32_t t) { return s.reference_normal[t]; });
   s.trees = SurfaceTrees(model);
   s.pose.assign(model.grains.size(), RigidPose{});
 }

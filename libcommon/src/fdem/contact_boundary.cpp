@@ -74,12 +74,18 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
   bool stale = s.ball_lists_rebuilds != s.rebuilds || s.ball_lists_radius != r || s.ball_built_at.size() != n;
   for (std::size_t b = 0; b < n && !stale; ++b) stale = (centres[b] - s.ball_built_at[b]).squaredNorm() > moved2;
   if (stale) s.build_ball_lists(centres, r);
-  const auto spring_of = [&](std::uint32_t ball, std::uint32_t grain) -> Eigen::Vector3d {
-    const auto it = std::lower_bound(s.ball_history.begin(), s.ball_history.end(), std::make_pair(ball, grain),
-                                     [](const BallHistoryEntry& h, const std::pair<std::uint32_t, std::uint32_t>& k) {
-                                       return std::tie(h.ball, h.grain) < std::tie(k.first, k.second);
-                                     });
-    return it != s.ball_history.end() && it->ball == ball && it->grain == grain ? it->spring : Eigen::Vector3d::Zero();
+  // A ball's history is found once, then each of its grains searches only the ball's few entries.
+  const auto history_of = [&](std::uint32_t ball) -> std::span<const BallHistoryEntry> {
+    const auto first = std::lower_bound(s.ball_history.begin(), s.ball_history.end(), ball,
+                                        [](const BallHistoryEntry& h, std::uint32_t k) { return h.ball < k; });
+    auto last = first;
+    while (last != s.ball_history.end() && last->ball == ball) ++last;
+    return {first, last};
+  };
+  const auto spring_of = [](std::span<const BallHistoryEntry> past, std::uint32_t grain) -> Eigen::Vector3d {
+    const auto it = std::lower_bound(past.begin(), past.end(), grain,
+                                     [](const BallHistoryEntry& h, std::uint32_t g) { return h.grain < g; });
+    return it != past.end() && it->grain == grain ? it->spring : Eigen::Vector3d::Zero();
   };
   const double area = std::numbers::pi * r * r;
   if (s.ball_hits.size() < n) s.ball_hits.resize(n);
@@ -88,6 +94,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
     std::vector<BallHit>& out = s.ball_hits[b];
     out.clear();
     const Eigen::Vector3d& c = centres[b];
+    const std::span<const BallHistoryEntry> past = history_of(static_cast<std::uint32_t>(b));
     for (BallCandidate& candidate : s.ball_candidates[b]) {
       const std::uint32_t g = candidate.grain;
       if (!s.trees.bounds(g).inflated(r).contains(c)) continue;
@@ -108,7 +115,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
       hit.law = node_contact_force(contact_law(m.normal_penalty, m.tangential_penalty, area, balls.mass, m.damping_ratio,
                                                balls.friction),
                                    hit.normal, hit.overlap, contact_velocity - surface_velocity,
-                                   spring_of(static_cast<std::uint32_t>(b), g), dt);
+                                   spring_of(past, g), dt);
       hit.grain = g;
       hit.triangle = near.triangle;
       hit.weights = w;

@@ -111,6 +111,7 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
   const double mu = std::min(mf.friction, mt.friction);
   const double beta = 0.5 * (mf.damping_ratio + mt.damping_ratio);
   const double deepest = search_depth(key.a, key.b);
+  const std::span<const HistoryEntry> past = history_of(key.a, key.b);
   SurfaceTrees::Nearest near;
   // Between rigid grains the list is sorted by clearance: read it only as far as the pair moved.
   for (std::size_t i = 0; i < nodes.size(); ++i) {
@@ -126,25 +127,25 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
     const auto outside = [&](const SurfaceTrees::Nearest& n) {
       return !(to_surface(n).dot(pseudonormal(n.triangle, n.closest.feature, x)) > 0);
     };
-    bool close = false;
     if (rigid_pair) {
+      // Found, inside and placed in the body frame of `to`, where its reference pseudonormals hold.
       const Eigen::Vector3d q = to_body * listed.reference + to_body_shift;
       if (!box.contains(q) || (q - centre).squaredNorm() > reach2) continue;
-      place_node();
-      const auto outside_in_world = [&](SurfaceTrees::Nearest n) {
-        n.closest.point = body_to.rotation * n.closest.point + body_to.translation;
-        return outside(n);
+      const auto outside_in_body = [&](const SurfaceTrees::Nearest& n) {
+        return !((n.closest.point - q).dot(reference_pseudonormal(n.triangle, n.closest.feature)) > 0);
       };
-      close = nearest_remembered(to, q, deepest, listed, memos[i], near, checks, outside_in_world);
-      if (close) near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
+      if (!nearest_remembered(to, q, deepest, listed, memos[i], near, checks, outside_in_body) || outside_in_body(near))
+        continue;
+      place_node();
+      near.closest.point = body_to.rotation * near.closest.point + body_to.translation;
     } else {
       place_node();
       if (!box.contains(p) || (p - centre).squaredNorm() > reach2) continue;
-      close = nearest(to, p, deepest, x, near, listed.hint);
+      const bool close = nearest(to, p, deepest, x, near, listed.hint);
       checks.triangles += near.tested;
       if (close && listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
+      if (!close || outside(near)) continue;
     }
-    if (!close || outside(near)) continue;
     const Eigen::Vector3d d = to_surface(near);
     NodeHit hit;
     hit.overlap = std::sqrt(near.distance2);
@@ -155,7 +156,7 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
     if (!(area > 0)) continue;
     const Eigen::Vector3d w = near.closest.weights;
     const Eigen::Vector3d relative = velocity(node, from, v) - surface_velocity(near.triangle, w, v);
-    const HistoryEntry* previous = previous_entry(key.a, key.b, node);
+    const HistoryEntry* previous = previous_entry(past, node);
     hit.offset = offset_of(previous, hit.overlap);
     hit.law = node_contact_force(contact_law(p_n, p_t, area, node_mass[node], beta, mu), hit.normal, hit.overlap - hit.offset,
                                  relative, previous ? previous->spring : Eigen::Vector3d::Zero(), dt);
@@ -193,6 +194,7 @@ void ContactModel::State::platen_hits(const Candidate& key, const PlatenState& p
                                       std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double dt,
                                       std::vector<NodeHit>& out, Checks& checks) const {
   const Material& m = material_of(key.a);
+  const std::span<const HistoryEntry> past = history_of(key.a, key.b);
   checks.nodes += surface(key.a).size();
   for (std::uint32_t node : surface(key.a)) {
     const auto [p, arm] = place(node, key.a, x);
@@ -203,7 +205,7 @@ void ContactModel::State::platen_hits(const Candidate& key, const PlatenState& p
     hit.normal = platen.normal;
     const double area = facing_area(node, hit.normal, x, pose[key.a]);
     if (!(area > 0)) continue;
-    const HistoryEntry* previous = previous_entry(key.a, key.b, node);
+    const HistoryEntry* previous = previous_entry(past, node);
     hit.offset = offset_of(previous, hit.overlap);
     hit.law = node_contact_force(
         contact_law(m.normal_penalty, m.tangential_penalty, area, node_mass[node], m.damping_ratio, platen.friction),

@@ -189,6 +189,10 @@ struct ContactModel::State {
   std::vector<std::array<std::uint32_t, 3>> neighbour;  ///< triangle across edge 01, 12, 20
   std::vector<double> triangle_area;                    ///< reference, m^2
   std::vector<Eigen::Vector3d> reference_normal;        ///< per triangle, twice its reference area long
+  /// Per node, the angle-weighted sum of its triangles' reference unit normals (zero off the
+  /// surface): a rigid grain's corner pseudonormal, turned by its pose instead of recomputed from
+  /// the corner's neighbours every test (that recomputation was a ninth of a shearing step).
+  std::vector<Eigen::Vector3d> reference_corner_normal;
   /// Parallel to node_triangles: each triangle's reference unit outward normal and a third of its
   /// reference area (rigid grains' facing_area).
   std::vector<Eigen::Vector4d> node_facets;
@@ -330,8 +334,11 @@ struct ContactModel::State {
   }
 
   /// A normal at the closest feature whose sign tells inside from outside for a closed surface
-  /// (angle-weighted pseudonormals at corners, the two faces' sum at edges).
+  /// (angle-weighted pseudonormals at corners, the two faces' sum at edges). A rigid grain's is its
+  /// reference one turned by its pose.
   Eigen::Vector3d pseudonormal(std::uint32_t t, TriangleFeature feature, std::span<const Eigen::Vector3d> x) const {
+    const RigidPose& body = pose[triangle_grain[t]];
+    if (body.rigid) return body.rotation * reference_pseudonormal(t, feature);
     const Eigen::Vector3d n = normal_of(t, x).normalized();
     auto across = [&](int edge) -> Eigen::Vector3d {
       const std::uint32_t o = neighbour[t][edge];
@@ -346,14 +353,37 @@ struct ContactModel::State {
     }
     const std::uint32_t v = triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)];
     const std::uint32_t g = triangle_grain[t];
-    const Eigen::Vector3d at_v = position(v, g, x);
+    return corner_normal(v, [&](std::uint32_t node) { return position(node, g, x); },
+                         [&](std::uint32_t triangle) { return normal_of(triangle, x); });
+  }
+  /// The pseudonormal of triangle t's feature on its grain's reference surface (body frame).
+  Eigen::Vector3d reference_pseudonormal(std::uint32_t t, TriangleFeature feature) const {
+    const Eigen::Vector3d n = reference_normal[t].normalized();
+    auto across = [&](int edge) -> Eigen::Vector3d {
+      const std::uint32_t o = neighbour[t][edge];
+      return o == kNoTriangle ? n : Eigen::Vector3d(n + reference_normal[o].normalized());
+    };
+    switch (feature) {
+      case TriangleFeature::face: return n;
+      case TriangleFeature::edge_ab: return across(0);
+      case TriangleFeature::edge_bc: return across(1);
+      case TriangleFeature::edge_ca: return across(2);
+      default: break;
+    }
+    return reference_corner_normal[triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)]];
+  }
+  /// Node v's angle-weighted pseudonormal from its corners' positions and its triangles' normals
+  /// (any length: each is normalised).
+  template <class Position, class Normal>
+  Eigen::Vector3d corner_normal(std::uint32_t v, Position position_of, Normal normal_of_triangle) const {
+    const Eigen::Vector3d at_v = position_of(v);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (std::uint32_t k = node_triangle_offset[v]; k < node_triangle_offset[v + 1]; ++k) {
       const auto& tri = triangles[node_triangles[k]];
       const int i = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-      const Eigen::Vector3d e1 = (position(tri[(i + 1) % 3], g, x) - at_v).normalized();
-      const Eigen::Vector3d e2 = (position(tri[(i + 2) % 3], g, x) - at_v).normalized();
-      sum += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * normal_of(node_triangles[k], x).normalized();
+      const Eigen::Vector3d e1 = (position_of(tri[(i + 1) % 3]) - at_v).normalized();
+      const Eigen::Vector3d e2 = (position_of(tri[(i + 2) % 3]) - at_v).normalized();
+      sum += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * normal_of_triangle(node_triangles[k]).normalized();
     }
     return sum;
   }
@@ -368,10 +398,20 @@ struct ContactModel::State {
     return it != deep_pairs.end() && it->a == a && it->b == b ? it->depth : max_penetration;
   }
 
-  const HistoryEntry* previous_entry(std::uint32_t a, std::uint32_t b, std::uint32_t node) const {
-    auto it = std::lower_bound(history.begin(), history.end(), 0,
-                               [&](const HistoryEntry& h, int) { return key_less(h, a, b, node); });
-    return it != history.end() && it->a == a && it->b == b && it->node == node ? &*it : nullptr;
+  /// The history of candidate (a, b): found once per candidate, so that each node contact searches
+  /// only its pair's few entries (a search over the whole history per node contact missed the cache
+  /// at every probe).
+  std::span<const HistoryEntry> history_of(std::uint32_t a, std::uint32_t b) const {
+    const auto first = std::lower_bound(history.begin(), history.end(), 0,
+                                        [&](const HistoryEntry& h, int) { return key_less(h, a, b, 0); });
+    auto last = first;
+    while (last != history.end() && last->a == a && last->b == b) ++last;
+    return {first, last};
+  }
+  static const HistoryEntry* previous_entry(std::span<const HistoryEntry> pair_history, std::uint32_t node) {
+    auto it = std::lower_bound(pair_history.begin(), pair_history.end(), node,
+                               [](const HistoryEntry& h, std::uint32_t n) { return h.node < n; });
+    return it != pair_history.end() && it->node == node ? &*it : nullptr;
   }
   /// A node contact's force-free overlap this step: what it kept from its start (never more than
   /// its overlap now: it only shrinks as the contact opens), or all of it in the first step after

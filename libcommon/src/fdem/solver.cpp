@@ -229,6 +229,10 @@ StepReport Solver::step(double dt) {
     for (std::size_t g = 0; g < grains; ++g)
       if (m.grains[g].kind == GrainKind::rigid) poses_[g] = pose_of(g);
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
+    times_.node_contacts += report.contact.node_contacts;
+    times_.node_checks += report.contact.node_checks;
+    times_.triangle_checks += report.contact.triangle_checks;
+    times_.pair_lists_built += report.contact.pair_lists_built;
   }
   sum_platen_contacts();
   times_.contact += seconds_since();

@@ -14,6 +14,10 @@ std::string describe_step_times(const StepTimes& t, std::size_t grains, int thre
       "boundary {:.0f} %, elements {:.0f} %, motion {:.0f} %",
       t.steps, total, 1e3 * total / static_cast<double>(t.steps), rate, rate / threads, threads, share(t.contact),
       share(t.boundary), share(t.elements), share(t.motion));
+  const auto per_step = [&](std::uint64_t count) { return static_cast<double>(count) / static_cast<double>(t.steps); };
+  line += fmt::format("; a step has {:.3g} node contacts, checks {:.3g} nodes and {:.3g} node-triangle pairs and builds "
+                      "{:.3g} pairs' lists",
+                      per_step(t.node_contacts), per_step(t.node_checks), per_step(t.triangle_checks), per_step(t.pair_lists_built));
   if (t.body_steps > 0)
     line += fmt::format("; membrane {:.3g} us per ball and step", 1e6 * t.body_seconds / static_cast<double>(t.body_steps));
   return line;

@@ -17,12 +17,19 @@ struct StepTimes {
   /// steps, and the boundary's seconds in them.
   std::uint64_t body_steps = 0;
   double body_seconds = 0;
+  /// Contact work summed over the steps (ContactStepStats): node contacts, surface nodes tested against another
+  /// grain or a platen, closest-point evaluations, and rigid pairs whose near-node lists were built
+  /// again between broad-phase builds.
+  std::uint64_t node_contacts = 0;
+  std::uint64_t node_checks = 0;
+  std::uint64_t triangle_checks = 0;
+  std::uint64_t pair_lists_built = 0;
 
   double total() const { return elements + contact + boundary + motion; }
 };
 
 /// One line for a run's log: steps, time per step, grain-steps per second (and per thread), each
-/// phase's share and, with a membrane, its cost per ball and step.
+/// phase's share, the contact work per step and, with a membrane, its cost per ball and step.
 std::string describe_step_times(const StepTimes& times, std::size_t grains, int threads);
 
 }  // namespace graintwin::fdem
