@@ -339,29 +339,28 @@ struct ContactModel::State {
   Eigen::Vector3d pseudonormal(std::uint32_t t, TriangleFeature feature, std::span<const Eigen::Vector3d> x) const {
     const RigidPose& body = pose[triangle_grain[t]];
     if (body.rigid) return body.rotation * reference_pseudonormal(t, feature);
-    const Eigen::Vector3d n = normal_of(t, x).normalized();
-    auto across = [&](int edge) -> Eigen::Vector3d {
-      const std::uint32_t o = neighbour[t][edge];
-      return o == kNoTriangle ? n : Eigen::Vector3d(n + normal_of(o, x).normalized());
-    };
-    switch (feature) {
-      case TriangleFeature::face: return n;
-      case TriangleFeature::edge_ab: return across(0);
-      case TriangleFeature::edge_bc: return across(1);
-      case TriangleFeature::edge_ca: return across(2);
-      default: break;
-    }
-    const std::uint32_t v = triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)];
     const std::uint32_t g = triangle_grain[t];
-    return corner_normal(v, [&](std::uint32_t node) { return position(node, g, x); },
-                         [&](std::uint32_t triangle) { return normal_of(triangle, x); });
+    return feature_normal(
+        t, feature, [&](std::uint32_t triangle) { return normal_of(triangle, x); },
+        [&](std::uint32_t v) {
+          return corner_normal(v, [&](std::uint32_t node) { return position(node, g, x); },
+                               [&](std::uint32_t triangle) { return normal_of(triangle, x); });
+        });
   }
   /// The pseudonormal of triangle t's feature on its grain's reference surface (body frame).
   Eigen::Vector3d reference_pseudonormal(std::uint32_t t, TriangleFeature feature) const {
-    const Eigen::Vector3d n = reference_normal[t].normalized();
+    return feature_normal(
+        t, feature, [&](std::uint32_t triangle) { return reference_normal[triangle]; },
+        [&](std::uint32_t v) { return reference_corner_normal[v]; });
+  }
+  /// The pseudonormal of triangle t's feature from its triangles' normals (any length) and, at a
+  /// corner, the corner's.
+  template <class Normal, class Corner>
+  Eigen::Vector3d feature_normal(std::uint32_t t, TriangleFeature feature, Normal normal_of_triangle, Corner corner) const {
+    const Eigen::Vector3d n = normal_of_triangle(t).normalized();
     auto across = [&](int edge) -> Eigen::Vector3d {
       const std::uint32_t o = neighbour[t][edge];
-      return o == kNoTriangle ? n : Eigen::Vector3d(n + reference_normal[o].normalized());
+      return o == kNoTriangle ? n : Eigen::Vector3d(n + normal_of_triangle(o).normalized());
     };
     switch (feature) {
       case TriangleFeature::face: return n;
@@ -370,7 +369,7 @@ struct ContactModel::State {
       case TriangleFeature::edge_ca: return across(2);
       default: break;
     }
-    return reference_corner_normal[triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)]];
+    return corner(triangles[t][static_cast<int>(feature) - static_cast<int>(TriangleFeature::vertex_a)]);
   }
   /// Node v's angle-weighted pseudonormal from its corners' positions and its triangles' normals
   /// (any length: each is normalised).
