@@ -50,6 +50,7 @@ struct Options {
   std::string band = "single";
   double band_angle = 60.0, band_azimuth = 0.0, band_slip = 0.5, nonaffine = 0.15, rotation_per_shear = 0.5;
   std::string band_width = "";  // default 10 d50
+  std::string nonaffine_correlation = "0";
   std::string contact_search = "";  // default 2 voxels
   std::string loading = "prescribed";
   std::string triaxial_scene;
@@ -146,6 +147,8 @@ SeriesParams series_params(const Options& o) {
   p.loading.band_width = o.band_width.empty() ? 0.0 : parse_length_m(o.band_width, "--band-width");
   p.loading.band_slip = o.band_slip;
   p.loading.nonaffine = o.nonaffine;
+  p.loading.nonaffine_correlation =
+      o.nonaffine_correlation == "0" ? 0.0 : parse_length_m(o.nonaffine_correlation, "--nonaffine-correlation");
   p.loading.rotation_per_shear = o.rotation_per_shear;
   p.contact_search = o.contact_search.empty() ? 0.0 : parse_length_m(o.contact_search, "--contact-search");
   const LoadingKind loading = parse_enum(kLoadingKindNames, o.loading, "--loading");
@@ -275,6 +278,11 @@ void add_options(cli::Tool& tool, Options& o) {
       ->check(number_in(closed(0, 10)))->capture_default_str();
   app.add_option("--nonaffine", o.nonaffine, "Random grain motion in the band per unit slip (std)")
       ->check(number_in(closed(0, 10)))->capture_default_str();
+  app.add_option("--nonaffine-correlation", o.nonaffine_correlation,
+                 "Correlation length of that motion (0: each grain draws its own; a length such as 2mm: a smooth random "
+                 "field over it, so neighbours move together and overlap less; about 5 d50 keeps a tall sample's states "
+                 "cheap to relax)")
+      ->capture_default_str();
   app.add_option("--rotation-per-shear", o.rotation_per_shear, "Grain rotation (rad) per unit local shear")
       ->check(number_in(closed(-10, 10, "rad")))->capture_default_str();
   app.add_option("--loading", o.loading,

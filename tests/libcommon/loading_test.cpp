@@ -108,3 +108,57 @@ TEST(Loading, StatesAreCumulativeAndDeterministic) {
   p.band_width = 0.0;
   EXPECT_THROW(loading_states(p, ref, {0.0, 0.01}), UsageError);
 }
+
+namespace {
+// Per grain, the random part of its motion from state 0 to 1: the state minus the smooth field.
+std::vector<Eigen::Vector3d> random_motion(const LoadingParams& p, const std::vector<PackedGrain>& ref, double eps) {
+  const auto states = loading_states(p, ref, {0.0, eps});
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    out.push_back(states[1][i].position - ref[i].position - smooth_displacement(p, ref[i].position, eps));
+  return out;
+}
+}  // namespace
+
+TEST(Loading, CorrelatedNonaffineMotionKeepsItsStdAndMovesNeighboursTogether) {
+  LoadingParams p = sample();
+  p.band_width = 1.0;  // so wide that every grain is in its middle: band weight 1, the same std for all
+  const double eps = 0.02, sigma = p.nonaffine * p.band_slip * eps * p.height;
+  // Pairs of grains 0.2 mm apart on a lattice of 2 mm: pairs far from each other, close within.
+  std::vector<PackedGrain> ref;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 5; ++k)
+        for (double dx : {0.0, 0.2e-3}) {
+          PackedGrain g;
+          g.position = Eigen::Vector3d(-3e-3 + 2e-3 * i + dx, -3e-3 + 2e-3 * j, 1e-3 + 2e-3 * k);
+          ref.push_back(g);
+        }
+  const auto spread = [&](double correlation) {
+    p.nonaffine_correlation = correlation;
+    const auto u = random_motion(p, ref, eps);
+    double own = 0, relative = 0;
+    for (std::size_t i = 0; i < u.size(); i += 2) {
+      own += u[i].squaredNorm() + u[i + 1].squaredNorm();
+      relative += (u[i + 1] - u[i]).squaredNorm();
+    }
+    const double pairs = static_cast<double>(u.size() / 2);
+    return std::pair{std::sqrt(own / (2 * pairs * 3)), std::sqrt(relative / (pairs * 3))};
+  };
+  const auto [own_independent, relative_independent] = spread(0.0);
+  const auto [own_correlated, relative_correlated] = spread(2e-3);
+  // Each grain's std is sigma either way (160 draws of 3 components: within 15 %).
+  EXPECT_NEAR(own_independent / sigma, 1.0, 0.15);
+  EXPECT_NEAR(own_correlated / sigma, 1.0, 0.15);
+  // Independent neighbours differ by sqrt(2) sigma; over a tenth of the correlation length, by a
+  // small fraction of it.
+  EXPECT_NEAR(relative_independent / sigma, std::sqrt(2.0), 0.25);
+  EXPECT_LT(relative_correlated / sigma, 0.2);
+  // The same draw again; a too short length and a negative one are refused before any work.
+  p.nonaffine_correlation = 2e-3;
+  EXPECT_EQ(random_motion(p, ref, eps)[7], random_motion(p, ref, eps)[7]);
+  p.nonaffine_correlation = 1e-9;
+  EXPECT_THROW(loading_states(p, ref, {0.0, eps}), UsageError);
+  p.nonaffine_correlation = -1e-3;
+  EXPECT_THROW(loading_states(p, ref, {0.0, eps}), UsageError);
+}

@@ -1,6 +1,12 @@
 #include "graintwin/synth/loading.hpp"
 
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <random>
 
 #include "graintwin/core/error.hpp"
@@ -41,12 +47,71 @@ std::vector<Band> bands(const LoadingParams& p) {
 double slip_profile(double d, double w) { return 0.5 * (1.0 + std::erf(2.0 * d / w)); }
 double slip_gradient(double d, double w) { return 2.0 / (w * std::sqrt(M_PI)) * std::exp(-4.0 * d * d / (w * w)); }
 
+// Cubic B-spline weights of the four lattice nodes around fractional position t in [0, 1).
+std::array<double, 4> bspline_weights(double t) {
+  const double t2 = t * t, t3 = t2 * t, s = 1.0 - t;
+  return {s * s * s / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0, (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0};
+}
+
+// A smooth random vector field of unit std in each component at every point: independent normal
+// vectors on a lattice of spacing `length` over [lo, hi], blended by cubic B-splines and divided by
+// the blend's own std there (the sum of the squared weights), so only the correlation depends on
+// where the point lies between the nodes. Its correlation falls to zero at four spacings.
+class SmoothNoise {
+ public:
+  SmoothNoise(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double length, std::uint64_t seed)
+      : lo_(lo), length_(length) {
+    for (int a = 0; a < 3; ++a) dims_[a] = static_cast<std::size_t>(std::floor((hi[a] - lo[a]) / length)) + 4;
+    values_.resize(dims_[0] * dims_[1] * dims_[2]);
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> n01;
+    for (Eigen::Vector3d& v : values_) v = Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
+  }
+  static std::size_t nodes(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double length) {
+    double n = 1.0;
+    for (int a = 0; a < 3; ++a) n *= std::floor((hi[a] - lo[a]) / length) + 4.0;
+    return n < 1e18 ? static_cast<std::size_t>(n) : SIZE_MAX;
+  }
+  Eigen::Vector3d at(const Eigen::Vector3d& x) const {
+    std::array<std::array<double, 4>, 3> w;
+    std::array<std::size_t, 3> base;
+    double variance = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double u = (x[a] - lo_[a]) / length_;
+      const double cell = std::clamp(std::floor(u), 0.0, static_cast<double>(dims_[a] - 4));
+      base[a] = static_cast<std::size_t>(cell);
+      w[a] = bspline_weights(std::clamp(u - cell, 0.0, 1.0));
+      double sum2 = 0.0;
+      for (double wi : w[a]) sum2 += wi * wi;
+      variance *= sum2;
+    }
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        for (int k = 0; k < 4; ++k)
+          sum += w[0][i] * w[1][j] * w[2][k] *
+                 values_[((base[2] + k) * dims_[1] + base[1] + j) * dims_[0] + base[0] + i];
+    return sum / std::sqrt(variance);
+  }
+
+ private:
+  Eigen::Vector3d lo_;
+  double length_;
+  std::array<std::size_t, 3> dims_{};
+  std::vector<Eigen::Vector3d> values_;
+};
+
+// Lattices beyond this many nodes (a correlation length far below the grain size) are refused.
+constexpr std::size_t kMaxNoiseNodes = 50'000'000;
+
 void validate(const LoadingParams& p) {
   if (!(p.height > 0.0 && p.radius > 0.0)) throw UsageError("loading needs a positive sample height and radius");
   if (p.band != ShearBand::none && !(p.band_width > 0.0))
     throw UsageError("a shear band needs a positive band width (about 10 d50)");
   if (!(p.band_angle_deg > 0.0 && p.band_angle_deg < 90.0))
     throw UsageError("band angle must be between 0 and 90 degrees from the horizontal");
+  if (!(p.nonaffine_correlation >= 0.0))
+    throw UsageError("the nonaffine correlation length must be 0 (independent grains) or positive");
 }
 
 }  // namespace
@@ -83,6 +148,14 @@ std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, con
   validate(p);
   std::vector<std::vector<PackedGrain>> states;
   std::vector<Eigen::Vector3d> walk(reference.size(), Eigen::Vector3d::Zero());
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const PackedGrain& g : reference) lo = lo.cwiseMin(g.position), hi = hi.cwiseMax(g.position);
+  const bool correlated = p.nonaffine_correlation > 0.0 && !reference.empty();
+  if (correlated && SmoothNoise::nodes(lo, hi, p.nonaffine_correlation) > kMaxNoiseNodes)
+    throw UsageError(fmt::format("a nonaffine correlation length of {:.3g} mm is too short for a sample {:.3g} mm across: "
+                                 "give at least {:.3g} mm (about the grain size), or 0 for independent grains",
+                                 1e3 * p.nonaffine_correlation, 1e3 * (hi - lo).maxCoeff(),
+                                 1e3 * (hi - lo).maxCoeff() / std::cbrt(static_cast<double>(kMaxNoiseNodes)) * 2.0));
   std::vector<Eigen::Quaterniond> spin(reference.size(), Eigen::Quaterniond::Identity());
   double prev = 0.0;
   for (std::size_t k = 0; k < strains.size(); ++k) {
@@ -90,6 +163,9 @@ std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, con
     if (!(eps >= 0.0 && eps < 0.5)) throw UsageError("axial strains must lie in [0, 0.5)");
     const double deps = eps - prev;
     std::vector<PackedGrain> state(reference.size());
+    std::optional<SmoothNoise> field;
+    if (correlated && k > 0 && deps != 0.0)
+      field.emplace(lo, hi, p.nonaffine_correlation, p.seed ^ (0xD6E8FEB86659FD93ull * (k + 1)));
     for (std::size_t i = 0; i < reference.size(); ++i) {
       const Eigen::Vector3d& x = reference[i].position;
       if (k > 0 && deps != 0.0) {
@@ -102,7 +178,8 @@ std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, con
           band_weight += b.share * std::exp(-4.0 * d * d / (p.band_width * p.band_width));
         }
         const double sigma = p.nonaffine * p.band_slip * std::abs(deps) * p.height * band_weight;
-        walk[i] += sigma * Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
+        const Eigen::Vector3d draw(n01(rng), n01(rng), n01(rng));  // drawn either way: the rotations' stream stays
+        walk[i] += sigma * (field ? field->at(x) : draw);
         const double shear_inc = local_shear(p, x, eps) - local_shear(p, x, prev);
         const double angle = p.rotation_per_shear * shear_inc + p.rotation_noise_deg * M_PI / 180.0 * n01(rng);
         const Eigen::Vector3d axis = Eigen::Vector3d(n01(rng), n01(rng), n01(rng)).normalized();

@@ -38,6 +38,10 @@ struct LoadingParams {
   double band_width = 0.0;                ///< band thickness (m), about 10 d50
   double band_slip = 0.5;                 ///< slip across a band per unit axial strain, in units of H0
   double nonaffine = 0.15;                ///< std of random grain motion in a band, per unit band slip
+  /// Correlation length (m) of that random motion: 0 draws it independently per grain; a length
+  /// makes it a smooth random field over that distance, so neighbours move together (their relative
+  /// motion, which overlaps them, is a fraction of each one's) while the std per grain stays.
+  double nonaffine_correlation = 0.0;
   double rotation_per_shear = 0.5;        ///< grain rotation (rad) per unit local shear strain
   double rotation_noise_deg = 0.2;        ///< random rotation per state outside bands (deg, std)
   std::uint64_t seed = 1;
