@@ -77,6 +77,17 @@ Model pressed_cubes(double overlap, double damping_ratio = 0.0) {
 
 std::vector<double> unit_masses(const Model& m) { return std::vector<double>(m.nodes.size(), 1e-6); }
 
+// `count` rigid faceted spheres of `radius` at the origin (facets of about a quarter of the radius).
+Model faceted_spheres(double radius, std::uint32_t count) {
+  mesh::TetOptions o;
+  o.size = 0.25 * radius;
+  Model m;
+  for (std::uint32_t g = 0; g < count; ++g)
+    mesh::append_grain(m, mesh::mesh_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(radius),
+                                               Eigen::Quaterniond::Identity(), o), g + 1, GrainKind::rigid);
+  return m;
+}
+
 TEST(ClosestPoint, FaceEdgeAndCornerRegions) {
   const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
   TrianglePoint r = closest_point_on_triangle({0.25, 0.25, -2}, a, b, c);
@@ -273,11 +284,7 @@ TEST(SurfaceTrees, TrianglesWithinTwoMarginsHoldTheNearestOneMarginAway) {
   // Points near a faceted sphere (edges and corners nearby), displaced by exactly m in random
   // directions, the worst case; slots_within_in_body must also list exactly the brute-force set.
   const double radius = 0.5 * kMm, m_margin = 0.01 * radius;
-  mesh::TetOptions o;
-  o.size = 0.25 * radius;
-  Model m;
-  mesh::append_grain(m, mesh::mesh_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(radius),
-                                             Eigen::Quaterniond::Identity(), o), 1, GrainKind::rigid);
+  const Model m = faceted_spheres(radius, 1);
   SurfaceTrees trees(m);
   std::mt19937 rng(5);
   std::normal_distribution<double> gauss;
@@ -915,12 +922,7 @@ TEST(ContactModel, SearchMemosOfRigidGrainsGiveTheForcesOfSearchingAnew) {
   // and corners, and the closest triangle keeps changing among the remembered ones). At step 500
   // it jumps. Forces must match searching anew, bit for bit.
   const double radius = 0.5 * kMm;
-  mesh::TetOptions o;
-  o.size = 0.25 * radius;
-  Model m;
-  for (std::uint32_t g = 0; g < 2; ++g)
-    mesh::append_grain(m, mesh::mesh_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(radius),
-                                               Eigen::Quaterniond::Identity(), o), g + 1, GrainKind::rigid);
+  const Model m = faceted_spheres(radius, 2);
   ContactOptions anew;
   anew.search_memos = false;
   ContactModel remembering(m, unit_masses(m), {}), searching(m, unit_masses(m), anew);
@@ -963,6 +965,57 @@ TEST(ContactModel, SearchMemosOfRigidGrainsGiveTheForcesOfSearchingAnew) {
   }
   EXPECT_GT(contacts, 2000u);
   EXPECT_LT(tested_remembering, tested_searching / 3);  // the memos do save searches
+}
+
+TEST(ContactModel, MembraneBallMemosGiveTheForcesOfSearchingAnew) {
+  // Forty balls around a faceted rigid sphere that turns slowly. Each breathes along its direction
+  // between 0.3 of its radius clear of the surface and 0.1 of it pressed in (up to 0.2 memo margin
+  // a step), while drifting sideways; at step 450 all jump sideways by half the skin (the ball lists
+  // are built again and keep their memos). Forces on the balls and the grain must match searching
+  // anew, bit for bit: a ball outside at d keeps its memo only while it moves less than d - its
+  // radius (the test fails with d).
+  const double radius = 0.5 * kMm, ball = 0.15 * radius;
+  const Model m = faceted_spheres(radius, 1);
+  ContactOptions anew;
+  anew.search_memos = false;
+  ContactModel remembering(m, unit_masses(m), {}), searching(m, unit_masses(m), anew);
+  const double margin = 0.02 * remembering.skin();  // kMemoMarginFraction
+  const double amplitude = 0.2 * ball, omega = 0.2 * margin / amplitude;
+  constexpr int kBalls = 40, kSteps = 600, kJump = 450;
+  std::vector<Eigen::Vector3d> direction(kBalls);
+  for (int b = 0; b < kBalls; ++b) {  // a Fibonacci sphere
+    const double z = 1 - (2 * b + 1.0) / kBalls, phi = b * std::numbers::pi * (3 - std::sqrt(5.0));
+    direction[b] = Eigen::Vector3d(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+  }
+  const BallContactOptions ball_options{ball, 1e-9, 0.3};
+  const double dt = 1e-8;
+  std::vector<Eigen::Vector3d> x(m.nodes.size()), v = zeros(m.nodes.size()), centres(kBalls);
+  const std::vector<Eigen::Vector3d> still = zeros(kBalls);
+  std::size_t contacts = 0, clear = 0;
+  for (int step = 0; step < kSteps; ++step) {
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(2e-4 * step, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+    const std::vector<RigidPose> poses = {RigidPose::of_body(turn, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero())};
+    for (std::uint32_t n = 0; n < m.nodes.size(); ++n) x[n] = turn * m.nodes[n];
+    for (int b = 0; b < kBalls; ++b) {
+      const double slid = 0.05 * margin * step + (step >= kJump ? 0.5 * remembering.skin() : 0.0);
+      const Eigen::Vector3d side = direction[b].unitOrthogonal();
+      const Eigen::Vector3d d = (direction[b] + slid / radius * side).normalized();
+      const double gap = 0.1 * ball + amplitude * std::sin(omega * step + b);  // -0.1 to 0.3 of the ball
+      centres[b] = (radius + ball + gap) * d;
+      clear += gap > 0.05 * ball;
+    }
+    auto fa = zeros(x.size()), fb = zeros(x.size()), ball_fa = zeros(kBalls), ball_fb = zeros(kBalls),
+         moment_a = zeros(kBalls), moment_b = zeros(kBalls);
+    remembering.add_forces(x, v, {}, dt, fa, poses);
+    searching.add_forces(x, v, {}, dt, fb, poses);
+    contacts += remembering.add_ball_forces(x, v, centres, still, still, ball_options, dt, fa, ball_fa, moment_a).contacts;
+    searching.add_ball_forces(x, v, centres, still, still, ball_options, dt, fb, ball_fb, moment_b);
+    ASSERT_EQ(ball_fa, ball_fb) << "step " << step;
+    ASSERT_EQ(moment_a, moment_b) << "step " << step;
+    ASSERT_TRUE(same_loads(remembering.rigid_loads(), searching.rigid_loads())) << "step " << step;
+  }
+  EXPECT_GT(contacts, 5000u);
+  EXPECT_GT(clear, 5000u);  // balls clear of the grain, hovering within the search's reach
 }
 
 TEST(ContactModel, StableTimeStepIsHalfTheNodeOscillatorLimit) {

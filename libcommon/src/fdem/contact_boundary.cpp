@@ -99,7 +99,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
       const std::uint32_t g = candidate.grain;
       if (!s.trees.bounds(g).inflated(r).contains(c)) continue;
       SurfaceTrees::Nearest near;
-      if (!s.ball_nearest(candidate, c, r + s.max_penetration, x, near)) continue;
+      if (!s.ball_nearest(candidate, c, r + s.max_penetration, r, x, near)) continue;
       const Eigen::Vector3d d = near.closest.point - c;  // from the centre to the surface
       const double dist = std::sqrt(near.distance2);
       const bool inside = d.dot(s.pseudonormal(near.triangle, near.closest.feature, x)) > 0;
@@ -170,16 +170,25 @@ void ContactModel::State::build_ball_lists(std::span<const Eigen::Vector3d> cent
         for (std::int64_t k = index(grown.lo.z()); k <= index(grown.hi.z()); ++k) grid[key(i, j, k)].push_back(g);
   }
   const std::size_t n = centres.size();
+  // A memo is a fact about a grain's fixed body-frame surface, true whatever the lists: a ball that
+  // keeps a grain keeps its memo and hint (both lists are in grain order), unless the radius changed.
+  const bool keep_memos = ball_lists_radius == radius && ball_candidates.size() == n;
   ball_candidates.resize(n);
 #pragma omp parallel for schedule(dynamic, 64) if (n >= kParallelNodes / 4)
   for (std::int64_t b = 0; b < static_cast<std::int64_t>(n); ++b) {
     std::vector<BallCandidate>& list = ball_candidates[b];
+    std::vector<BallCandidate> before;
+    if (keep_memos) before.swap(list);
     list.clear();
     const Eigen::Vector3d& c = centres[b];
     const auto it = grid.find(key(index(c.x()), index(c.y()), index(c.z())));
     if (it == grid.end()) continue;
-    for (std::uint32_t g : it->second)
-      if (trees.bounds(g).inflated(reach).contains(c)) list.push_back({g, SurfaceTrees::kNoHint, SearchMemo{}});
+    auto kept = before.begin();
+    for (std::uint32_t g : it->second) {
+      if (!trees.bounds(g).inflated(reach).contains(c)) continue;
+      while (kept != before.end() && kept->grain < g) ++kept;
+      list.push_back(kept != before.end() && kept->grain == g ? *kept : BallCandidate{g, SurfaceTrees::kNoHint, SearchMemo{}});
+    }
   }
   ball_built_at.assign(centres.begin(), centres.end());
   ball_lists_rebuilds = rebuilds;

@@ -40,7 +40,7 @@ CandidateSum ContactModel::State::sum_hits(const Candidate& c, std::span<const N
 template <class Outside>
 bool ContactModel::State::nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, double deepest, NearNode& listed,
                                              SearchMemo& memo, SurfaceTrees::Nearest& near, Checks& checks,
-                                             Outside outside) const {
+                                             Outside outside, double touch) const {
   const double deepest2 = deepest * deepest;
   if (options.search_memos && (q - memo.at).squaredNorm() < memo.valid2) {
     if (memo.count == 0) return false;
@@ -70,8 +70,8 @@ bool ContactModel::State::nearest_remembered(std::uint32_t to, const Eigen::Vect
   }
   if (listed.hint != SurfaceTrees::kNoHint) listed.hint = near.triangle;
   const double d = std::sqrt(near.distance2);
-  if (outside(near)) {
-    memo.valid2 = d > slack ? (d - slack) * (d - slack) : -1;
+  if (outside(near) && !(d < touch)) {
+    memo.valid2 = d - touch > slack ? (d - touch - slack) * (d - touch - slack) : -1;
     return false;
   }
   if (!options.search_memos) return near.distance2 < deepest2;
@@ -170,7 +170,8 @@ void ContactModel::State::grain_hits(std::uint32_t from, std::uint32_t to, const
 }
 
 bool ContactModel::State::ball_nearest(BallCandidate& candidate, const Eigen::Vector3d& c, double radius,
-                                       std::span<const Eigen::Vector3d> x, SurfaceTrees::Nearest& near) const {
+                                       double ball_radius, std::span<const Eigen::Vector3d> x,
+                                       SurfaceTrees::Nearest& near) const {
   const std::uint32_t g = candidate.grain;
   const RigidPose& body = pose[g];
   if (!body.rigid) {  // a deformable surface moves under any memo: searched anew from the last triangle
@@ -178,13 +179,17 @@ bool ContactModel::State::ball_nearest(BallCandidate& candidate, const Eigen::Ve
     candidate.hint = near.triangle;
     return true;
   }
-  // A ball touches whether its centre is inside or outside the grain: no side ends the search.
+  // A ball touches with its centre inside the grain or outside within its radius; a centre outside
+  // farther than that keeps its memo until it has moved the difference (a membrane hovering near
+  // the grains searched again every 2 m of motion: a third of a shearing step went to those searches).
   NearNode listed;
   listed.hint = candidate.hint;
   Checks checks;
   const Eigen::Vector3d q = body.rotation.transpose() * (c - body.translation);
-  if (!nearest_remembered(g, q, radius, listed, candidate.memo, near, checks, [](const SurfaceTrees::Nearest&) { return false; }))
-    return false;
+  const auto outside = [&](const SurfaceTrees::Nearest& n) {
+    return !((n.closest.point - q).dot(reference_pseudonormal(n.triangle, n.closest.feature)) > 0);
+  };
+  if (!nearest_remembered(g, q, radius, listed, candidate.memo, near, checks, outside, ball_radius)) return false;
   near.closest.point = body.rotation * near.closest.point + body.translation;
   candidate.hint = near.triangle;
   return true;

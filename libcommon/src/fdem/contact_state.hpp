@@ -103,9 +103,10 @@ struct NearNode {
 /// |q - at|): a node outside at d stays outside while |q - at| < d; a node deeper than the deepest
 /// detectable penetration P stays so while |q - at| < d - P; a node with nothing within P + 2m
 /// stays without contact while |q - at| < 2m; and for a node in contact, the triangle closest to q
-/// is among those within d + 2m of `at` while |q - at| <= m. Answers from the memo are therefore
-/// the search's own, bit for bit (ties go to the lowest index in both), and a restart that starts
-/// without memos continues exactly.
+/// is among those within d + 2m of `at` while |q - at| <= m. A membrane ball's centre, which
+/// touches within its radius r outside, keeps the same memo: outside at d >= r, no contact while
+/// |q - at| < d - r. Answers from the memo are therefore the search's own, bit for bit (ties go to
+/// the lowest index in both), and a restart that starts without memos continues exactly.
 struct SearchMemo {
   Eigen::Vector3d at = Eigen::Vector3d::Zero();
   double valid2 = -1;       ///< the memo holds while |q - at|^2 < valid2 (never when negative)
@@ -504,10 +505,12 @@ struct ContactModel::State {
   /// grains, from its memo when that still holds, else anew (and remembered). True when a triangle
   /// lies within the deepest detectable penetration; `near` is then in the body frame. `outside`
   /// tells whether the node is outside `to` given a search's answer (in the body frame).
-  /// `deepest`: the pair's search_depth (P of SearchMemo).
+  /// `deepest`: the pair's search_depth (P of SearchMemo). `touch`: how near outside the surface a
+  /// point still touches it (0 for a node; a membrane ball's radius for its centre): a point
+  /// outside at d >= touch stays without contact while |q - at| < d - touch.
   template <class Outside>
   bool nearest_remembered(std::uint32_t to, const Eigen::Vector3d& q, double deepest, NearNode& listed, SearchMemo& memo,
-                          SurfaceTrees::Nearest& near, Checks& checks, Outside outside) const;
+                          SurfaceTrees::Nearest& near, Checks& checks, Outside outside, double touch = 0) const;
 
   /// Nodes of grain `from` inside grain `to` (pair key a < b), with their forces, among `nodes`
   /// (whose hints are moved to the triangles found; `memos` has one per node).
@@ -522,9 +525,10 @@ struct ContactModel::State {
   /// Every ball's candidate grains (ball_candidates) for balls of `radius` at `centres`.
   void build_ball_lists(std::span<const Eigen::Vector3d> centres, double radius);
   /// The triangle of grain candidate.grain nearest to the ball centre c within `radius` (world
-  /// frame): a rigid grain is searched in its body frame through the candidate's memo.
-  bool ball_nearest(BallCandidate& candidate, const Eigen::Vector3d& c, double radius, std::span<const Eigen::Vector3d> x,
-                    SurfaceTrees::Nearest& near) const;
+  /// frame): a rigid grain is searched in its body frame through the candidate's memo. False also
+  /// when the centre lies outside the grain at least `ball_radius` from it (no contact either way).
+  bool ball_nearest(BallCandidate& candidate, const Eigen::Vector3d& c, double radius, double ball_radius,
+                    std::span<const Eigen::Vector3d> x, SurfaceTrees::Nearest& near) const;
 
   /// Nodes of grain key.a behind `platen`, with their forces.
   void platen_hits(const Candidate& key, const PlatenState& platen, std::span<const Eigen::Vector3d> x,
