@@ -43,7 +43,7 @@ inline constexpr double kReachRoundOff = 1e-6;
 /// How far, as a fraction of the skin, a listed node may move in the other rigid grain's body frame
 /// before its remembered search is redone (SearchMemo). Larger keeps answers longer but remembers
 /// more triangles per node in contact.
-inline constexpr double kMemoMarginFraction = 0.02;
+inline constexpr double kMemoMarginFraction = 0.05;
 /// Triangles a node in contact remembers (SearchMemo); a node with more within reach searches anew.
 inline constexpr std::size_t kMemoTriangles = 6;
 
