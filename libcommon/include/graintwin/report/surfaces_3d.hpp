@@ -47,9 +47,10 @@ double clustering_cell(double area, std::size_t target);
 /// The total area of a triangle surface.
 double surface_area(std::span<const Eigen::Vector3d> vertices, std::span<const std::array<std::uint32_t, 3>> triangles);
 
-/// Triangles drawn per picture at most (about): a grain above its share (the budget over the grains
-/// drawn) is clustered down to it. 1.5 million keep a picture under about 10 s on one core with
-/// Mesa's software renderer, and a grain of the 15 000-grain series 100 triangles across 15 pixels.
+/// Triangles drawn per picture (about): a grain above its share (the budget over the grains drawn)
+/// is clustered down to it. A picture of 1.1 million triangles took 7 s on one loaded core with
+/// Mesa's software renderer; at 15 000 grains this leaves about 150 triangles to a grain that is
+/// some 15 pixels across.
 inline constexpr std::size_t kSurfaceTriangleBudget = 1'500'000;
 
 /// The centroid of the solid a closed triangle surface encloses (divergence theorem over its
