@@ -17,6 +17,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <regex>
 #include <set>
@@ -113,15 +114,39 @@ std::vector<double> sim_axial() {
 }
 double sim_ratio(double eps) { return 1.0 + 3.0 * eps / (0.01 + eps); }
 
+/// Frame k's membrane: `balls` (x, y, z each) as /frames/<k>/membrane/position, where fdemrun's
+/// triaxial test writes its balls.
+void add_membrane(const fs::path& path, std::size_t k, const std::vector<double>& balls) {
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const std::string group = fmt::format("/frames/{:06d}/membrane", k);
+  const hid_t g = H5Gcreate2(file, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  const hsize_t dims[2] = {balls.size() / 3, 3};
+  const hid_t space = H5Screate_simple(2, dims, nullptr);
+  const hid_t set = H5Dcreate2(g, "position", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  const herr_t written = H5Dwrite(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, balls.data());
+  H5Dclose(set), H5Sclose(space), H5Gclose(g), H5Fclose(file);
+  ASSERT_GE(written, 0);
+}
+
 /// A 4^3 lattice of rigid boxes compressed along z, with x- and z-neighbour contacts carrying
-/// spread-out forces, grain stresses whose q varies from frame to frame, and the triaxial series.
+/// spread-out forces, grain stresses whose q varies from frame to frame, the triaxial series, and a
+/// membrane of balls on a cylinder around the lattice; its frames also as fdemrun --vtk writes them.
 void write_simulation(const fs::path& path) {
   test::LatticeRun run;
   run.velocity_gradient = Eigen::Vector3d(20.0, 20.0, -100.0).asDiagonal();
   run.extra_velocity = {{21, Eigen::Vector3d(2.0, -1.0, 1.0)}};
+  run.vtk_frames = path.parent_path() / "simulation_frames";
   test::write_lattice_results(path, run);
   const std::size_t n = 64;
   for (std::size_t k = 0; k < run.frames; ++k) {
+    std::vector<double> balls;
+    for (int ring = 0; ring < 8; ++ring)
+      for (int j = 0; j < 24; ++j) {
+        const double phi = 2.0 * std::numbers::pi * j / 24.0;
+        balls.insert(balls.end(), {2.25e-3 + 3.6e-3 * std::cos(phi), 2.25e-3 + 3.6e-3 * std::sin(phi), -0.5e-3 + 0.7e-3 * ring});
+      }
+    add_membrane(path, k, balls);
     std::vector<test::KnownContact> contacts;
     double f = 1.0;
     for (std::size_t a = 0; a < n; ++a) {
@@ -216,13 +241,14 @@ void make_runs() {
     write_scan(r.volumes.back(), t);
     run_ok("labels2contacts", {(scan / "labels.h5").string(), (scan / "contacts.h5").string()});
     // Low SH degree and principal-axis rotations: the report reads no shape detail, and it is faster.
-    run_ok("labels2shapes", {(scan / "labels.h5").string(), (scan / "shapes.h5").string(), "--degree", "6"});
+    run_ok("labels2shapes", {(scan / "labels.h5").string(), (scan / "shapes.h5").string(), "--degree", "6", "--surfaces",
+                             (scan / "grains.vtp").string()});
     shapes.push_back((scan / "shapes.h5").string());
     contacts.push_back((scan / "contacts.h5").string());
     series["scans"].push_back({{"axial_strain", applied_axial_strain(t)}});
   }
   std::vector<std::string> track_args = shapes;
-  track_args.insert(track_args.end(), {(r.full / "tracks.h5").string(), "--rotation", "axes"});
+  track_args.insert(track_args.end(), {(r.full / "tracks.h5").string(), "--rotation", "axes", "--vtk", (r.full / "tracks.vtp").string()});
   run_ok("shapes2tracks", track_args);
   std::vector<std::string> micro_args{(r.full / "tracks.h5").string(), (r.full / "micro.h5").string(), "--contacts"};
   micro_args.insert(micro_args.end(), contacts.begin(), contacts.end());
@@ -233,7 +259,7 @@ void make_runs() {
   write_budget(r.full / "validation.json");
   // The boxes sit 1.5 mm apart with equivalent radii of 0.62 mm: link neighbours into clusters.
   run_ok("tracks2micro", {(r.full / "simulation.h5").string(), (r.full / "simulation_micro.h5").string(), "--contact-factor", "1.3"});
-  run_ok("fdem2forces", {(r.full / "simulation.h5").string(), (r.full / "forces.h5").string()});
+  run_ok("fdem2forces", {(r.full / "simulation.h5").string(), (r.full / "forces.h5").string(), "--chains", (r.full / "force_chains").string()});
   r.series_json = r.dir / "series.json";
   std::ofstream(r.series_json) << series.dump();
 }
@@ -301,10 +327,14 @@ const std::vector<std::string> kSectionPanels{"section_scan_000", "section_scan_
 constexpr std::size_t kSectionSidesMissing = 2;
 /// The D2min clusters in 3D: one panel per increment, the scans' two beside the simulation's three.
 const std::vector<std::string> kClusterPanels{"clusters_3d_0", "clusters_3d_1", "clusters_3d_2"};
+/// eps_q in 3D: one panel per increment, as the D2min clusters.
+const std::vector<std::string> kEpsQPanels{"eps_q_3d_0", "eps_q_3d_1", "eps_q_3d_2"};
+/// The grains' surfaces in 3D: one panel, the reference scan beside the twin's last frame.
+constexpr std::size_t kSurfacePictures = 2;
 /// The force-chain network's panels: one per frame of the lattice simulation, the simulation's side only.
 const std::vector<std::string> kNetworkPanels{"force_network_0", "force_network_1", "force_network_2", "force_network_3"};
 
-/// The pixel check of the pictures of the sample (sections, 3D clusters and force networks), run with
+/// The pixel check of the pictures of the sample (sections, the 3D grains, clusters, eps_q and force networks), run with
 /// Debian's Python: each must show something (not
 /// blank, many colours, at least 2 % of it grains in colour) with the sample inside the frame (the
 /// coloured pixels away from the picture's edges, their centre in its middle). Prints one line per
@@ -316,7 +346,7 @@ import numpy as np
 folder = sys.argv[1]
 checked, failures = 0, []
 for c in json.load(open(folder + "/charts.json"))["charts"]:
-    if c["kind"] not in ("section", "network", "grains"):
+    if c["kind"] not in ("section", "network", "grains", "surfaces"):
         continue
     rgb = mi.imread(folder + "/" + c["file"])[..., :3]
     h, w, _ = rgb.shape
@@ -409,7 +439,7 @@ TEST_F(Report, FullRunNamesEveryPanelEmbedsEveryChartAndKeepsTheNumbers) {
   const nlohmann::json spec = nlohmann::json::parse(slurp(out / "report_img/charts.json"));
   EXPECT_EQ(spec["charts"].size(),
             2 * kPanels.size() - 4 + 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 +
-                kNetworkPanels.size() + kBudgetLines.size());
+                2 * kEpsQPanels.size() - 1 + kSurfacePictures + kNetworkPanels.size() + kBudgetLines.size());
   const auto* twin = find_chart(spec, "budget_twin.png");
   ASSERT_NE(twin, nullptr);
   ASSERT_NE(find_series(*twin, "twin"), nullptr);
@@ -473,10 +503,11 @@ TEST_F(Report, RunWithoutSimulationSaysSoInEveryPanel) {
   for (const std::string& id : kPanels) EXPECT_NE(html.find("id=\"" + id + "\""), std::string::npos) << id;
   // Every simulation side is missing and says which stage makes it; the experiment keeps its 11,
   // and its pictures: the sections of three scans, D2min and eps_q of two increments, and the D2min
-  // clusters of two increments in 3D.
-  const std::size_t pictures = kScans + 2 * (kScans - 1) + (kScans - 1);
-  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + pictures + 1)
-      << "and the force-chain network's one panel";
+  // clusters and eps_q of two increments in 3D. Without a model the grains' surfaces say so.
+  const std::size_t pictures = kScans + 2 * (kScans - 1) + 2 * (kScans - 1);
+  EXPECT_EQ(count_of(html, "This run has no simulation results (simulation.h5, kind=fdem_results)"), kPanels.size() + pictures + 2)
+      << "and the force-chain network's and the grains' surfaces' one panel each";
+  EXPECT_EQ(count_of(html, "This run has no FDEM model (model.h5): the mesh stage (shapes2mesh) makes"), 1u);
   EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), kPanels.size() - 4 + pictures);
   EXPECT_NE(html.find("No benchmark charts were found"), std::string::npos);
   // No validation.json: the error budget is one sentence.
@@ -609,16 +640,70 @@ TEST_F(Report, PicturesShowTheSampleBesideTheTwin) {
   }
   EXPECT_EQ(grains["centre"].size(), 3 * row);
   EXPECT_GT(members, 0u) << "tracks2micro's top fraction makes clusters";
-  std::set<std::string> cameras;
-  for (const std::string& id : kClusterPanels)
-    for (const char* side : {"_experiment.png", "_simulation.png"})
-      if (const auto* c = find_chart(spec, id + side))
-        cameras.insert((*c)["grains"]["bounds"].dump() + (*c)["grains"]["colour_min"].dump() + (*c)["grains"]["colour_max"].dump());
-  EXPECT_EQ(cameras.size(), 1u) << "one camera and one colour scale for every 3D picture of D2min";
+  // The camera boxes and colour scales of the 3D grain pictures of `panels`, both sides.
+  const auto cameras_and_scales = [&](const std::vector<std::string>& panels) {
+    std::set<std::string> seen;
+    for (const std::string& id : panels)
+      for (const char* side : {"_experiment.png", "_simulation.png"})
+        if (const auto* c = find_chart(spec, id + side))
+          seen.insert((*c)["grains"]["bounds"].dump() + (*c)["grains"]["colour_min"].dump() + (*c)["grains"]["colour_max"].dump());
+    return seen;
+  };
+  EXPECT_EQ(cameras_and_scales(kClusterPanels).size(), 1u) << "one camera and one colour scale for every 3D picture of D2min";
+  // eps_q in 3D, increment 0: every tracked grain of scan 0 outside the front quarter, painted with
+  // micro.h5's eps_q; no grain left in that quarter; one camera and colour scale for all.
+  const auto* eps_q = find_chart(spec, "eps_q_3d_0_experiment.png");
+  ASSERT_NE(eps_q, nullptr);
+  const auto& painted_3d = (*eps_q)["grains"];
+  const auto bounds = painted_3d["bounds"].get<std::array<double, 6>>();
+  const double cut_x = 0.5 * (bounds[0] + bounds[1]), cut_y = 0.5 * (bounds[2] + bounds[3]);
+  std::map<std::array<double, 3>, nlohmann::json> eps_q_at;
+  for (std::size_t i = 0; i < painted_3d["radius"].size(); ++i) {
+    const std::array<double, 3> c{painted_3d["centre"][3 * i].get<double>(), painted_3d["centre"][3 * i + 1].get<double>(),
+                                  painted_3d["centre"][3 * i + 2].get<double>()};
+    EXPECT_FALSE(c[0] > cut_x && c[1] < cut_y) << "a grain in the front quarter cut away";
+    EXPECT_EQ(painted_3d["highlighted"][i].get<int>(), 1) << "every grain is painted";
+    eps_q_at[c] = painted_3d["value"][i];
+  }
+  std::size_t kept = 0, in_cut = 0;
+  for (std::size_t n = 0; n < m.grains; ++n) {
+    if (m.grain_label[n * states] == 0) continue;
+    const double* c = &tracked.centroid[3 * n * tracked.scans];
+    if (c[0] > cut_x && c[1] < cut_y) {
+      ++in_cut;
+      continue;
+    }
+    const std::array<double, 3> at{c[0], c[1], c[2]};
+    ASSERT_TRUE(eps_q_at.count(at)) << "grain " << n;
+    const double value = m.grain_eps_q[n * increments];
+    if (std::isfinite(value)) EXPECT_EQ(eps_q_at[at].get<double>(), value);
+    ++kept;
+  }
+  EXPECT_EQ(eps_q_at.size(), kept);
+  EXPECT_GT(in_cut, 5u) << "about a quarter of the 64 grains";
+  EXPECT_EQ(cameras_and_scales(kEpsQPanels).size(), 1u) << "one camera and one colour scale for every 3D picture of eps_q";
+  // The grains' surfaces: the 48 cubes outside the front quarter of the lattice (sites 0 to 4.5 mm,
+  // cut at its middle, 2.25 mm) whole, scan 0's and the twin's at its last frame with the membrane
+  // balls outside the cut; the triangles' files are gone once drawn.
+  for (const char* side : {"grains_3d_experiment.png", "grains_3d_simulation.png"}) {
+    const auto* c = find_chart(spec, side);
+    ASSERT_NE(c, nullptr) << side;
+    const auto& v = (*c)["surfaces"];
+    EXPECT_EQ(v["grains"], 48) << side;
+    EXPECT_EQ(v["grains_cut"], 16) << side;
+    EXPECT_EQ(v["triangles"], v["source_triangles"]) << side << ": cubes need no simplification";
+    EXPECT_NEAR(v["cut"][0].get<double>(), 2.25e-3, 1e-12);
+    EXPECT_FALSE(fs::exists(img / v["mesh_file"].get<std::string>())) << side;
+  }
+  const auto& membrane = (*find_chart(spec, "grains_3d_simulation.png"))["surfaces"]["membrane"];
+  EXPECT_GT(membrane.size(), 3 * 100u);
+  EXPECT_LT(membrane.size(), 3 * 192u) << "the balls in the front quarter are cut away";
+  EXPECT_NE(html.find("<section class=\"panel\" id=\"grains_3d\">"), std::string::npos);
   // Every picture shows something, with the sample inside the frame.
   const auto pixels = test::run_program("/usr/bin/python3", {"-c", kPixelCheck, img.string()});
   EXPECT_EQ(pixels.exit_code, 0) << pixels.out << pixels.err;
-  const std::size_t pictures = 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 + kNetworkPanels.size();
+  const std::size_t pictures = 2 * kSectionPanels.size() - kSectionSidesMissing + 2 * kClusterPanels.size() - 1 +
+                               2 * kEpsQPanels.size() - 1 + kSurfacePictures + kNetworkPanels.size();
   EXPECT_NE(pixels.out.find(std::to_string(pictures) + " pictures checked"), std::string::npos) << pixels.out;
 }
 
@@ -638,6 +723,51 @@ TEST_F(Report, HeadlessChromiumLoadsEveryImage) {
   EXPECT_EQ(loaded[1].str(), total[1].str()) << "images that did not decode in Chromium";
 }
 
+/// Loads a state with the run folder as its data directory and prints each source's name and points
+/// (every time step of a series counted), one per line.
+constexpr const char* kLoadState = R"(
+import sys
+from paraview.simple import GetSources, LoadState
+LoadState(sys.argv[1], data_directory=sys.argv[2])
+for (name, _), source in sorted(GetSources().items()):
+    times = list(getattr(source, "TimestepValues", None) or [None])
+    points = []
+    for t in times:
+        source.UpdatePipeline(t) if t is not None else source.UpdatePipeline()
+        points.append(source.GetDataInformation().GetNumberOfPoints())
+    print(f"{name}: {min(points)} points in every one of {len(times)} steps")
+)";
+
+TEST_F(Report, ParaviewStateOpensEveryVtkFileOfTheRunFromWhereverTheRunFolderIsMoved) {
+  test::TempDir dir;
+  const fs::path run = dir / "run", moved = dir / "moved";
+  fs::copy(g_runs->full, run, fs::copy_options::recursive);
+  const auto r = run_tool("report", {run.string(), (run / "report.html").string(), "--paraview-state", (run / "twin.pvsm").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string state = slurp(run / "twin.pvsm");
+  // Every VTK file of the run's stages, by its path relative to the state's folder.
+  for (const char* file : {"scan_000/grains.vtp", "scan_001/grains.vtp", "scan_002/grains.vtp", "tracks.vtp",
+                           "simulation_frames/frames.pvd", "twin_membrane/membrane.pvd", "force_chains/chains.pvd"})
+    EXPECT_NE(state.find("value=\"" + std::string(file) + "\""), std::string::npos) << file;
+  EXPECT_EQ(state.find(run.string()), std::string::npos) << "no absolute path";
+  for (std::size_t k = 0; k < 4; ++k) EXPECT_TRUE(fs::exists(run / fmt::format("twin_membrane/membrane_{}.vtp", k))) << k;
+  fs::rename(run, moved);
+  const fs::path pvpython = "/usr/bin/pvpython";
+  if (!fs::exists(pvpython))
+    GTEST_SKIP() << "ParaView's pvpython is not installed (Debian's paraview, left out of scripts/deps.sh to keep CI fast): "
+                    "the state was written and checked, not loaded";
+  const auto loaded = test::run_program(pvpython, {"-c", kLoadState, (moved / "twin.pvsm").string(), moved.string()});
+  ASSERT_EQ(loaded.exit_code, 0) << loaded.out << loaded.err;
+  for (const char* line : {"force chains: ", "grain tracks: ", "membrane balls: ", "scan_000 grains: ", "scan_001 grains: ", "scan_002 grains: ",
+                           "twin frames: "}) {
+    const std::size_t at = loaded.out.find(line);
+    ASSERT_NE(at, std::string::npos) << line << " is not in the state:\n" << loaded.out;
+    EXPECT_NE(loaded.out.substr(at + std::string(line).size(), 2), "0 ") << line << "has no points:\n" << loaded.out;
+  }
+  EXPECT_NE(loaded.out.find("twin frames: 512 points in every one of 4 steps"), std::string::npos)
+      << "64 cubes of 8 nodes, 4 frames:\n" << loaded.out;
+}
+
 TEST(ReportFailures, BadInputsFailCleanly) {
   test::TempDir run, out;
   fs::create_directories(run / "scan_000");
@@ -646,6 +776,8 @@ TEST(ReportFailures, BadInputsFailCleanly) {
   test::expect_clean_failure("report", out, {(out / "no_such_run").string(), page}, 2, "no_such_run does not exist; run the pipeline");
   test::expect_clean_failure("report", out, {out.path().string(), page}, 2, "holds no scan_*/labels.h5; run the segment stage");
   test::expect_clean_failure("report", out, {run.path().string(), (out / "r.txt").string()}, 2, "must end in .html");
+  test::expect_clean_failure("report", out, {run.path().string(), page, "--paraview-state", (out / "twin.xml").string()}, 2,
+                             "--paraview-state " + (out / "twin.xml").string() + " must end in .pvsm");
   test::expect_clean_failure("report", out, {run.path().string(), page, "--tracks", labels}, 2, "pass the output of shapes2tracks");
   test::expect_clean_failure("report", out, {run.path().string(), page, "--shapes", labels, labels}, 2, "give one per scan");
   test::expect_clean_failure("report", out, {run.path().string(), page, "--scan-strains", labels}, 2, "pass a series.json");

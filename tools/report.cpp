@@ -3,11 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <fstream>
+#include <optional>
 
 #include "graintwin/cli/option_checks.hpp"
 #include "graintwin/cli/tool.hpp"
 #include "graintwin/core/error.hpp"
 #include "graintwin/io/atomic_output.hpp"
+#include "graintwin/report/paraview_state.hpp"
 #include "graintwin/report/run_report.hpp"
 
 namespace fs = std::filesystem;
@@ -25,7 +27,8 @@ int main(int argc, char** argv) {
       "simulation right: sections of each scan with its labels (over the scan's grey values with --volumes) beside the same "
       "planes through the FDEM twin's grains; D2min and eps_q of every grain painted on the vertical section through the axis "
       "for each increment, on one colour scale; the high-D2min clusters in 3D for each increment, scans beside the twin; the "
-      "twin's strong force-chain network in 3D at each frame (3D pictures by VTK on a private Xvfb); stress ratio and volumetric strain against axial strain (the simulation's triaxial series, the "
+      "twin's strong force-chain network in 3D at each frame; the grains' own surfaces in 3D (the reference scan beside the twin at its "
+      "last frame with its membrane, a front quarter cut away) and eps_q of every grain in 3D for each increment (3D pictures by VTK on a private Xvfb); stress ratio and volumetric strain against axial strain (the simulation's triaxial series, the "
       "scans' strains as points), PSD, coordination numbers, roses of contact normals, branch vectors and mean normal "
       "force, g(r), incremental displacement distributions, PDFs of D2min and eps_q, cluster size distribution with its "
       "power-law fit, R_g against s with d_f, force PDF with its strong and weak fits, volatility of grain stress against "
@@ -33,7 +36,7 @@ int main(int argc, char** argv) {
       "a series without truth says so), each stage's accuracy-against-time charts from --bench-img, and the files' "
       "provenance. Where a side has no data (CT measures no forces; a stage has not run) the panel says so in one "
       "sentence. Charts are drawn by --chart-script with Debian's python3-matplotlib.");
-  fs::path run_dir, output;
+  fs::path run_dir, output, state;
   RunFiles given;
   ReportOptions ro;
   ro.python = "/usr/bin/python3";
@@ -63,6 +66,11 @@ int main(int argc, char** argv) {
       ->check(cli::whole_number_in(1, 20))->capture_default_str();
   app.add_option("--title", ro.title, "Page title (default: Experiment against simulation: <RUNDIR name>)");
   app.add_option("--python", ro.python, "Python with matplotlib that runs the chart script")->capture_default_str();
+  app.add_option("--paraview-state", state,
+                 "Also write a ParaView state of the run (.pvsm): the scans' grains and tracks beside the twin's frames, membrane "
+                 "and force chains (the files the pipeline's stages wrote for ParaView in RUNDIR), paths relative to the state's "
+                 "folder; the membrane's balls per frame go to <stem>_membrane/ beside it. Open it with the run folder as the data "
+                 "directory (docs/report.md)");
   app.add_option("--chart-script", ro.script, "The chart script; default: pipelines/plots/report_charts.py of the source tree this build came from");
   tool.set_examples({"report runs/sand_small runs/sand_small/report.html --scan-strains sample_volumes/sand_small/series.json",
                      "report runs/sand_small /tmp/report.html --simulation other/simulation.h5 --forces other/forces.h5 --bench-img docs/img"});
@@ -78,9 +86,15 @@ int main(int argc, char** argv) {
     require_file(ro.script, "--chart-script");
     if (!ro.bench_img.empty()) require_folder(ro.bench_img, "--bench-img", "pass the repository's docs/img");
     if (ro.bench_img.empty()) ro.bench_img = fs::path(GRAINTWIN_SOURCE_DIR) / "docs/img";
+    if (!state.empty() && state.extension() != ".pvsm") throw UsageError("--paraview-state " + state.string() + " must end in .pvsm");
     const fs::path img_dir = output.parent_path() / (output.stem().string() + "_img");
     io::AtomicOutput html_out(output, ctx.force());
     io::AtomicOutput img_out(img_dir, ctx.force());
+    std::optional<io::AtomicOutput> state_out, membrane_out;
+    if (!state.empty()) {
+      state_out.emplace(state, ctx.force());
+      membrane_out.emplace(state.parent_path() / (state.stem().string() + "_membrane"), ctx.force());
+    }
     const RunFiles files = locate_run_files(run_dir, given);
     const auto provenance = check_run_files(files);
 
@@ -89,6 +103,12 @@ int main(int argc, char** argv) {
     std::ofstream(html_out.temp_path(), std::ios::binary) << page.html;
     spdlog::info("{} panels: {} charts drawn, {} sides without data (the page says why); error budget: {} lines, {} charts; {} benchmark charts",
                  page.panels, page.charts, page.sides_without, page.budget_lines, page.budget_charts, page.bench_charts);
-    io::commit_outputs({&html_out, &img_out});
+    if (state_out) {
+      const auto sources = write_paraview_state(run_dir, files, state_out->temp_path(), state, membrane_out->temp_path(), membrane_out->final_path());
+      spdlog::info("ParaView state {}: {} data sets", state.string(), sources.size());
+    }
+    // The membrane's folder exists only when the simulation has a membrane.
+    const bool membrane_written = membrane_out && fs::exists(membrane_out->temp_path());
+    io::commit_outputs({&html_out, &img_out, state_out ? &*state_out : nullptr, membrane_written ? &*membrane_out : nullptr});
   });
 }

@@ -1,4 +1,4 @@
-"""Draws the report's 3D pictures with VTK (kinds "network" and "grains" of charts.json; docs/report.md).
+"""Draws the report's 3D pictures with VTK (kinds "network", "grains" and "surfaces" of charts.json; docs/report.md).
 
 A network chart holds `segments` (x0, y0, z0, x1, y1, z1 per contact, metres) and `force` (the
 normal force of each, N). Each contact is a tube of radius radius_max * force / force_max (at most
@@ -6,10 +6,15 @@ normal force of each, N). Each contact is a tube of radius radius_max * force / 
 
 A grains chart holds each grain's `centre`, `radius` and `value`: the `highlighted` grains are
 spheres painted on the scale colour_min .. colour_max (logarithmic when colour_log, plasma, as the
-sections' D2min), a highlighted grain whose value is null grey; the others grey points; the
-`membrane` balls pale blue points.
+sections' D2min; else viridis, as their eps_q), a highlighted grain whose value is null grey; the
+others grey points; the `membrane` balls pale blue points.
 
-Both are seen by a fixed parallel camera looking along +y from 20 degrees above, framing `bounds`.
+A surfaces chart names `mesh_file`, an HDF5 file beside charts.json (the report writes it and
+removes it once drawn): /vertices (V x 3, m), /triangles (T x 3) and /label (T), each triangle
+coloured by its grain's label as the sections colour it; the `membrane` balls are pale blue
+spheres of `membrane_radius` (points when 0).
+
+All are seen by a fixed parallel camera looking along +y from 20 degrees above, framing `bounds`.
 The script computes nothing but radii and colours: every number comes from the JSON.
 
 VTK (Debian's python3-vtk9) renders on its own X server: Xvfb, started here on a free display
@@ -24,8 +29,11 @@ import signal
 import subprocess
 import sys
 
+import h5py
 import matplotlib
 import numpy as np
+
+from report_sections import identity_colours
 
 XVFB = "/usr/bin/Xvfb"
 SIZE = 640  # pixels, square
@@ -100,6 +108,18 @@ def point_cloud(vtk, xyz, colour, size):
     return actor
 
 
+def spheres(vtk, data, radius, theta, phi):
+    """A sphere of `radius` (theta x phi facets) on every point of `data`."""
+    sphere = vtk.vtkSphereSource()
+    sphere.SetRadius(radius)
+    sphere.SetThetaResolution(theta)
+    sphere.SetPhiResolution(phi)
+    glyphs = vtk.vtkGlyph3D()
+    glyphs.SetInputData(data)
+    glyphs.SetSourceConnection(sphere.GetOutputPort())
+    return glyphs
+
+
 def coloured(vtk, source, array, table):
     """An actor of `source`'s output painted by its point array `array` through `table`."""
     mapper = vtk.vtkPolyDataMapper()
@@ -131,12 +151,13 @@ def colour_bar(vtk, table, title):
 
 
 def render(vtk, actors, bar, title, bounds, margin, out_path):
-    """The actors and the colour bar seen by the fixed camera, written as a PNG."""
+    """The actors and the colour bar (if any) seen by the fixed camera, written as a PNG."""
     renderer = vtk.vtkRenderer()
     renderer.SetBackground(1.0, 1.0, 1.0)
     for actor in actors:
         renderer.AddActor(actor)
-    renderer.AddActor2D(bar)
+    if bar is not None:
+        renderer.AddActor2D(bar)
     text = vtk.vtkTextActor()
     text.SetInput(title)
     text.GetTextProperty().SetColor(0.1, 0.1, 0.1)
@@ -221,7 +242,7 @@ def draw_grains(chart, out_path):
     lo, hi = g["colour_min"], g["colour_max"]
     if lo is None or hi is None:
         lo, hi = 1.0, 10.0
-    table = lookup_table(vtk, lo, hi, g["colour_log"], "plasma")
+    table = lookup_table(vtk, lo, hi, g["colour_log"], "plasma" if g["colour_log"] else "viridis")
     table.SetNanColor(0.78, 0.78, 0.78, 1.0)
     actors = [point_cloud(vtk, centre[~shown], (0.55, 0.55, 0.55), 2)]
     if g["membrane"]:
@@ -238,16 +259,62 @@ def draw_grains(chart, out_path):
         data.SetPoints(points_of(vtk, centre[shown]))
         data.GetPointData().SetScalars(scales)
         data.GetPointData().AddArray(values)
-        sphere = vtk.vtkSphereSource()
-        sphere.SetRadius(1.0)
-        sphere.SetThetaResolution(16)
-        sphere.SetPhiResolution(12)
-        glyphs = vtk.vtkGlyph3D()
-        glyphs.SetInputData(data)
-        glyphs.SetSourceConnection(sphere.GetOutputPort())
+        # Fewer facets when there are many spheres (every grain of a 15 000-grain sample, eps_q):
+        # at about 15 pixels a sphere, 8 x 6 facets look as round and cost a fifth.
+        glyphs = spheres(vtk, data, 1.0, *((16, 12) if shown.sum() < 3000 else (8, 6)))
         glyphs.SetScaleModeToScaleByScalar()
         glyphs.SetScaleFactor(1.0)
         glyphs.SetColorModeToColorByScalar()
         actors.append(coloured(vtk, glyphs, "value", table))
     margin = float(radius.max()) if len(radius) else 0.0
     render(vtk, actors, colour_bar(vtk, table, g["quantity"]), chart["title"], g["bounds"], margin, out_path)
+
+
+def draw_surfaces(chart, out_path):
+    start_display()
+    import vtk  # after the display exists: VTK's X window reads DISPLAY
+    from vtk.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+
+    s = chart["surfaces"]
+    mesh_path = os.path.join(os.path.dirname(out_path), s["mesh_file"])
+    try:
+        with h5py.File(mesh_path, "r") as f:
+            vertices = np.ascontiguousarray(f["vertices"][:], dtype=np.float64)
+            triangles = np.asarray(f["triangles"][:], dtype=np.int64)
+            label = np.asarray(f["label"][:], dtype=np.int64)
+    except (OSError, KeyError) as e:
+        sys.exit(f"cannot read the grains' triangles {mesh_path} ({e.__class__.__name__}): the report writes them beside "
+                 "charts.json just before drawing, rerun it")
+    points = vtk.vtkPoints()
+    points.SetData(numpy_to_vtk(vertices, deep=True))
+    cells = vtk.vtkCellArray()
+    offsets = np.arange(0, 3 * len(triangles) + 1, 3, dtype=np.int64)
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True), numpy_to_vtkIdTypeArray(triangles.ravel(), deep=True))
+    data = vtk.vtkPolyData()
+    data.SetPoints(points)
+    data.SetPolys(cells)
+    colours = numpy_to_vtk((255 * identity_colours(label)).astype(np.uint8), deep=True)
+    colours.SetName("colour")
+    data.GetCellData().SetScalars(colours)
+    mapper = vtk.vtkPolyDataMapper()
+    mapper.SetInputData(data)
+    mapper.SetScalarModeToUseCellData()
+    mapper.SetColorModeToDirectScalars()
+    grains = vtk.vtkActor()
+    grains.SetMapper(mapper)
+    actors = [grains]
+    if s["membrane"]:
+        if s["membrane_radius"] > 0:
+            balls = vtk.vtkPolyData()
+            balls.SetPoints(points_of(vtk, s["membrane"]))
+            glyphs = spheres(vtk, balls, s["membrane_radius"], 8, 6)
+            glyphs.ScalingOff()
+            membrane_mapper = vtk.vtkPolyDataMapper()
+            membrane_mapper.SetInputConnection(glyphs.GetOutputPort())
+            membrane = vtk.vtkActor()
+            membrane.SetMapper(membrane_mapper)
+            membrane.GetProperty().SetColor(0.6, 0.75, 0.95)
+            actors.append(membrane)
+        else:
+            actors.append(point_cloud(vtk, s["membrane"], (0.6, 0.75, 0.95), 2))
+    render(vtk, actors, None, chart["title"], s["bounds"], 0.0, out_path)

@@ -11,13 +11,19 @@ x = polar-angle bin edges in degrees from the loading axis z and y = one value p
 drawn as a closed outline in the x-z plane, mirrored about both axes. Charts of one panel share
 their axis limits so experiment and simulation compare at a glance. Kind "section" (pictures of the
 sample: label slices and the twin's outlines) is drawn by report_sections.py, kinds "network" (the
-3D force-chain network) and "grains" (D2min clusters in 3D) by report_3d.py with VTK. The script computes
-nothing but limits: every number comes from the JSON.
+3D force-chain network), "grains" (D2min clusters, eps_q in 3D) and "surfaces" (the grains' own
+shapes in 3D) by report_3d.py with VTK. The script computes
+nothing but limits: every number comes from the JSON. The charts are drawn by one process per core
+(each 3D one with its own Xvfb); the first error stops the script with its message.
 """
+import ctypes
 import json
 import math
+import multiprocessing
 import os
+import signal
 import sys
+import traceback
 
 import matplotlib
 
@@ -103,38 +109,78 @@ def draw_rose(ax, chart, radius):
     ax.set_xlabel(chart["y_label"])
 
 
+def draw_chart(chart, group, out_dir):
+    """One chart's PNG; `group` holds the charts of its panel (shared limits)."""
+    if chart["kind"] == "section":
+        report_sections.draw(chart, os.path.join(out_dir, chart["file"]))
+        return
+    if chart["kind"] in ("network", "grains", "surfaces"):
+        import report_3d  # VTK and its Xvfb only when a run has a 3D picture to draw
+
+        draw_3d = {"network": report_3d.draw_network, "grains": report_3d.draw_grains,
+                   "surfaces": report_3d.draw_surfaces}[chart["kind"]]
+        draw_3d(chart, os.path.join(out_dir, chart["file"]))
+        return
+    if chart["kind"] == "rose":
+        values = [v for c in group for s in c["series"] for v in finite(s["y"], False)]
+        fig = plt.figure(figsize=(5.6, 5.0), dpi=100)
+        ax = fig.add_subplot(projection="polar")
+        draw_rose(ax, chart, 1.1 * max(values) if values and max(values) > 0 else None)
+    else:
+        fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+        draw_xy(ax, chart, xy_limits(group))
+    ax.set_title(chart["title"])
+    if any(s["name"] for s in chart["series"]):
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, chart["file"]))
+    plt.close(fig)
+
+
+_work = None  # (charts, panels, out_dir), set before the workers fork
+
+
+def die_with_parent():
+    """A worker ends when the script does (PR_SET_PDEATHSIG), as the script ends with the report."""
+    ctypes.CDLL("libc.so.6").prctl(1, signal.SIGKILL)
+
+
+def draw_in_worker(index):
+    """Draws chart `index`; returns None, or the error that stopped it (a worker must not exit)."""
+    charts, panels, out_dir = _work
+    try:
+        draw_chart(charts[index], panels[charts[index]["panel"]], out_dir)
+    except SystemExit as e:
+        return str(e.code)
+    except Exception:  # noqa: BLE001  (reported by the parent with its traceback)
+        return traceback.format_exc()
+    return None
+
+
+# Slowest first, so the workers finish together: 3D pictures, then sections, then charts.
+COST = {"surfaces": 0, "grains": 1, "network": 2, "section": 3}
+
+
 def main():
+    global _work
     spec_path, out_dir = sys.argv[1:3]
     with open(spec_path) as f:
         charts = json.load(f)["charts"]
     panels = {}
     for c in charts:
         panels.setdefault(c["panel"], []).append(c)
-    for chart in charts:
-        if chart["kind"] == "section":
-            report_sections.draw(chart, os.path.join(out_dir, chart["file"]))
-            continue
-        if chart["kind"] in ("network", "grains"):
-            import report_3d  # VTK and its Xvfb only when a run has a 3D picture to draw
-
-            draw_3d = report_3d.draw_network if chart["kind"] == "network" else report_3d.draw_grains
-            draw_3d(chart, os.path.join(out_dir, chart["file"]))
-            continue
-        group = panels[chart["panel"]]
-        if chart["kind"] == "rose":
-            values = [v for c in group for s in c["series"] for v in finite(s["y"], False)]
-            fig = plt.figure(figsize=(5.6, 5.0), dpi=100)
-            ax = fig.add_subplot(projection="polar")
-            draw_rose(ax, chart, 1.1 * max(values) if values and max(values) > 0 else None)
-        else:
-            fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
-            draw_xy(ax, chart, xy_limits(group))
-        ax.set_title(chart["title"])
-        if any(s["name"] for s in chart["series"]):
-            ax.legend(fontsize=7, loc="best")
-        fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, chart["file"]))
-        plt.close(fig)
+    _work = (charts, panels, out_dir)
+    order = sorted(range(len(charts)), key=lambda i: COST.get(charts[i]["kind"], 4))
+    # One process per core: the pictures are independent, and a 15 000-grain run has about 80.
+    workers = min(len(os.sched_getaffinity(0)), max(len(charts), 1))
+    if workers == 1:
+        errors = [draw_in_worker(i) for i in order]
+    else:
+        with multiprocessing.get_context("fork").Pool(workers, initializer=die_with_parent) as pool:
+            errors = list(pool.imap_unordered(draw_in_worker, order))
+    errors = [e for e in errors if e]
+    if errors:
+        sys.exit(errors[0])
 
 
 if __name__ == "__main__":

@@ -8,11 +8,13 @@
 #include <hdf5.h>
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "graintwin/fdem/frames_vtk.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/io/h5file.hpp"
@@ -29,6 +31,7 @@ struct LatticeRun {
   std::size_t frames = 4;
   std::size_t steps_per_frame = 10;
   double dt = 1e-6;          ///< s
+  std::filesystem::path vtk_frames;  ///< when set, also every frame as fdemrun --vtk writes it (frames.pvd)
 };
 
 inline std::uint32_t lattice_label(std::size_t grain) { return std::uint32_t(10 + grain); }
@@ -62,13 +65,17 @@ inline void write_lattice_results(const std::filesystem::path& path, const Latti
     solver.set_grain_velocity(i, v, Eigen::Vector3d::Zero());
   }
   fdem::ResultsWriter writer(path, solver, "{}");
+  std::optional<fdem::VtkFrameWriter> vtk;
+  if (!run.vtk_frames.empty()) vtk.emplace(run.vtk_frames);
   writer.add_stage("move", 0.0);
   for (std::size_t k = 0; k < run.frames; ++k) {
     if (k > 0)
       for (std::size_t s = 0; s < run.steps_per_frame; ++s) writer.add_row(solver, solver.step(run.dt), 0, run.dt);
     writer.add_frame(solver);
+    if (vtk) vtk->add(solver);
   }
   writer.finish({"lattice results (test)"});
+  if (vtk) vtk->finish();
 }
 
 /// Replaces dataset `name` of `path` by `data` with `dims` (io::H5File opens files read-only; the

@@ -75,6 +75,12 @@ nlohmann::json to_json(const GrainsView& v) {
           {"colour_log", v.colour_log},   {"bounds", v.bounds}};
 }
 
+nlohmann::json to_json(const SurfacesView& v) {
+  return {{"mesh_file", v.mesh_file}, {"triangles", v.triangles.size() / 3}, {"grains", v.grains},
+          {"grains_cut", v.grains_cut}, {"source_triangles", v.source_triangles}, {"membrane", v.membrane},
+          {"membrane_radius", v.membrane_radius}, {"cut", v.cut}, {"bounds", v.bounds}};
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Chart& c) {
@@ -87,6 +93,7 @@ nlohmann::json to_json(const Chart& c) {
                       {"y_label", c.y_label}, {"x_log", c.x_log}, {"y_log", c.y_log}, {"series", series}, {"sections", sections}};
   if (c.network) j["network"] = to_json(*c.network);
   if (c.grains) j["grains"] = to_json(*c.grains);
+  if (c.surfaces) j["surfaces"] = to_json(*c.surfaces);
   return j;
 }
 

@@ -10,6 +10,7 @@
 #include "graintwin/report/force_network.hpp"
 #include "graintwin/report/page.hpp"
 #include "graintwin/report/sections.hpp"
+#include "graintwin/report/surfaces_3d.hpp"
 
 namespace graintwin::report {
 
@@ -70,9 +71,11 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
 
   PageContent page;
   page.title = report_title(run_dir, options.title);
-  // The sample itself first (sections, D2min clusters and force chains in 3D), then the statistics.
+  // The sample itself first (sections, the grains, D2min clusters, eps_q and force chains in 3D), then the statistics.
   page.panels = section_panels(files, experiment, simulation, options.panels);
+  page.panels.push_back(grain_surface_panel(files, experiment, simulation));
   for (Panel& p : cluster_3d_panels(files, experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
+  for (Panel& p : eps_q_3d_panels(files, experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
   for (Panel& p : force_network_panels(files, simulation, options.panels)) page.panels.push_back(std::move(p));
   for (Panel& p : build_panels(experiment, simulation, options.panels)) page.panels.push_back(std::move(p));
   if (!files.validation.empty()) page.budget = error_budget(validate::read_validation(files.validation));
@@ -85,7 +88,13 @@ ReportPage build_report(const fs::path& run_dir, const RunFiles& files,
   const fs::path spec_path = img_dir / "charts.json";
   // Compact: the twin's outlines run to hundreds of thousands of points at 16 000 grains.
   std::ofstream(spec_path) << spec.dump() << "\n";
+  // The grains' triangles go to the script in files of their own, gone once drawn (charts.json
+  // keeps how many and from where): at 15 000 grains they are tens of megabytes.
+  for (const Chart* c : charts)
+    if (c->surfaces) write_surface_mesh(*c->surfaces, img_dir / c->surfaces->mesh_file);
   run_chart_script(options.python, options.script, spec_path, img_dir);
+  for (const Chart* c : charts)
+    if (c->surfaces) fs::remove(img_dir / c->surfaces->mesh_file);
   for (const Chart* c : charts) page.images[c->file] = read_binary_file(img_dir / c->file);
   done(3);
 

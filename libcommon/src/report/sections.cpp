@@ -104,20 +104,51 @@ std::vector<GrainOutline> twin_section(TwinSurfaces& surfaces, std::span<const E
   std::vector<Eigen::Vector3d> posed;
   std::vector<std::array<std::uint32_t, 3>> local;
   for (std::size_t g : near) {
-    const fdem::Grain& grain = model.grains[g];
-    const Eigen::Matrix3d r = Eigen::Quaterniond(rotation[g][0], rotation[g][1], rotation[g][2], rotation[g][3]).normalized().toRotationMatrix();
-    posed.clear();
-    for (std::uint32_t v = grain.node_begin; v < grain.node_end; ++v)
-      posed.push_back(centroid[g] + r * (model.nodes[v] - surfaces.reference_centroid(g)));
-    local.clear();
-    for (std::uint32_t t = grain.triangle_begin; t < grain.triangle_end; ++t) {
-      const auto& tri = model.triangles[t];
-      local.push_back({tri[0] - grain.node_begin, tri[1] - grain.node_begin, tri[2] - grain.node_begin});
-    }
+    pose_grain(model, g, surfaces.reference_centroid(g), centroid[g], rotation[g], posed, local);
     auto loops = cut_surface(posed, local, plane, offset);
-    if (!loops.empty()) out.push_back({grain.label, std::move(loops)});
+    if (!loops.empty()) out.push_back({model.grains[g].label, std::move(loops)});
   }
   return out;
+}
+
+void pose_grain(const fdem::Model& model, std::size_t g, const Eigen::Vector3d& reference_centroid, const Eigen::Vector3d& centroid,
+                const Eigen::Vector4d& rotation, std::vector<Eigen::Vector3d>& vertices, std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  const fdem::Grain& grain = model.grains[g];
+  const Eigen::Matrix3d r = Eigen::Quaterniond(rotation[0], rotation[1], rotation[2], rotation[3]).normalized().toRotationMatrix();
+  vertices.clear();
+  for (std::uint32_t v = grain.node_begin; v < grain.node_end; ++v)
+    vertices.push_back(centroid + r * (model.nodes[v] - reference_centroid));
+  triangles.clear();
+  for (std::uint32_t t = grain.triangle_begin; t < grain.triangle_end; ++t) {
+    const auto& tri = model.triangles[t];
+    triangles.push_back({tri[0] - grain.node_begin, tri[1] - grain.node_begin, tri[2] - grain.node_begin});
+  }
+}
+
+std::vector<std::size_t> model_rows(const fdem::Model& model, const fs::path& model_file, const fs::path& simulation_file) {
+  const micro::SimulationGrains grains = micro::read_simulation_grains(simulation_file);
+  if (grains.label.size() != model.grains.size())
+    throw DataError(simulation_file.string() + " holds " + std::to_string(grains.label.size()) + " grains but the model " +
+                    model_file.string() + " " + std::to_string(model.grains.size()) +
+                    "; they are not of one run: rerun the simulate stage on this model");
+  std::vector<std::size_t> rows;
+  for (const fdem::Grain& g : model.grains) {
+    const auto it = grains.row.find(g.label);
+    if (it == grains.row.end())
+      throw DataError(simulation_file.string() + " has no grain of label " + std::to_string(g.label) + " of the model " +
+                      model_file.string() + "; they are not of one run: rerun the simulate stage on this model");
+    rows.push_back(it->second);
+  }
+  return rows;
+}
+
+FramePose frame_pose(const fdem::ResultsFrame& frame, const std::vector<std::size_t>& rows) {
+  FramePose p;
+  for (std::size_t r : rows) {
+    p.centroid.emplace_back(frame.centroid[3 * r], frame.centroid[3 * r + 1], frame.centroid[3 * r + 2]);
+    p.rotation.emplace_back(frame.rotation[4 * r], frame.rotation[4 * r + 1], frame.rotation[4 * r + 2], frame.rotation[4 * r + 3]);
+  }
+  return p;
 }
 
 std::array<double, 2> colour_range(const std::vector<double>& values, bool log) {
@@ -166,9 +197,6 @@ ScanPlanes scan_planes(const fs::path& labels_file) {
 
 namespace {
 
-constexpr const char* kNoModel =
-    "This run has no FDEM model (model.h5): the mesh stage (shapes2mesh) makes the grain surfaces the twin's sections cut.";
-
 std::string mm(double metres) { return fmt::format("{:.2f} mm", 1e3 * metres); }
 
 std::string percent(double strain) { return fmt::format("{:.1f} %", 100.0 * strain); }
@@ -205,20 +233,9 @@ struct TwinFrame {
 /// The model, its grains in the results' order, and the frames posed on demand (each once).
 class Twin {
  public:
-  Twin(const RunFiles& files, double axis_y) : files_(files), model_(fdem::read_model_file(files.model)), surfaces_(model_) {
+  Twin(const RunFiles& files, double axis_y)
+      : files_(files), model_(fdem::read_model_file(files.model)), surfaces_(model_), row_(model_rows(model_, files.model, files.simulation)) {
     axis_y_ = model_.sample ? model_.sample->axis_xy.y() : axis_y;
-    const micro::SimulationGrains grains = micro::read_simulation_grains(files.simulation);
-    if (grains.label.size() != model_.grains.size())
-      throw DataError(files.simulation.string() + " holds " + std::to_string(grains.label.size()) + " grains but the model " +
-                      files.model.string() + " " + std::to_string(model_.grains.size()) +
-                      "; they are not of one run: rerun the simulate stage on this model");
-    for (const fdem::Grain& g : model_.grains) {
-      const auto it = grains.row.find(g.label);
-      if (it == grains.row.end())
-        throw DataError(files.simulation.string() + " has no grain of label " + std::to_string(g.label) + " of the model " +
-                        files.model.string() + "; they are not of one run: rerun the simulate stage on this model");
-      row_.push_back(it->second);
-    }
   }
   double axis_y() const { return axis_y_; }
   /// The log axial strain of frame k (NaN when the frame has none).
@@ -231,14 +248,9 @@ class Twin {
     auto it = frames_.find(k);
     if (it != frames_.end()) return it->second;
     const fdem::ResultsFrame f = fdem::read_results_frame(files_.simulation, k);
-    std::vector<Eigen::Vector3d> centroid;
-    std::vector<Eigen::Vector4d> rotation;
+    const auto [centroid, rotation] = frame_pose(f, row_);
     double z_lo = std::numeric_limits<double>::infinity(), z_hi = -z_lo;
-    for (std::size_t r : row_) {
-      centroid.emplace_back(f.centroid[3 * r], f.centroid[3 * r + 1], f.centroid[3 * r + 2]);
-      rotation.emplace_back(f.rotation[4 * r], f.rotation[4 * r + 1], f.rotation[4 * r + 2], f.rotation[4 * r + 3]);
-      z_lo = std::min(z_lo, centroid.back().z()), z_hi = std::max(z_hi, centroid.back().z());
-    }
+    for (const Eigen::Vector3d& c : centroid) z_lo = std::min(z_lo, c.z()), z_hi = std::max(z_hi, c.z());
     TwinFrame t;
     t.axial_strain = f.axial_strain;
     // Through the centre of the grain nearest mid-height, so the plane cuts grains even in a
@@ -255,8 +267,8 @@ class Twin {
   const RunFiles& files_;
   fdem::Model model_;
   TwinSurfaces surfaces_;
-  double axis_y_ = 0.0;
   std::vector<std::size_t> row_;  ///< results row of each model grain
+  double axis_y_ = 0.0;
   std::map<std::size_t, TwinFrame> frames_;
 };
 

@@ -76,12 +76,31 @@ struct GrainsView {
   std::array<double, 6> bounds{};          ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
 };
 
+/// A 3D picture of the grains' own surfaces at one state (drawn with VTK): triangles coloured by
+/// their grain's label (the sections' identity colours), the membrane's balls as spheres, a front
+/// quarter cut away, seen by a fixed camera. The triangles go to the chart script through a binary
+/// file in the image folder (`mesh_file`, written by write_surface_mesh, removed once drawn):
+/// millions of them would not fit in charts.json.
+struct SurfacesView {
+  std::vector<float> vertices;             ///< x, y, z per vertex (m); not in the JSON
+  std::vector<std::uint32_t> triangles;    ///< three vertex indices per triangle; not in the JSON
+  std::vector<std::uint32_t> label;        ///< per triangle, its grain's label (its colour); not in the JSON
+  std::string mesh_file;                   ///< the file holding them, in the image folder
+  std::size_t grains = 0;                  ///< grains drawn
+  std::size_t grains_cut = 0;              ///< grains left out by the cutaway
+  std::size_t source_triangles = 0;        ///< triangles of the drawn grains before decimation
+  std::vector<double> membrane;            ///< x, y, z per ball (m), those outside the cutaway; empty without one
+  double membrane_radius = 0.0;            ///< m; 0 draws the balls as points
+  std::array<double, 2> cut{};             ///< x, y (m): the corner of the front quarter cut away (x > cut x, y < cut y)
+  std::array<double, 6> bounds{};          ///< x0, x1, y0, y1, z0, z1 (m): the box the camera frames
+};
+
 /// One PNG. kind "xy": series on Cartesian axes (log axes drop points that are not positive);
 /// kind "rose": each series is a rose profile, x = the polar-angle bin edges in degrees from the
 /// loading axis z (n + 1), y = the value per bin (n), drawn as a closed outline in the x-z plane,
 /// mirrored about both axes (the directions are axes, folded onto the upper hemisphere); kind
-/// "section": `sections` side by side, no series; kinds "network" and "grains": the 3D `network`
-/// or `grains`.
+/// "section": `sections` side by side, no series; kinds "network", "grains" and "surfaces": the 3D
+/// `network`, `grains` or `surfaces`.
 struct Chart {
   std::string file;   ///< PNG name inside the report's image folder
   std::string panel;  ///< charts of one panel share their axis limits
@@ -92,6 +111,7 @@ struct Chart {
   std::vector<SectionView> sections;  ///< kind "section": drawn side by side in one PNG
   std::optional<NetworkView> network;  ///< kind "network"
   std::optional<GrainsView> grains;    ///< kind "grains"
+  std::optional<SurfacesView> surfaces;  ///< kind "surfaces"
 
   /// Adds a series, keeping only points with finite coordinates (and positive ones on log axes;
   /// vertical lines keep every finite x). Returns false, adding nothing, when no point is left.

@@ -1,5 +1,6 @@
 #pragma once
-// The report's 3D pictures of D2min and its clusters (docs/report.md, "D2min clusters in 3D"):
+// The report's 3D pictures of D2min and its clusters (docs/report.md, "D2min clusters in 3D"), and
+// of eps_q (every grain painted, a front quarter cut away; "eps_q in 3D"):
 // for each increment shown, the grains at the increment's first state as spheres of their
 // volume-equivalent diameter at their centroids, the members of the high-D2min clusters
 // (tracks2micro's /grains/cluster) opaque and painted with their D2min, the others as grey points;
@@ -9,6 +10,7 @@
 
 #include "graintwin/report/panels.hpp"
 #include "graintwin/report/run_data.hpp"
+#include "graintwin/report/surfaces_3d.hpp"
 
 namespace graintwin::report {
 
@@ -23,5 +25,13 @@ std::array<double, 6> sphere_bounds(const std::vector<double>& centre, const std
 /// frame's membrane balls. A side without its files says which stage makes them.
 std::vector<Panel> cluster_3d_panels(const RunFiles& files, const ExperimentData& experiment, const SimulationData& simulation,
                                      const PanelOptions& options);
+
+/// Removes from `view` its grains (centres) and membrane balls in `cut`.
+void cut_front_quarter(GrainsView& view, const FrontQuarter& cut);
+
+/// As cluster_3d_panels, with every grain painted with its eps_q (/grains/eps_q, linear scale) and
+/// the quarter in front of the middle of the grains shown (the camera box) cut away.
+std::vector<Panel> eps_q_3d_panels(const RunFiles& files, const ExperimentData& experiment, const SimulationData& simulation,
+                                   const PanelOptions& options);
 
 }  // namespace graintwin::report

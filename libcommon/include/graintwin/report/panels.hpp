@@ -21,6 +21,8 @@ inline constexpr const char* kNoMicro =
     "This run has no micro-mechanics of the scans (micro.h5): the micro stage (tracks2micro) makes it from two scans or more.";
 inline constexpr const char* kNoContacts =
     "This run has no contacts files (scan_*/contacts.h5): the contacts stage (labels2contacts) makes them.";
+inline constexpr const char* kNoModel =
+    "This run has no FDEM model (model.h5): the mesh stage (shapes2mesh) makes the grain surfaces the twin's pictures show.";
 inline constexpr const char* kNoShapes = "This run has no shapes files (scan_*/shapes.h5): the shapes stage (labels2shapes) makes them.";
 
 struct Side {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/results_file.hpp"
 #include "graintwin/report/panels.hpp"
 #include "graintwin/report/run_data.hpp"
 
@@ -70,6 +71,22 @@ struct GrainOutline {
 /// grain; grains whose reach does not reach the plane are skipped.
 std::vector<GrainOutline> twin_section(TwinSurfaces& surfaces, std::span<const Eigen::Vector3d> centroid,
                                        std::span<const Eigen::Vector4d> rotation, SectionPlane plane, double offset);
+
+/// Grain g's reference surface X posed at `centroid` + R(`rotation`) (X - `reference_centroid`), R
+/// the quaternion (w, x, y, z): its vertices, and its triangles over them (indices from 0).
+void pose_grain(const fdem::Model& model, std::size_t g, const Eigen::Vector3d& reference_centroid, const Eigen::Vector3d& centroid,
+                const Eigen::Vector4d& rotation, std::vector<Eigen::Vector3d>& vertices, std::vector<std::array<std::uint32_t, 3>>& triangles);
+
+/// The row of each model grain (by label) in the simulation's per-grain tables; DataError naming
+/// both files when they are not of one run (other grain counts, a label the simulation lacks).
+std::vector<std::size_t> model_rows(const fdem::Model& model, const fs::path& model_file, const fs::path& simulation_file);
+
+/// Each model grain's centroid and rotation (w, x, y, z) at a frame, `rows` from model_rows.
+struct FramePose {
+  std::vector<Eigen::Vector3d> centroid;
+  std::vector<Eigen::Vector4d> rotation;
+};
+FramePose frame_pose(const fdem::ResultsFrame& frame, const std::vector<std::size_t>& rows);
 
 /// The colour scale of a quantity over every grain shown: its 1st to 99th percentile of the finite
 /// values (positive ones when `log`), so a few extreme grains do not wash the others out. {NaN,
