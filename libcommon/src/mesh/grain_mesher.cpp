@@ -154,17 +154,22 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
   // the user's choice).
   const auto mesh_and_check = [&](const std::function<TetMesh(double)>& run) {
     r.mesh = run(r.size.h);
-    r.quality = mesh_quality(r.mesh, options.gamma_floor);
+    r.quality = mesh_quality(r.mesh, options.gamma_floor, options.slivers);
     const auto off_volume = [&](const MeshQuality& q) {
       return r.path == MeshPath::kept_surface && order == 2 && r.size.rule != SizeRule::given &&
              std::abs(q.volume / r.surface_volume - 1.0) > kRemeshVolumeError;
     };
-    if (r.quality.inverted == 0 && r.quality.below_floor == 0 && !off_volume(r.quality)) return;
+    const auto note_slivers = [&] {
+      if (r.quality.below_thresholds > 0)
+        add_note(fmt::format("{} elements below the sliver thresholds (worst: min dihedral {:.1f} deg, min altitude {:.2f} of the median)",
+                             r.quality.below_thresholds, r.quality.min_dihedral, r.quality.min_altitude / r.quality.median_altitude));
+    };
+    if (r.quality.inverted == 0 && r.quality.below_floor == 0 && !off_volume(r.quality)) return note_slivers();
     const TetReport first = r.gmsh;
     r.remeshed = true;
     try {
       TetMesh finer = run(0.7 * r.size.h);
-      const MeshQuality q = mesh_quality(finer, options.gamma_floor);
+      const MeshQuality q = mesh_quality(finer, options.gamma_floor, options.slivers);
       if (worse(r.quality, q) || (!worse(q, r.quality) && off_volume(r.quality) &&
                                   std::abs(q.volume / r.surface_volume - 1.0) < std::abs(r.quality.volume / r.surface_volume - 1.0))) {
         r.mesh = std::move(finer), r.quality = q, r.size.h *= 0.7;
@@ -177,6 +182,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     }
     if (r.quality.inverted > 0 || r.quality.below_floor > 0)
       add_note(std::to_string(r.quality.below_floor) + " elements below the gamma floor, " + std::to_string(r.quality.inverted) + " inverted");
+    note_slivers();
   };
 
   // 1. The SH surface, remeshed by gmsh, within the budget.
@@ -203,7 +209,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
       try {
         mesh_and_check([&](double h) {
           TetOptions o;
-          o.size = h, o.order = order, o.deadline = deadline;
+          o.size = h, o.order = order, o.slivers = options.slivers, o.deadline = deadline;
           if (options.snap_to_sh) o.project = on_sh_surface;
           return tetrahedralize(sh_candidate, o, &r.gmsh, options.workers);
         });
@@ -284,7 +290,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
             continue;
           }
           TetOptions o;
-          o.size = std::min(h, edge / kRemeshEdgePerSize), o.order = order, o.keep_surface = true, o.project = onto, o.deadline = deadline;
+          o.size = std::min(h, edge / kRemeshEdgePerSize), o.order = order, o.slivers = options.slivers, o.keep_surface = true, o.project = onto, o.deadline = deadline;
           try {
             return tetrahedralize(boundary, o, &r.gmsh, options.workers);
           } catch (const GmshOverrun&) {
@@ -318,7 +324,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
   try {
     mesh_and_check([&](double h) {
       TetOptions o;
-      o.size = h, o.order = order;
+      o.size = h, o.order = order, o.slivers = options.slivers;
       return mesh_ellipsoid(grain.centroid, grain.semi_axes, axes, o, &r.gmsh, options.workers);
     });
   } catch (const DataError& e) {
