@@ -124,7 +124,8 @@ TEST(SliverMeasures, DihedralAndAltitudeOfKnownTetrahedra) {
   EXPECT_NEAR(mesh::tet_min_altitude(o, x, y, z), 1 / std::sqrt(3.0), 1e-12);  // to the slanted face
   const Vector3d a(1, 1, 1), b(1, -1, -1), c(-1, 1, -1), d(-1, -1, 1);  // regular
   EXPECT_NEAR(mesh::tet_min_dihedral_degrees(a, b, c, d), std::acos(1.0 / 3.0) * 180 / M_PI, 1e-9);
-  EXPECT_LT(mesh::tet_min_altitude(a, c, b, d), 0.0);  // inverted
+  EXPECT_NEAR(mesh::tet_min_altitude(a, c, b, d), 2 * std::sqrt(2.0) * std::sqrt(2.0 / 3.0), 1e-12);  // edge 2 sqrt(2)
+  EXPECT_LT(mesh::tet_min_altitude(a, b, c, d), 0.0);  // the same corners inverted
   // A flat one: four corners in a plane.
   EXPECT_NEAR(mesh::tet_min_dihedral_degrees(o, x, y, Vector3d(1, 1, 0)), 0.0, 1e-6);
   // The altitude fdemrun's element step uses, element by element of a gmsh ball.
