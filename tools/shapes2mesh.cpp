@@ -47,7 +47,8 @@ constexpr const char* kDescription =
     "--elements-per-diameter overrides both. Quality (gamma = 3 inradius / circumradius) is measured per element; "
     "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Slivers, which set fdemrun's element step "
     "(its smallest element altitude), are then removed within each grain to --min-dihedral and --min-altitude by "
-    "moving interior nodes, flipping elements and splitting interior edges, the grain's surface kept as it is; each "
+    "moving interior nodes, flipping elements and splitting interior edges, boundary nodes kept (a boundary element "
+    "nothing else lifts is taken out, its volume lost); each "
     "grain's worst element is written to /mesh/quality, and grains that cannot reach the thresholds are named. Grains smaller than --rigid-below d50 get "
     "a coarse linear mesh and are marked rigid. LABELS also gives the sample cylinder (ct2labels' region) when it "
     "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel: -j threads, each "
@@ -111,8 +112,8 @@ void add_options(cli::Tool& tool, Options& o) {
       ->check(number_in(closed(0, 0.9)))->capture_default_str();
   app.add_option("--min-dihedral", o.mesh.slivers.min_dihedral_degrees,
                  "Sliver removal: every element's smallest dihedral angle at least this (degrees; 0: not checked). Interior "
-                 "nodes are moved, elements flipped and interior edges split, the grain's surface kept; a grain that cannot "
-                 "reach it is warned about and recorded in /mesh/quality")
+                 "nodes are moved, elements flipped and interior edges split, boundary nodes kept (a boundary element nothing "
+                 "else lifts is taken out); a grain that cannot reach it is named in a warning and recorded in /mesh/quality")
       ->check(number_in(closed(0, 60, "degrees")))->capture_default_str();
   app.add_option("--min-altitude", o.mesh.slivers.min_altitude_ratio,
                  "Sliver removal: every element's smallest altitude at least this share of the grain's median element "
