@@ -3,7 +3,8 @@
 // broken SH surface caught and replaced; the .vtu and .msh views; the same model whatever the
 // number of gmsh worker processes; Ctrl-C ending the workers, SIGKILL taking them along, -j 1024
 // starting no more of them than grains or processors; grains over the time budget falling back and
-// counted; bad inputs failing cleanly.
+// counted; every grain's worst element recorded, and thresholds it cannot reach named; bad inputs
+// failing cleanly.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -17,6 +18,7 @@
 #include <fstream>
 #include <thread>
 
+#include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/provenance.hpp"
@@ -238,6 +240,48 @@ TEST(Shapes2mesh, GrainsOverTheBudgetFallBackToTheKeptSurfaceAndAreCounted) {
       << d.err;
 }
 
+TEST(Shapes2mesh, EveryGrainsWorstElementIsRecordedAndUnreachableThresholdsNamed) {
+  test::TempDir dir;
+  const Inputs in = write_inputs(dir);
+  const auto r = run_tool("shapes2mesh", {in.shapes.string(), in.labels.string(), (dir / "m.h5").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("slivers (--min-dihedral"), std::string::npos) << r.err;
+  const fdem::Model m = fdem::read_model_file(dir / "m.h5");
+  const auto q = fdem::read_mesh_quality(dir / "m.h5");
+  ASSERT_TRUE(q.has_value());
+  ASSERT_EQ(q->label.size(), m.grains.size());
+  EXPECT_GT(q->min_dihedral_threshold, 0.0);
+  EXPECT_GT(q->min_altitude_ratio_threshold, 0.0);
+  for (std::size_t g = 0; g < m.grains.size(); ++g) {
+    SCOPED_TRACE(g);
+    EXPECT_EQ(q->label[g], m.grains[g].label);
+    // The worst element is the grain's own, at its model index, with the altitude fdemrun's step uses.
+    const std::uint64_t worst = q->worst_element[g];
+    ASSERT_GE(worst, m.grains[g].element_begin);
+    ASSERT_LT(worst, m.grains[g].element_end);
+    EXPECT_NEAR(q->min_altitude[g], fdem::element_min_altitude(m, worst), 1e-15);
+    for (std::size_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
+      EXPECT_GE(fdem::element_min_altitude(m, e), q->min_altitude[g]);
+    EXPECT_DOUBLE_EQ(q->step_ratio[g], q->min_altitude[g] / q->median_altitude[g]);
+    // The balls' meshes reach the default thresholds.
+    EXPECT_EQ(q->below_thresholds[g], 0u);
+    EXPECT_GE(q->step_ratio[g], q->min_altitude_ratio_threshold);
+    EXPECT_GE(q->min_dihedral[g], q->min_dihedral_threshold);
+  }
+  // 60 degrees cannot be had (space is not filled by near-regular tetrahedra): the run still writes
+  // its model, but names the grains that stay below and counts their elements.
+  const auto hard = run_tool("shapes2mesh", {in.shapes.string(), in.labels.string(), (dir / "hard.h5").string(), "--min-dihedral", "60"});
+  ASSERT_EQ(hard.exit_code, 0) << hard.err;
+  EXPECT_NE(hard.err.find("grain 1: "), std::string::npos) << hard.err;
+  EXPECT_NE(hard.err.find("stay below --min-dihedral 60"), std::string::npos) << hard.err;
+  const auto hq = fdem::read_mesh_quality(dir / "hard.h5");
+  ASSERT_TRUE(hq.has_value());
+  EXPECT_EQ(hq->min_dihedral_threshold, 60.0);
+  for (std::size_t g = 0; g < hq->label.size(); ++g) EXPECT_GT(hq->below_thresholds[g], 0u);
+  const auto notes = io::H5File::open(dir / "hard.h5").read_strings("/mesh/note");
+  EXPECT_NE(notes[0].find("below the sliver thresholds"), std::string::npos) << notes[0];
+}
+
 TEST(Shapes2mesh, OverridesAndRigidSmallGrains) {
   test::TempDir dir;
   const Inputs in = write_inputs(dir);
@@ -341,6 +385,10 @@ TEST(Shapes2mesh, OptionsOutsideTheirRangeAreRefused) {
   refused({"--grains=-1"}, "--grains: must be a whole number in [0, 50000], not -1");
   refused({"--membrane-thickness", "nan"}, "--membrane-thickness: the length 'nan' must be a finite length");
   refused({"--membrane-thickness", "2m"}, "[1 um, 10 mm]");
+  // Thresholds no mesh can meet are refused before any work: no tetrahedron has all dihedral
+  // angles above 70.5 degrees, and half the elements lie below the median altitude.
+  refused({"--min-dihedral", "61"}, "--min-dihedral: must be a finite number in [0, 60] degrees");
+  refused({"--min-altitude", "0.95"}, "--min-altitude: must be a finite number in [0, 0.9]");
 }
 
 TEST(Shapes2mesh, MeshesBeyondTheMemoryAreRefusedWithTheNumbersBeforeMeshing) {

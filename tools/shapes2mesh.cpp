@@ -45,7 +45,11 @@ constexpr const char* kDescription =
     "--surface-nodes nodes on each grain's surface) and, for 4-node meshes, the volume target --volume-tol from the "
     "grain's measured total mean curvature; "
     "--elements-per-diameter overrides both. Quality (gamma = 3 inradius / circumradius) is measured per element; "
-    "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Grains smaller than --rigid-below d50 get "
+    "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Slivers, which set fdemrun's element step "
+    "(its smallest element altitude), are then removed within each grain to --min-dihedral and --min-altitude by "
+    "moving interior nodes, flipping elements and splitting interior edges, boundary nodes kept (a boundary element "
+    "nothing else lifts is taken out, its volume lost); each "
+    "grain's worst element is written to /mesh/quality, and grains that cannot reach the thresholds are named. Grains smaller than --rigid-below d50 get "
     "a coarse linear mesh and are marked rigid. LABELS also gives the sample cylinder (ct2labels' region) when it "
     "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel: -j threads, each "
     "handing its gmsh work to its own gmsh worker process (gmsh is not thread-safe), largest grains first; with "
@@ -83,6 +87,7 @@ struct Options {
 
 void add_options(cli::Tool& tool, Options& o) {
   o.mesh.budget_seconds = 5.0;
+  o.mesh.slivers = {12.0, 0.35};
   o.equivalent.aspect = 0.0;  // the scan's unless given
   tool.add_input("SHAPES", o.shapes, "Shapes of the reference scan (.h5, kind=shapes)");
   tool.add_optional_input("LABELS", o.labels,
@@ -104,6 +109,15 @@ void add_options(cli::Tool& tool, Options& o) {
   app.add_option("--volume-tol", o.mesh.size.volume_tolerance, "Automatic size, 4-node: largest relative volume error of the facets")
       ->check(number_in(closed(1e-4, 0.5)))->capture_default_str();
   app.add_option("--gamma-floor", o.mesh.gamma_floor, "Elements below this quality make a grain remeshed (and reported)")
+      ->check(number_in(closed(0, 0.9)))->capture_default_str();
+  app.add_option("--min-dihedral", o.mesh.slivers.min_dihedral_degrees,
+                 "Sliver removal: every element's smallest dihedral angle at least this (degrees; 0: not checked). Interior "
+                 "nodes are moved, elements flipped and interior edges split, boundary nodes kept (a boundary element nothing "
+                 "else lifts is taken out); a grain that cannot reach it is named in a warning and recorded in /mesh/quality")
+      ->check(number_in(closed(0, 60, "degrees")))->capture_default_str();
+  app.add_option("--min-altitude", o.mesh.slivers.min_altitude_ratio,
+                 "Sliver removal: every element's smallest altitude at least this share of the grain's median element "
+                 "altitude (fdemrun's element step follows the smallest altitude; 0: not checked)")
       ->check(number_in(closed(0, 0.9)))->capture_default_str();
   app.add_option("--rigid-below", o.rigid_below_d50, "Grains with equivalent diameter below this many d50 are rigid, coarse, linear")
       ->check(number_in(closed(0, 10, "d50")))->capture_default_str();
@@ -245,8 +259,9 @@ void log_equivalent_sample(const mesh::EquivalentTwin& twin, std::size_t library
 }
 
 /// Each grain's fallbacks (and with -v -v its path, time and quality), then the cut at the neighbours.
-void log_grains(const mesh::TwinGrains& grains, const std::vector<mesh::GrainMeshResult>& results, const mesh::MeshTable& table,
+void log_grains(const mesh::TwinGrains& grains, const std::vector<mesh::GrainMeshResult>& results, const mesh::TwinModel& twin,
                 const Options& o, bool cut) {
+  const mesh::MeshTable& table = twin.table;
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const auto& r = results[i];
     const std::uint32_t label = grains.label[i];
@@ -258,6 +273,19 @@ void log_grains(const mesh::TwinGrains& grains, const std::vector<mesh::GrainMes
                   r.quality.surface_nodes, 100.0 * (r.quality.volume / r.surface_volume - 1.0), r.quality.min_gamma,
                   r.note.empty() ? "" : "; ", r.note);
   }
+  // Grains whose elements stay below the sliver thresholds: named, the first ones one by one.
+  constexpr std::size_t kNamed = 20;
+  std::size_t short_of = 0;
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const auto& q = results[i].quality;
+    if (q.below_thresholds == 0 || results[i].kind == fdem::GrainKind::rigid) continue;
+    if (++short_of <= kNamed)
+      spdlog::warn("grain {}: {} of {} elements stay below --min-dihedral {:g} / --min-altitude {:g} (worst: element {}, min "
+                   "dihedral {:.1f} deg over the grain, min altitude {:.2f} of the median)",
+                   grains.label[i], q.below_thresholds, q.elements, o.mesh.slivers.min_dihedral_degrees,
+                   o.mesh.slivers.min_altitude_ratio, twin.quality.worst_element[i], q.min_dihedral, q.min_altitude / q.median_altitude);
+  }
+  if (short_of > kNamed) spdlog::warn("{} more grains stay below the sliver thresholds (/mesh/quality names them)", short_of - kNamed);
   if (!cut || table.cut_share.empty()) return;
   std::vector<double> shares(table.cut_share);
   std::sort(shares.begin(), shares.end());
@@ -282,6 +310,19 @@ void log_summary(const mesh::TwinModel& twin, const mesh::TwinSample& sample, co
   spdlog::info("quality: {} grains had elements inverted by curving ({} through optimize(HighOrder), the others' mid-edge "
                "nodes pulled back); {} grains remeshed, {} still below the gamma floor {} or inverted",
                c.curving_inverted, c.optimized, c.remeshed, c.below_floor, o.mesh.gamma_floor);
+  // What sets the element step: each grain's worst element against its median altitude.
+  const fdem::MeshQualityTable& q = twin.quality;
+  if (n > 0) {
+    std::vector<double> ratios(q.step_ratio);
+    std::sort(ratios.begin(), ratios.end());
+    const auto worst = static_cast<std::size_t>(std::min_element(q.step_ratio.begin(), q.step_ratio.end()) - q.step_ratio.begin());
+    spdlog::info("slivers (--min-dihedral {:g}, --min-altitude {:g}): {} elements below before the pass, {:.2f} s in it; {} "
+                 "deformable grains still below ({} elements); smallest altitude over the grain's median: {:.2f} at the "
+                 "median grain, {:.2f} at worst (grain {}, element {}, min dihedral {:.1f} deg)",
+                 o.mesh.slivers.min_dihedral_degrees, o.mesh.slivers.min_altitude_ratio, c.slivers_before, c.sliver_seconds,
+                 c.below_thresholds, c.sliver_elements, ratios[ratios.size() / 2], ratios.front(), q.label[worst], q.worst_element[worst],
+                 q.min_dihedral[worst]);
+  }
   const fdem::SampleCylinder& s = sample.cylinder;
   spdlog::info("sample cylinder ({}): axis ({:.4g}, {:.4g}) mm, radius {:.4g} mm, z {:.4g} .. {:.4g} mm", sample.source,
                s.axis_xy.x() * 1e3, s.axis_xy.y() * 1e3, s.radius * 1e3, s.z_min * 1e3, s.z_max * 1e3);
@@ -299,7 +340,8 @@ nlohmann::json parameters_json(const Options& o, double thickness, bool cut, con
       {"cut_at_neighbours", cut},
       {"membrane_thickness_m", thickness}, {"platen_friction", o.platen_friction}, {"sample_source", sample_source},
       {"tracked_only", o.tracks.string()}, {"gmsh_processes", workers}, {"packing", o.packing},
-      {"grain_budget_s", mo.budget_seconds}, {"sh_meshing", o.sh_meshing}};
+      {"grain_budget_s", mo.budget_seconds}, {"sh_meshing", o.sh_meshing},
+      {"min_dihedral_degrees", mo.slivers.min_dihedral_degrees}, {"min_altitude_ratio", mo.slivers.min_altitude_ratio}};
   parameters["sample_cylinder"] = o.sample_choice;
   const mesh::EquivalentPackingOptions& po = o.equivalent;
   if (sample)
@@ -356,9 +398,9 @@ int main(int argc, char** argv) {
     const auto results = mesh::mesh_twin_grains(twin_grains, basis, scan ? &*scan : nullptr, o.mesh, [&] { progress->advance(1); });
     progress.reset();
 
-    mesh::TwinModel twin = mesh::assemble_twin(twin_grains, results);
+    mesh::TwinModel twin = mesh::assemble_twin(twin_grains, results, o.mesh.slivers);
     const bool cut = scan && !sample && o.mesh.cut_at_neighbours;
-    log_grains(twin_grains, results, twin.table, o, cut);
+    log_grains(twin_grains, results, twin, o, cut);
     // The sample: the equivalent packing's cylinder, the inscribed one, ct2labels' region when it
     // is bounded, else the cylinder around the grains.
     const mesh::TwinSample twin_sample =
@@ -371,7 +413,7 @@ int main(int argc, char** argv) {
     const nlohmann::json parameters = parameters_json(o, thickness, cut, twin_sample.source, workers.size(),
                                                       sample ? &sample->sample : nullptr, shapes.psd.d50);
     fdem::write_model_file(out.temp_path(), twin.model, ctx.history(),
-                           [&](io::H5File& f) { mesh::write_mesh_table(f, twin.table, parameters.dump()); });
+                           [&](io::H5File& f) { mesh::write_mesh_table(f, twin, parameters.dump()); });
     if (vtu_out) io::write_vtu(vtu_out->temp_path(), fdem::model_grid(twin.model));
     if (msh_out) fdem::write_model_msh(msh_out->temp_path(), twin.model);
     io::commit_outputs({&out, vtu_out ? &*vtu_out : nullptr, msh_out ? &*msh_out : nullptr});

@@ -217,7 +217,7 @@ TEST(MeshTwin, TheMeshTableIsWrittenWithItsUnitsAndCodes) {
   const TwinModel twin = assemble_twin(grains_in_place({&library[0]}), {r});
   {
     io::H5File f = io::H5File::create(dir / "m.h5");
-    write_mesh_table(f, twin.table, R"({"order": 1})");
+    write_mesh_table(f, twin, R"({"order": 1})");
   }
   const io::H5File f = io::H5File::open(dir / "m.h5");
   EXPECT_EQ(f.read<std::uint32_t>("/mesh/label"), (std::vector<std::uint32_t>{10}));

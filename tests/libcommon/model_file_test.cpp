@@ -1,6 +1,7 @@
 // kind=fdem_model files: round trip of a mixed 4/10-node model with materials, platens and sample
 // cylinder; refusal of other kinds, of inconsistent models and of values out of their physical
-// range (with the file named); the .vtu and .msh views.
+// range (with the file named); shapes2mesh's quality table written and read back; the .vtu and
+// .msh views.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -8,6 +9,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
+#include "graintwin/io/schema.hpp"
 #include "graintwin/io/volume_io.hpp"
 #include "support/run_tool.hpp"
 #include "support/simulation_results.hpp"
@@ -73,6 +75,48 @@ TEST(ModelFile, RoundTripKeepsEveryTable) {
   EXPECT_EQ(f.info("/elements").dims, (std::vector<hsize_t>{2, 10}));
   EXPECT_EQ(f.read<std::uint32_t>("/elements")[4], 4294967295u);  // 4-node row padded
   EXPECT_TRUE(f.exists("/mesh/extra"));
+}
+
+TEST(ModelFile, MeshQualityTableIsWrittenAndReadBack) {
+  test::TempDir dir;
+  const fdem::Model m = two_tet_model();
+  // A model without the table (fdemrun's scenes, models made before it existed) reads as none.
+  fdem::write_model_file(dir / "none.h5", m, {});
+  EXPECT_FALSE(fdem::read_mesh_quality(dir / "none.h5").has_value());
+  fdem::MeshQualityTable q;
+  q.label = {5, 8};
+  q.min_dihedral = {54.7, 12.5};
+  q.min_altitude = {0.577e-3, 0.2e-3};
+  q.median_altitude = {0.577e-3, 0.5e-3};
+  q.worst_element = {0, 1};
+  q.step_ratio = {1.0, 0.4};
+  q.below_thresholds = {0, 3};
+  q.min_dihedral_threshold = 12.0;
+  q.min_altitude_ratio_threshold = 0.3;
+  fdem::write_model_file(dir / "m.h5", m, {}, [&](io::H5File& f) { fdem::write_mesh_quality(f, q); });
+  const auto r = fdem::read_mesh_quality(dir / "m.h5");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->label, q.label);
+  EXPECT_EQ(r->min_dihedral, q.min_dihedral);
+  EXPECT_EQ(r->min_altitude, q.min_altitude);
+  EXPECT_EQ(r->median_altitude, q.median_altitude);
+  EXPECT_EQ(r->worst_element, q.worst_element);
+  EXPECT_EQ(r->step_ratio, q.step_ratio);
+  EXPECT_EQ(r->below_thresholds, q.below_thresholds);
+  EXPECT_EQ(r->min_dihedral_threshold, 12.0);
+  EXPECT_EQ(r->min_altitude_ratio_threshold, 0.3);
+  EXPECT_EQ(io::H5File::open(dir / "m.h5").attr_string("/mesh/quality/min_altitude", "units").value_or(""), "m");
+  // Columns of different lengths are refused before anything is written, and so on reading.
+  q.step_ratio.pop_back();
+  EXPECT_THROW(fdem::write_model_file(dir / "short.h5", m, {}, [&](io::H5File& f) { fdem::write_mesh_quality(f, q); }), UsageError);
+  namespace sq = schema::fdem_model::mesh_quality;
+  fdem::write_model_file(dir / "broken.h5", m, {}, [&](io::H5File& f) {  // as a damaged file would hold it
+    f.write(sq::label, q.label);
+    for (const char* column : {sq::min_dihedral, sq::min_altitude, sq::median_altitude, sq::step_ratio}) f.write(column, q.step_ratio);
+    for (const char* column : {sq::worst_element, sq::below_thresholds}) f.write(column, q.worst_element);
+    for (const char* threshold : {sq::min_dihedral_threshold, sq::min_altitude_ratio_threshold}) f.set_attr(sq::group, threshold, 0.0);
+  });
+  EXPECT_THROW(fdem::read_mesh_quality(dir / "broken.h5"), DataError);
 }
 
 TEST(ModelFile, AllLinearModelsStoreFourColumnsAndNoSampleIsAllowed) {

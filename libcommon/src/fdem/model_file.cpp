@@ -299,6 +299,53 @@ Model read_model_file(const std::filesystem::path& path) {
   return m;
 }
 
+namespace {
+
+/// Rows of the first column of `t` whose length differs from its labels', if any.
+std::optional<std::size_t> mismatched_rows(const MeshQualityTable& t) {
+  for (const std::size_t size : {t.min_dihedral.size(), t.min_altitude.size(), t.median_altitude.size(), t.worst_element.size(),
+                                 t.step_ratio.size(), t.below_thresholds.size()})
+    if (size != t.label.size()) return size;
+  return std::nullopt;
+}
+
+}  // namespace
+
+void write_mesh_quality(io::H5File& f, const MeshQualityTable& t) {
+  namespace q = schema::fdem_model::mesh_quality;
+  if (const auto rows = mismatched_rows(t))
+    throw UsageError(fmt::format("write_mesh_quality: a column of {} rows beside {} labels", *rows, t.label.size()));
+  f.write(q::label, t.label);
+  f.write(q::min_dihedral, t.min_dihedral, units("degree"));
+  f.write(q::min_altitude, t.min_altitude, units("m"));
+  f.write(q::median_altitude, t.median_altitude, units("m"));
+  f.write(q::worst_element, t.worst_element);
+  f.write(q::step_ratio, t.step_ratio, units("1"));
+  f.write(q::below_thresholds, t.below_thresholds);
+  f.set_attr(q::group, q::min_dihedral_threshold, t.min_dihedral_threshold);
+  f.set_attr(q::group, q::min_altitude_ratio_threshold, t.min_altitude_ratio_threshold);
+}
+
+std::optional<MeshQualityTable> read_mesh_quality(const std::filesystem::path& path) {
+  namespace q = schema::fdem_model::mesh_quality;
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_model, "pass the output of shapes2mesh");
+  if (!f.exists(q::group)) return std::nullopt;
+  MeshQualityTable t;
+  t.label = f.read<std::uint32_t>(q::label);
+  t.min_dihedral = f.read<double>(q::min_dihedral);
+  t.min_altitude = f.read<double>(q::min_altitude);
+  t.median_altitude = f.read<double>(q::median_altitude);
+  t.worst_element = f.read<std::uint64_t>(q::worst_element);
+  t.step_ratio = f.read<double>(q::step_ratio);
+  t.below_thresholds = f.read<std::uint64_t>(q::below_thresholds);
+  t.min_dihedral_threshold = f.attr_double(q::group, q::min_dihedral_threshold);
+  t.min_altitude_ratio_threshold = f.attr_double(q::group, q::min_altitude_ratio_threshold);
+  if (const auto rows = mismatched_rows(t))
+    throw DataError(fmt::format("{}: /mesh/quality has a column of {} rows beside {} labels; rebuild the model with shapes2mesh",
+                                path.string(), *rows, t.label.size()));
+  return t;
+}
+
 io::VtkUnstructuredGrid model_grid(const Model& m, std::span<const Eigen::Vector3d> positions) {
   if (!positions.empty() && positions.size() != m.nodes.size())
     throw UsageError(fmt::format("model_grid: {} positions for {} nodes", positions.size(), m.nodes.size()));

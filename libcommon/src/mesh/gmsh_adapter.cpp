@@ -84,32 +84,6 @@ std::size_t count_inverted(const TetMesh& m) {
   return n;
 }
 
-/// Restores validity of curved elements: the mid-edge nodes of every element whose Jacobian ratio
-/// is below `min_ratio` move towards the straight-edge midpoint by `fraction` (1: onto it; a
-/// straight element with valid corners has ratio 1); repeated since a moved node is shared.
-std::size_t pull_back_distorted(TetMesh& m, double min_ratio, double fraction, int passes) {
-  std::size_t moved = 0;
-  for (int pass = 0; pass < passes; ++pass) {
-    bool any = false;
-    for (std::size_t e = 0; e < m.element_count(); ++e) {
-      if (jacobian_ratio(m, e) >= min_ratio) continue;
-      any = true;
-      const std::uint32_t* n = m.element(e);
-      for (int k = 0; k < 6; ++k) {
-        const Eigen::Vector3d mid = 0.5 * (m.nodes[n[fdem::kTet10Edges[k][0]]] + m.nodes[n[fdem::kTet10Edges[k][1]]]);
-        Eigen::Vector3d& p = m.nodes[n[4 + k]];
-        if (p != mid) p += fraction * (mid - p), ++moved;
-      }
-    }
-    if (!any) break;
-  }
-  return moved;
-}
-
-/// Snapped elements must keep min det J / max det J at least this (barely valid curved elements
-/// would set a tiny stable time step in the solver).
-constexpr double kMinSnappedJacobianRatio = 0.2;
-
 double corner_six_volume(const TetMesh& m, std::size_t e) {
   const std::uint32_t* n = m.element(e);
   const Eigen::Vector3d& a = m.nodes[n[0]];
@@ -139,7 +113,7 @@ void snap_to_surface(TetMesh& m, const std::function<Eigen::Vector3d(const Eigen
   }
   report.inverted_after_curving = count_inverted(m);
   if (m.nodes_per_element == 10)
-    report.straightened = pull_back_distorted(m, kMinSnappedJacobianRatio, 0.5, 4) + pull_back_distorted(m, kMinSnappedJacobianRatio, 1.0, 2);
+    report.straightened = pull_back_curved(m);
   report.inverted = count_inverted(m);
 }
 
@@ -185,7 +159,7 @@ TetMesh generate(const detail::GmshRequest& q, TetReport& report) {
     }
     m = extract(2);
   }
-  if (count_inverted(m) > 0) report.straightened = pull_back_distorted(m, 1e-300, 1.0, 4);
+  if (count_inverted(m) > 0) report.straightened = straighten_distorted(m, 1e-300, 1.0, 4);
   report.inverted = count_inverted(m);
   return m;
 }
@@ -233,7 +207,7 @@ void check_options(const TetOptions& o) {
     throw UsageError(fmt::format("tetrahedralize: the element size must be positive and the order 1 or 2 (got {} and {})", o.size, o.order));
 }
 
-/// Runs the request (here or in a worker), then snaps onto the exact surface when asked.
+/// Runs the request (here or in a worker), then snaps onto the exact surface when asked and removes slivers.
 TetMesh run(detail::GmshRequest& q, const TetOptions& o, TetReport* report, GmshWorkers* workers,
             const std::function<void(TetMesh&)>& place) {
   TetReport local;
@@ -247,6 +221,7 @@ TetMesh run(detail::GmshRequest& q, const TetOptions& o, TetReport* report, Gmsh
   TetMesh m = workers ? workers->run(q, r, o.deadline) : detail::run_gmsh(q, r);
   if (place) place(m);
   if (o.project) snap_to_surface(m, o.project, r);
+  r.slivers = remove_slivers(m, o.slivers);
   return m;
 }
 

@@ -60,9 +60,12 @@ constexpr std::array<EnumName<SurfaceOrigin>, 3> kSurfaceOriginNames{
 constexpr std::array<EnumName<MeshPath>, 3> kMeshPathNames{
     {{MeshPath::gmsh_surface, "gmsh surface"}, {MeshPath::kept_surface, "kept surface"}, {MeshPath::ellipsoid, "ellipsoid"}}};
 
-bool worse(const MeshQuality& a, const MeshQuality& b) {
-  return a.inverted + a.below_floor > b.inverted + b.below_floor;
-}
+/// Elements that fail a requirement: inverted, under the gamma floor, or slivers the pass could
+/// not lift (kept meshes are compared by these first: on the soil crop, a grain's finer remesh
+/// kept for its volume had a sliver at 0.18 of the median altitude where the first had none).
+std::size_t failing(const MeshQuality& q) { return q.inverted + q.below_floor + q.below_thresholds; }
+
+bool worse(const MeshQuality& a, const MeshQuality& b) { return failing(a) > failing(b); }
 
 }  // namespace
 
@@ -147,24 +150,29 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     const double r = shape::sh_radius(grain.coeffs, degree, d);
     return grain.centroid + (cut ? cut->radial_limit(grain.centroid, d, r) : r) * d;
   };
-  // Meshes with `run` at r.size.h, then once more at 0.7 h when elements miss the quality floor
-  // (keeping the better mesh; a failed or overrun remesh keeps the first).
+  // Meshes with `run` at r.size.h, then once more at 0.7 h when elements miss the quality floor or
+  // stay slivers (keeping the better mesh; a failed or overrun remesh keeps the first).
   // Kept surfaces, 10-node, automatic size: also when the mesh misses the surface's volume by more
   // than kRemeshVolumeError (4-node meshes have --volume-tol in their size rule; a given size is
   // the user's choice).
   const auto mesh_and_check = [&](const std::function<TetMesh(double)>& run) {
     r.mesh = run(r.size.h);
-    r.quality = mesh_quality(r.mesh, options.gamma_floor);
+    r.quality = mesh_quality(r.mesh, options.gamma_floor, options.slivers);
     const auto off_volume = [&](const MeshQuality& q) {
       return r.path == MeshPath::kept_surface && order == 2 && r.size.rule != SizeRule::given &&
              std::abs(q.volume / r.surface_volume - 1.0) > kRemeshVolumeError;
     };
-    if (r.quality.inverted == 0 && r.quality.below_floor == 0 && !off_volume(r.quality)) return;
+    const auto note_slivers = [&] {
+      if (r.quality.below_thresholds > 0)
+        add_note(fmt::format("{} elements below the sliver thresholds (worst: min dihedral {:.1f} deg, min altitude {:.2f} of the median)",
+                             r.quality.below_thresholds, r.quality.min_dihedral, r.quality.min_altitude / r.quality.median_altitude));
+    };
+    if (failing(r.quality) == 0 && !off_volume(r.quality)) return note_slivers();
     const TetReport first = r.gmsh;
     r.remeshed = true;
     try {
       TetMesh finer = run(0.7 * r.size.h);
-      const MeshQuality q = mesh_quality(finer, options.gamma_floor);
+      const MeshQuality q = mesh_quality(finer, options.gamma_floor, options.slivers);
       if (worse(r.quality, q) || (!worse(q, r.quality) && off_volume(r.quality) &&
                                   std::abs(q.volume / r.surface_volume - 1.0) < std::abs(r.quality.volume / r.surface_volume - 1.0))) {
         r.mesh = std::move(finer), r.quality = q, r.size.h *= 0.7;
@@ -177,6 +185,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
     }
     if (r.quality.inverted > 0 || r.quality.below_floor > 0)
       add_note(std::to_string(r.quality.below_floor) + " elements below the gamma floor, " + std::to_string(r.quality.inverted) + " inverted");
+    note_slivers();
   };
 
   // 1. The SH surface, remeshed by gmsh, within the budget.
@@ -203,7 +212,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
       try {
         mesh_and_check([&](double h) {
           TetOptions o;
-          o.size = h, o.order = order, o.deadline = deadline;
+          o.size = h, o.order = order, o.slivers = options.slivers, o.deadline = deadline;
           if (options.snap_to_sh) o.project = on_sh_surface;
           return tetrahedralize(sh_candidate, o, &r.gmsh, options.workers);
         });
@@ -284,7 +293,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
             continue;
           }
           TetOptions o;
-          o.size = std::min(h, edge / kRemeshEdgePerSize), o.order = order, o.keep_surface = true, o.project = onto, o.deadline = deadline;
+          o.size = std::min(h, edge / kRemeshEdgePerSize), o.order = order, o.slivers = options.slivers, o.keep_surface = true, o.project = onto, o.deadline = deadline;
           try {
             return tetrahedralize(boundary, o, &r.gmsh, options.workers);
           } catch (const GmshOverrun&) {
@@ -318,7 +327,7 @@ GrainMeshResult mesh_grain(const shape::GrainShape& grain, const ShSurfaceBasis&
   try {
     mesh_and_check([&](double h) {
       TetOptions o;
-      o.size = h, o.order = order;
+      o.size = h, o.order = order, o.slivers = options.slivers;
       return mesh_ellipsoid(grain.centroid, grain.semi_axes, axes, o, &r.gmsh, options.workers);
     });
   } catch (const DataError& e) {

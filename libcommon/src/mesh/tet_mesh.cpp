@@ -58,6 +58,34 @@ double tet_gamma(const Vec& a, const Vec& b, const Vec& c, const Vec& d) {
   return 3.0 * inradius / circumradius;
 }
 
+double tet_min_altitude(const Vec& a, const Vec& b, const Vec& c, const Vec& d) {
+  const double six_v = (b - a).cross(c - a).dot(d - a);
+  const double twice_area = std::max({(b - a).cross(c - a).norm(), (b - a).cross(d - a).norm(), (c - a).cross(d - a).norm(),
+                                      (c - b).cross(d - b).norm()});
+  return twice_area > 0.0 ? six_v / twice_area : 0.0;  // 3 V / A with V = six_v / 6 and A = twice_area / 2
+}
+
+double tet_min_dihedral_degrees(const Vec& a, const Vec& b, const Vec& c, const Vec& d) {
+  // Outward (area) normals of the faces opposite each corner; the interior angle at the edge two
+  // faces share is pi minus the angle between their outward normals.
+  const std::array<Vec, 4> p{a, b, c, d};
+  std::array<Vec, 4> n;
+  for (std::size_t i = 0; i < 4; ++i) {
+    const Vec& u = p[(i + 1) % 4];
+    n[i] = (p[(i + 2) % 4] - u).cross(p[(i + 3) % 4] - u);
+    if (n[i].dot(p[i] - u) > 0.0) n[i] = -n[i];
+    if (!(n[i].squaredNorm() > 0.0)) return 0.0;
+  }
+  double largest_cos = -1.0;
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t j = i + 1; j < 4; ++j) largest_cos = std::max(largest_cos, -n[i].dot(n[j]) / (n[i].norm() * n[j].norm()));
+  return std::acos(std::clamp(largest_cos, -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+bool meets(const SliverThresholds& t, double min_dihedral_degrees, double min_altitude, double median_altitude) {
+  return min_dihedral_degrees >= t.min_dihedral_degrees && min_altitude >= t.min_altitude_ratio * median_altitude;
+}
+
 double tet10_det_jacobian(const std::array<Vec, 10>& x, double xi, double eta, double zeta) {
   const double l[4] = {1.0 - xi - eta - zeta, xi, eta, zeta};
   Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
@@ -124,15 +152,55 @@ TriangleSurface boundary_surface(const TetMesh& m) {
   return s;
 }
 
-MeshQuality mesh_quality(const TetMesh& m, double gamma_floor) {
+double median_altitude(const TetMesh& m) {
+  std::vector<double> h(m.element_count());
+  for (std::size_t e = 0; e < h.size(); ++e) {
+    const std::uint32_t* n = m.element(e);
+    h[e] = tet_min_altitude(m.nodes[n[0]], m.nodes[n[1]], m.nodes[n[2]], m.nodes[n[3]]);
+  }
+  if (h.empty()) return 0.0;
+  std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2), h.end());
+  return h[h.size() / 2];
+}
+
+std::size_t straighten_distorted(TetMesh& m, double min_ratio, double fraction, int passes) {
+  std::size_t moved = 0;
+  for (int pass = 0; pass < passes; ++pass) {
+    bool any = false;
+    for (std::size_t e = 0; e < m.element_count(); ++e) {
+      if (jacobian_ratio(m, e) >= min_ratio) continue;
+      any = true;
+      const std::uint32_t* n = m.element(e);
+      for (int k = 0; k < 6; ++k) {
+        const Vec mid = 0.5 * (m.nodes[n[kTet10Edges[k][0]]] + m.nodes[n[kTet10Edges[k][1]]]);
+        Vec& p = m.nodes[n[4 + k]];
+        if (p != mid) p += fraction * (mid - p), ++moved;
+      }
+    }
+    if (!any) break;
+  }
+  return moved;
+}
+
+std::size_t pull_back_curved(TetMesh& m) {
+  return straighten_distorted(m, kMinCurvedJacobianRatio, 0.5, 4) + straighten_distorted(m, kMinCurvedJacobianRatio, 1.0, 2);
+}
+
+MeshQuality mesh_quality(const TetMesh& m, double gamma_floor, const SliverThresholds& slivers) {
   MeshQuality q;
   q.elements = m.element_count();
   q.nodes = m.nodes.size();
-  q.min_gamma = q.min_jacobian_ratio = std::numeric_limits<double>::infinity();
+  q.min_gamma = q.min_jacobian_ratio = q.min_dihedral = q.min_altitude = std::numeric_limits<double>::infinity();
+  q.median_altitude = median_altitude(m);
   double sum = 0.0;
   for (std::size_t e = 0; e < q.elements; ++e) {
     const std::uint32_t* n = m.element(e);
-    const double g = tet_gamma(m.nodes[n[0]], m.nodes[n[1]], m.nodes[n[2]], m.nodes[n[3]]);
+    const Vec &a = m.nodes[n[0]], &b = m.nodes[n[1]], &c = m.nodes[n[2]], &d = m.nodes[n[3]];
+    const double g = tet_gamma(a, b, c, d);
+    const double dihedral = tet_min_dihedral_degrees(a, b, c, d), altitude = tet_min_altitude(a, b, c, d);
+    q.min_dihedral = std::min(q.min_dihedral, dihedral);
+    if (altitude < q.min_altitude) q.min_altitude = altitude, q.worst_element = e;
+    q.below_thresholds += !meets(slivers, dihedral, altitude, q.median_altitude);
     const double r = jacobian_ratio(m, e);
     q.min_gamma = std::min(q.min_gamma, g);
     q.min_jacobian_ratio = std::min(q.min_jacobian_ratio, r);
@@ -141,7 +209,7 @@ MeshQuality mesh_quality(const TetMesh& m, double gamma_floor) {
     sum += g;
   }
   q.mean_gamma = q.elements ? sum / static_cast<double>(q.elements) : 0.0;
-  if (q.elements == 0) q.min_gamma = q.min_jacobian_ratio = 0.0;
+  if (q.elements == 0) q.min_gamma = q.min_jacobian_ratio = q.min_dihedral = q.min_altitude = 0.0;
   const TriangleSurface b = boundary_surface(m);
   q.surface_nodes = b.vertices.size();
   q.surface_area = surface_area(b);

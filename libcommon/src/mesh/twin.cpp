@@ -159,13 +159,28 @@ void MeshTable::add(std::uint32_t l, std::uint32_t source, const GrainMeshResult
   note.push_back(r.note);
 }
 
-TwinModel assemble_twin(const TwinGrains& grains, const std::vector<GrainMeshResult>& results) {
+TwinModel assemble_twin(const TwinGrains& grains, const std::vector<GrainMeshResult>& results, const SliverThresholds& slivers) {
   TwinModel twin;
   TwinCounts& c = twin.counts;
+  fdem::MeshQualityTable& q = twin.quality;
+  q.min_dihedral_threshold = slivers.min_dihedral_degrees;
+  q.min_altitude_ratio_threshold = slivers.min_altitude_ratio;
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const GrainMeshResult& r = results[i];
+    const std::size_t first_element = twin.model.element_count();
     append_grain(twin.model, r.mesh, grains.label[i], r.kind);
     twin.table.add(grains.label[i], grains.source_label[i], r);
+    q.label.push_back(grains.label[i]);
+    q.min_dihedral.push_back(r.quality.min_dihedral);
+    q.min_altitude.push_back(r.quality.min_altitude);
+    q.median_altitude.push_back(r.quality.median_altitude);
+    q.worst_element.push_back(first_element + r.quality.worst_element);
+    q.step_ratio.push_back(r.quality.median_altitude > 0.0 ? r.quality.min_altitude / r.quality.median_altitude : 0.0);
+    q.below_thresholds.push_back(r.quality.below_thresholds);
+    // Rigid grains carry no stress and set no element step.
+    if (r.kind != fdem::GrainKind::rigid && r.quality.below_thresholds > 0) ++c.below_thresholds, c.sliver_elements += r.quality.below_thresholds;
+    c.slivers_before += r.gmsh.slivers.before;
+    c.sliver_seconds += r.gmsh.slivers.seconds;
     ++c.origin[static_cast<int>(r.origin)];
     ++c.path[static_cast<int>(r.path)];
     c.overran += r.overran;
@@ -201,8 +216,9 @@ TwinSample twin_sample(const fdem::Model& model, double membrane_thickness, cons
   return s;
 }
 
-void write_mesh_table(io::H5File& f, const MeshTable& t, const std::string& parameters) {
+void write_mesh_table(io::H5File& f, const TwinModel& twin, const std::string& parameters) {
   namespace name = schema::fdem_model::mesh;
+  const MeshTable& t = twin.table;
   using Codes = std::tuple<const char*, const std::vector<std::uint8_t>*, const char*>;
   for (const auto& [column, values, codes] :
        {Codes{name::surface_origin, &t.origin, "0 SH fit, 1 smoothed voxels, 2 inertia ellipsoid"},
@@ -232,6 +248,7 @@ void write_mesh_table(io::H5File& f, const MeshTable& t, const std::string& para
   f.write(name::source_label, t.source_label);
   f.write_strings(name::note, t.note);
   f.write_strings(name::parameters, {parameters});
+  fdem::write_mesh_quality(f, twin.quality);
 }
 
 }  // namespace graintwin::mesh

@@ -185,6 +185,21 @@ inline constexpr const char* note = "/mesh/note";                      ///< stri
 inline constexpr const char* parameters = "/mesh/parameters";          ///< string (1), JSON
 }  // namespace graintwin::schema::fdem_model::mesh
 
+// The element quality shapes2mesh writes per grain (fdem::MeshQualityTable, G rows), and the
+// run's thresholds as attributes of the group.
+namespace graintwin::schema::fdem_model::mesh_quality {
+inline constexpr const char* group = "/mesh/quality";
+inline constexpr const char* label = "/mesh/quality/label";                      ///< uint32 (G), in the model
+inline constexpr const char* min_dihedral = "/mesh/quality/min_dihedral";        ///< (G) degrees
+inline constexpr const char* min_altitude = "/mesh/quality/min_altitude";        ///< (G) m
+inline constexpr const char* median_altitude = "/mesh/quality/median_altitude";  ///< (G) m
+inline constexpr const char* worst_element = "/mesh/quality/worst_element";      ///< uint64 (G), model element index
+inline constexpr const char* step_ratio = "/mesh/quality/step_ratio";            ///< (G) min / median altitude
+inline constexpr const char* below_thresholds = "/mesh/quality/below_thresholds";  ///< uint64 (G)
+inline constexpr const char* min_dihedral_threshold = "min_dihedral_threshold";  ///< attribute, degrees (0: none)
+inline constexpr const char* min_altitude_ratio_threshold = "min_altitude_ratio_threshold";  ///< attribute (0: none)
+}  // namespace graintwin::schema::fdem_model::mesh_quality
+
 // kind=micro (tracks2micro), layout in docs/formats.md. N grains (tracks), T states, K increments.
 namespace graintwin::schema::micro {
 inline constexpr const char* grain_label = "/grains/label";            ///< uint32 (N x T), label in each state, 0 = absent

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/mesh/sliver_removal.hpp"
 #include "graintwin/mesh/surface.hpp"
 #include "graintwin/mesh/tet_mesh.hpp"
 
@@ -40,6 +41,9 @@ struct TetOptions {
   /// (remesh_isotropic), of any genus. Without it gmsh remeshes the surface and needs it one
   /// sphere-like piece.
   bool keep_surface = false;
+  /// After meshing and snapping: remove_slivers to these thresholds (the boundary kept as it is).
+  /// None asked by default.
+  SliverThresholds slivers;
   /// gmsh must answer by then, or GmshOverrun is thrown (a worker is killed and replaced; in this
   /// process the run is refused when the time has already passed, since it cannot be stopped).
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
@@ -58,6 +62,7 @@ struct TetReport {
   std::size_t straightened = 0;            ///< mid-edge nodes pulled back towards straight edges to restore validity
   std::size_t unsnapped = 0;               ///< boundary corners left off the exact surface (snapping flattened an element)
   double seconds = 0.0;                    ///< wall time inside gmsh (classification, meshing, curving)
+  SliverReport slivers;                    ///< the sliver pass after gmsh (TetOptions::slivers), in this process
 };
 
 /// Tetrahedral mesh of the solid bounded by `surface` (closed, outward; check_surface first): the

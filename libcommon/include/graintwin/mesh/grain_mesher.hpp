@@ -86,6 +86,10 @@ struct GrainMeshOptions {
   int order = 2;
   SizeTargets size;
   double gamma_floor = 0.1;       ///< elements below this gamma make the grain remeshed once at 0.7 h
+  /// Every mesh goes through remove_slivers to these; elements still below them (counted in
+  /// MeshQuality::below_thresholds and noted) make the grain meshed again at 0.7 h, as the gamma
+  /// floor does, and the mesh with fewer failing elements is kept.
+  SliverThresholds slivers;
   double rigid_diameter = 0.0;    ///< grains smaller than this (m) get a coarse linear mesh and are rigid
   double smooth_vox = 0.7;        ///< Gaussian sigma of the voxel surface (voxels)
   /// With labels: every surface is cut where it reaches into a neighbour's labelled voxels

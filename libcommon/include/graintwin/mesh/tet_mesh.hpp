@@ -27,6 +27,24 @@ struct TetMesh {
 /// negative when the corners are inverted. For 10-node elements, of the corner tetrahedron.
 double tet_gamma(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d);
 
+/// Smallest altitude of a tetrahedron: 3 x volume / largest face area (fdem::element_min_altitude's
+/// measure, which sets fdemrun's element step), m; negative when the corners are inverted.
+double tet_min_altitude(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d);
+
+/// Smallest of a tetrahedron's six dihedral angles, degrees (0 when flat or degenerate).
+double tet_min_dihedral_degrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                const Eigen::Vector3d& d);
+
+/// What an element must reach to be no sliver (remove_slivers); 0 leaves a measure unchecked.
+struct SliverThresholds {
+  double min_dihedral_degrees = 0.0;  ///< smallest dihedral angle of the corner tetrahedron
+  double min_altitude_ratio = 0.0;    ///< smallest altitude over the grain's median element altitude
+  bool any() const { return min_dihedral_degrees > 0.0 || min_altitude_ratio > 0.0; }
+};
+
+/// Whether an element with these measures (altitude against the grain's `median_altitude`) meets `thresholds`.
+bool meets(const SliverThresholds& thresholds, double min_dihedral_degrees, double min_altitude, double median_altitude);
+
 /// det J of a 10-node tetrahedron (gmsh order) at natural coordinates (xi, eta, zeta) of the unit
 /// tetrahedron; equals 6 x volume for straight-sided elements.
 double tet10_det_jacobian(const std::array<Eigen::Vector3d, 10>& x, double xi, double eta, double zeta);
@@ -37,6 +55,11 @@ double jacobian_ratio(const TetMesh& mesh, std::size_t element);
 
 struct MeshQuality {
   std::size_t elements = 0, nodes = 0, surface_nodes = 0;
+  /// What sets the explicit step (of the corner tetrahedra): smallest dihedral angle (degrees),
+  /// smallest and median altitude (m), and the element with the smallest altitude.
+  double min_dihedral = 0.0, min_altitude = 0.0, median_altitude = 0.0;
+  std::size_t worst_element = 0;
+  std::size_t below_thresholds = 0;  ///< elements below the SliverThresholds passed to mesh_quality
   double min_gamma = 0.0, mean_gamma = 0.0;
   double min_jacobian_ratio = 0.0;   ///< over all elements
   std::size_t inverted = 0;          ///< elements with jacobian_ratio <= 0
@@ -44,7 +67,24 @@ struct MeshQuality {
   double volume = 0.0;               ///< m^3, exact for the (curved) elements
   double surface_area = 0.0;         ///< m^2, of the linear boundary triangles
 };
-MeshQuality mesh_quality(const TetMesh& mesh, double gamma_floor);
+MeshQuality mesh_quality(const TetMesh& mesh, double gamma_floor, const SliverThresholds& slivers = {});
+
+/// Median over the elements of their corner tetrahedra's smallest altitude, m (0 without elements).
+double median_altitude(const TetMesh& mesh);
+
+/// Restores curved 10-node elements: the mid-edge nodes of every element whose jacobian_ratio is
+/// below `min_ratio` move towards the straight-edge midpoint by `fraction` (1: onto it; a straight
+/// element with valid corners has ratio 1); repeated up to `passes` times since a moved node is
+/// shared. Returns the mid-edge nodes moved.
+std::size_t straighten_distorted(TetMesh& mesh, double min_ratio, double fraction, int passes);
+
+/// Curved elements must keep min det J / max det J at least this (barely valid curved elements
+/// would set a tiny stable time step in the solver).
+inline constexpr double kMinCurvedJacobianRatio = 0.2;
+/// The rule for 10-node meshes whose boundary nodes were moved (snapped onto the exact surface):
+/// elements below kMinCurvedJacobianRatio have their mid-edge nodes pulled back halfway, up to 4
+/// times, then fully; returns the mid-edge nodes moved. Always ends valid when the corners are.
+std::size_t pull_back_curved(TetMesh& mesh);
 
 /// Volume of the mesh (curved 10-node elements integrated exactly, 5-point cubic rule).
 double mesh_volume(const TetMesh& mesh);

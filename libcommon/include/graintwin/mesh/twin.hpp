@@ -16,6 +16,7 @@
 
 #include "graintwin/core/volume.hpp"
 #include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/model_file.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/mesh/equivalent_packing.hpp"
 #include "graintwin/mesh/grain_mesher.hpp"
@@ -112,17 +113,23 @@ struct TwinCounts {
   std::size_t overran = 0, rigid = 0, remeshed = 0, optimized = 0;
   std::size_t curving_inverted = 0;     ///< grains with elements inverted by curving
   std::size_t below_floor = 0;          ///< grains still below the gamma floor or inverted
+  std::size_t below_thresholds = 0;     ///< deformable grains with elements still below the sliver thresholds
+  std::size_t sliver_elements = 0;      ///< their elements below the thresholds
+  std::size_t slivers_before = 0;       ///< elements below the thresholds before the sliver pass, all grains
   double gmsh_seconds = 0.0, seconds = 0.0;  ///< s, summed over the grains
+  double sliver_seconds = 0.0;          ///< s in the sliver pass, summed over the grains
 };
 
 /// The twin's model (its grains, not yet its sample and platens) and figures.
 struct TwinModel {
   fdem::Model model;
   MeshTable table;
+  fdem::MeshQualityTable quality;  ///< each grain's worst element, by model element index
   TwinCounts counts;
 };
-/// Joins the meshes of `grains` (results in the same order) into one model.
-TwinModel assemble_twin(const TwinGrains& grains, const std::vector<GrainMeshResult>& results);
+/// Joins the meshes of `grains` (results in the same order) into one model; `slivers` are the
+/// thresholds the grains were meshed to (recorded with the quality table).
+TwinModel assemble_twin(const TwinGrains& grains, const std::vector<GrainMeshResult>& results, const SliverThresholds& slivers = {});
 
 /// The twin's sample cylinder and where it came from.
 struct TwinSample {
@@ -135,7 +142,8 @@ struct TwinSample {
 TwinSample twin_sample(const fdem::Model& model, double membrane_thickness, const synth::Container* container,
                        const fdem::SampleCylinder* inscribed, const ScanCylinder* region);
 
-/// Writes `table` and the run's `parameters` (JSON) under /mesh of an open model file.
-void write_mesh_table(io::H5File& file, const MeshTable& table, const std::string& parameters);
+/// Writes the twin's per-grain table and quality table and the run's `parameters` (JSON) under
+/// /mesh of an open model file.
+void write_mesh_table(io::H5File& file, const TwinModel& twin, const std::string& parameters);
 
 }  // namespace graintwin::mesh
