@@ -91,10 +91,11 @@ void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boun
   }
   const Model& m = solver.model();
   const hsize_t G = m.grains.size();
-  std::vector<double> centroid, rotation, stress, velocity;
+  std::vector<double> centroid, rotation, stress, velocity, spin;
   for (std::size_t g = 0; g < G; ++g) {
     push(centroid, solver.grain_centroid(g));
     push(velocity, solver.grain_velocity(g));
+    push(spin, solver.grain_spin(g));
     const Eigen::Quaterniond q = solver.grain_rotation(g);
     rotation.insert(rotation.end(), {q.w(), q.x(), q.y(), q.z()});
     const Eigen::Matrix3d s = -solver.grain_stress(g);  // compression positive (docs/conventions.md)
@@ -105,6 +106,7 @@ void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boun
   file_.write(group + "/" + sr::frame_rotation, rotation.data(), {G, 4}, units("1"));
   file_.write(group + "/" + sr::frame_stress, stress.data(), {G, 3, 3}, units("Pa"));
   file_.write(group + "/" + sr::frame_velocity, velocity.data(), {G, 3}, units("m/s"));
+  file_.write(group + "/" + sr::frame_spin, spin.data(), {G, 3}, units("rad/s"));
   std::vector<std::uint32_t> pair;
   std::vector<std::int32_t> platen;
   std::vector<double> point, normal, force, overlap;
@@ -253,6 +255,7 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   r.rotation = f.read<double>(at(sr::frame_rotation));
   r.stress = f.read<double>(at(sr::frame_stress));
   r.velocity = f.read<double>(at(sr::frame_velocity));
+  if (f.exists(at(sr::frame_spin))) r.spin = f.read<double>(at(sr::frame_spin));  // files before 2026-11-28 have none
   r.pair = f.read<std::uint32_t>(at(sr::contact_pair));
   r.platen = f.read<std::int32_t>(at(sr::contact_platen));
   r.point = f.read<double>(at(sr::contact_point));

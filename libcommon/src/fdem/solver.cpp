@@ -359,6 +359,23 @@ Eigen::Vector3d Solver::grain_velocity(std::size_t g) const {
   return model_->grains.at(g).kind == GrainKind::rigid ? state_.bodies[g].velocity : mass_mean(g, state_.v);
 }
 
+Eigen::Vector3d Solver::grain_spin(std::size_t g) const {
+  const Grain& grain = model_->grains.at(g);
+  if (grain.kind == GrainKind::rigid) {
+    const RigidBodyState& b = state_.bodies[g];
+    return angular_velocity(g, b.orientation, b.angular_momentum);
+  }
+  const Eigen::Vector3d c = grain_centroid(g), v = grain_velocity(g);
+  Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+    const Eigen::Vector3d r = state_.x[i] - c;
+    momentum += mass_[i] * r.cross(state_.v[i] - v);
+    inertia += mass_[i] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+  }
+  return inertia.ldlt().solve(momentum);
+}
+
 Eigen::Quaterniond Solver::grain_rotation(std::size_t g) const {
   const Grain& grain = model_->grains.at(g);
   if (grain.kind == GrainKind::rigid) return state_.bodies[g].orientation;

@@ -80,6 +80,7 @@ struct ResultsFrame {
   double time = 0;
   std::uint64_t step = 0;
   std::vector<double> centroid, rotation, stress, velocity;  ///< G x 3, G x 4, G x 9, G x 3
+  std::vector<double> spin;  ///< G x 3 angular velocity (rad/s); empty in files written before it was kept
   std::vector<std::uint32_t> pair;                           ///< M x 2
   std::vector<std::int32_t> platen;                          ///< M
   std::vector<double> point, normal, force, overlap;         ///< M x 3, M x 3, M x 3, M

@@ -176,6 +176,9 @@ class Solver {
   Eigen::Vector3d grain_centroid(std::size_t grain) const;
   /// Centroid velocity (m/s) of grain g at the last half step.
   Eigen::Vector3d grain_velocity(std::size_t grain) const;
+  /// Angular velocity (rad/s, world axes) of grain g at the last half step: a rigid body's, or for
+  /// a deformable grain its nodes' angular momentum about the centroid through their inertia now.
+  Eigen::Vector3d grain_spin(std::size_t grain) const;
   /// Rotation of grain g from the reference: the body orientation, or the polar part of the
   /// mass-weighted best fit of its nodes (Kabsch).
   Eigen::Quaterniond grain_rotation(std::size_t grain) const;

@@ -306,6 +306,7 @@ inline constexpr const char* frame_centroid = "grains/centroid";      ///< (G x 
 inline constexpr const char* frame_rotation = "grains/rotation";      ///< (G x 4) quaternion (w, x, y, z) from the reference
 inline constexpr const char* frame_stress = "grains/stress";          ///< (G x 3 x 3) Pa, compression positive, volume average
 inline constexpr const char* frame_velocity = "grains/velocity";      ///< (G x 3) m/s, centroid velocity (half step)
+inline constexpr const char* frame_spin = "grains/spin";              ///< (G x 3) rad/s, angular velocity, world axes (half step)
 inline constexpr const char* contact_pair = "contacts/pair";          ///< uint32 (M x 2) labels, low first; platen contacts: (label, 0)
 inline constexpr const char* contact_platen = "contacts/platen";      ///< int32 (M), platen row, -1 for grain pairs
 inline constexpr const char* contact_point = "contacts/point";        ///< (M x 3) m
