@@ -477,6 +477,10 @@ TEST(Ctsynth, OptionsOutsideTheirRangeAreRefusedBeforeAnyWork) {
   refused({"--grey-scale", "1e6"}, {"--grey-scale 1e+06", "65535", "at most 80713"});
   refused({"--grey-grain", "0.05"}, {"--grey-grain 0.05 is not above --grey-void 0.1"});
   refused({"--grey-scale", "1e-3"}, {"same value", "at least 1.54"});
+  // A correlation length must be 0 or a length its random lattice over the sample can afford.
+  refused({"--nonaffine-correlation=-1mm"}, {"nonaffine correlation length must be 0"});
+  refused({"--nonaffine-correlation", "nan"}, {"--nonaffine-correlation", "finite length"});
+  refused({"--nonaffine-correlation", "1nm"}, {"too short for a sample", "give at least"});
   // The scene file's keys are the same options, with the same checks.
   write_scene(dir / "scene.toml", "blur = 1e6\n");
   refused({"-q"}, {"--blur", "[0, 20] voxels"});

@@ -147,8 +147,7 @@ SeriesParams series_params(const Options& o) {
   p.loading.band_width = o.band_width.empty() ? 0.0 : parse_length_m(o.band_width, "--band-width");
   p.loading.band_slip = o.band_slip;
   p.loading.nonaffine = o.nonaffine;
-  p.loading.nonaffine_correlation =
-      o.nonaffine_correlation == "0" ? 0.0 : parse_length_m(o.nonaffine_correlation, "--nonaffine-correlation");
+  p.loading.nonaffine_correlation = parse_signed_length_m(o.nonaffine_correlation, "--nonaffine-correlation");
   p.loading.rotation_per_shear = o.rotation_per_shear;
   p.contact_search = o.contact_search.empty() ? 0.0 : parse_length_m(o.contact_search, "--contact-search");
   const LoadingKind loading = parse_enum(kLoadingKindNames, o.loading, "--loading");

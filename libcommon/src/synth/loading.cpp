@@ -67,11 +67,6 @@ class SmoothNoise {
     std::normal_distribution<double> n01;
     for (Eigen::Vector3d& v : values_) v = Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
   }
-  static std::size_t nodes(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double length) {
-    double n = 1.0;
-    for (int a = 0; a < 3; ++a) n *= std::floor((hi[a] - lo[a]) / length) + 4.0;
-    return n < 1e18 ? static_cast<std::size_t>(n) : SIZE_MAX;
-  }
   Eigen::Vector3d at(const Eigen::Vector3d& x) const {
     std::array<std::array<double, 4>, 3> w;
     std::array<std::size_t, 3> base;
@@ -110,11 +105,22 @@ void validate(const LoadingParams& p) {
     throw UsageError("a shear band needs a positive band width (about 10 d50)");
   if (!(p.band_angle_deg > 0.0 && p.band_angle_deg < 90.0))
     throw UsageError("band angle must be between 0 and 90 degrees from the horizontal");
-  if (!(p.nonaffine_correlation >= 0.0))
-    throw UsageError("the nonaffine correlation length must be 0 (independent grains) or positive");
 }
 
 }  // namespace
+
+void check_nonaffine_correlation(double length, const Eigen::Vector3d& extent) {
+  if (!(length >= 0.0) || !std::isfinite(length))
+    throw UsageError("the nonaffine correlation length must be 0 (independent grains) or a positive length");
+  if (length == 0.0) return;
+  double nodes = 1.0;  // SmoothNoise's lattice
+  for (int a = 0; a < 3; ++a) nodes *= std::floor(std::max(0.0, extent[a]) / length) + 4.0;
+  if (nodes > static_cast<double>(kMaxNoiseNodes))
+    throw UsageError(fmt::format("a nonaffine correlation length of {:.3g} mm is too short for a sample {:.3g} mm across: "
+                                 "give at least {:.3g} mm (about the grain size), or 0 for independent grains",
+                                 1e3 * length, 1e3 * extent.maxCoeff(),
+                                 2e3 * extent.maxCoeff() / std::cbrt(static_cast<double>(kMaxNoiseNodes))));
+}
 
 Eigen::Vector3d smooth_displacement(const LoadingParams& p, const Eigen::Vector3d& x, double eps) {
   const double zeta = 2.0 * x.z() / p.height - 1.0;
@@ -151,11 +157,7 @@ std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, con
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const PackedGrain& g : reference) lo = lo.cwiseMin(g.position), hi = hi.cwiseMax(g.position);
   const bool correlated = p.nonaffine_correlation > 0.0 && !reference.empty();
-  if (correlated && SmoothNoise::nodes(lo, hi, p.nonaffine_correlation) > kMaxNoiseNodes)
-    throw UsageError(fmt::format("a nonaffine correlation length of {:.3g} mm is too short for a sample {:.3g} mm across: "
-                                 "give at least {:.3g} mm (about the grain size), or 0 for independent grains",
-                                 1e3 * p.nonaffine_correlation, 1e3 * (hi - lo).maxCoeff(),
-                                 1e3 * (hi - lo).maxCoeff() / std::cbrt(static_cast<double>(kMaxNoiseNodes)) * 2.0));
+  check_nonaffine_correlation(p.nonaffine_correlation, reference.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(hi - lo));
   std::vector<Eigen::Quaterniond> spin(reference.size(), Eigen::Quaterniond::Identity());
   double prev = 0.0;
   for (std::size_t k = 0; k < strains.size(); ++k) {

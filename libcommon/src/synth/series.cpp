@@ -295,6 +295,10 @@ SeriesSummary make_series(const SeriesParams& p, const std::filesystem::path& di
                grain_table_bytes > scan_bytes
                    ? "give larger grains (--d-min, --d50, --d-max), a smaller sample (--diameter, --height or --box) or larger voxels (--voxel-size)"
                    : "make the sample smaller (--diameter, --height or --box), the voxels larger (--voxel-size) or the grains larger (--d-min, --d50, --d-max)");
+  const bool cylinder = p.container.kind == Container::Kind::cylinder;
+  check_nonaffine_correlation(p.loading.nonaffine_correlation,
+                              cylinder ? Eigen::Vector3d(2 * p.container.radius, 2 * p.container.radius, p.container.height)
+                                       : p.container.box_size);
   if (p.scanner.blur_sigma_vox > 0.0)
     check_kernel_fits(std::ceil(3.0 * p.scanner.blur_sigma_vox),
                       Shape3{static_cast<std::size_t>(voxels[0]), static_cast<std::size_t>(voxels[1]),

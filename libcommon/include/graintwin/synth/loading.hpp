@@ -59,6 +59,12 @@ double local_shear(const LoadingParams& p, const Eigen::Vector3d& x, double eps)
 std::vector<std::vector<PackedGrain>> loading_states(const LoadingParams& p, const std::vector<PackedGrain>& reference,
                                                      const std::vector<double>& strains);
 
+/// Throws UsageError unless a nonaffine correlation length (m) is 0 (independent grains) or long
+/// enough for its random lattice over a sample of `extent` (m, per axis) to stay a modest size.
+/// loading_states checks it over the grains' centres; callers check it over their container
+/// before any heavy work.
+void check_nonaffine_correlation(double length, const Eigen::Vector3d& extent);
+
 /// Inner radius of the (bulged) membrane at height z of the deformed sample for strain eps.
 double sample_radius_at(const LoadingParams& p, double z_deformed, double eps);
 
