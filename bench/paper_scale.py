@@ -26,7 +26,7 @@ can be rerun so; the earlier run's figures of the other stages are published bes
 
     python3 bench/paper_scale.py [--diameters 6 12] [--stages inspect segment contacts shapes track mesh]
         [--simulate-strain 0.18] [--cases-from RUN] [--build build] [--scratch /tmp/graintwin_paper_scale]
-        [--no-publish]
+        [--conditions TEXT] [--no-publish]
 """
 import argparse
 import json
@@ -318,6 +318,8 @@ def main():
                     help="an earlier run's folder of this bench: rerun --stages (micro, simulate, forces, validate, "
                          "report) on its cases, "
                          "publish its figures of the other stages beside them")
+    ap.add_argument("--conditions",
+                    help="a sentence on what else the machine ran meanwhile, published with the figures")
     ap.add_argument("--results", nargs="+",
                     help="finished runs' paper_scale.json: publish their figures again, run nothing; with several, "
                          "their cases are merged (a later file's stages win, stages it lacks are kept)")
@@ -390,7 +392,7 @@ def main():
         "growth exponent of CPU time (per scan for the stages run once per scan and for synth, per pair of scans for "
         "track) against the reference "
         "scan's grains between consecutive cases. "
-        f"{f'Packing: {packing}.' if packing else ''}{merged}\n\n" + table(results, a.stages) + "\n" + targets_lines(results) + simulate_lines(results))
+        f"{f'Packing: {packing}.' if packing else ''}{merged}{f' Conditions: {a.conditions}' if a.conditions else ''}\n\n" + table(results, a.stages) + "\n" + targets_lines(results) + simulate_lines(results))
     finish("paper_scale", text, run_dir, results, not a.no_publish)
 
 
