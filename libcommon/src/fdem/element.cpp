@@ -211,6 +211,13 @@ Eigen::Matrix3d viscous_stress(const Eigen::Matrix3d& F, const Eigen::Matrix3d& 
 using NodeColumns = Eigen::Matrix<double, 3, 10>;
 using PointGradients = Eigen::Map<const Eigen::Matrix<double, 10, 3, Eigen::RowMajor>>;
 
+/// The Lame constants of element e's grain's material as it is now: density scaling of the grains
+/// (mass_scaling.hpp) gives a grain a copy of its material after the elements were built, beyond
+/// the materials they cached.
+Lame element_lame(const Model& model, std::size_t e) {
+  return lame_constants(model.materials[model.grains[model.element_grain[e]].material]);
+}
+
 /// A 10-node element's node positions relative to corner 0, one column each (the gradients sum to
 /// zero, so F = X G, without the grain's distance from the origin in the sum).
 NodeColumns relative_positions(std::span<const Eigen::Vector3d> x, const std::uint32_t* nodes) {
@@ -248,7 +255,7 @@ void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::si
     return;
   }
   const std::uint32_t* nodes = element_nodes(*model_, e);
-  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  const Lame L = element_lame(*model_, e);
   const NodeColumns X = relative_positions(x, nodes);
   for (std::size_t q = slot, end = slot + quadratic_points(); q < end; ++q) {
     F = X * point_gradients(gradient_, q);
@@ -278,7 +285,7 @@ void ElasticElements::subtract_linear_tet_forces(const LinearTet& t, const Eigen
 void ElasticElements::add_quadratic_tet_forces(std::span<const Eigen::Vector3d> x, std::size_t e,
                                                std::span<Eigen::Vector3d> f, double& energy) const {
   const std::uint32_t* nodes = element_nodes(*model_, e);
-  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  const Lame L = element_lame(*model_, e);
   const NodeColumns X = relative_positions(x, nodes);  // gathered once for the 4 points
   NodeColumns forces = NodeColumns::Zero();
   for (std::size_t q = slot_[e], end = slot_[e] + quadratic_points(); q < end; ++q) {
@@ -316,7 +323,7 @@ void ElasticElements::add_viscous_forces(std::span<const Eigen::Vector3d> x, std
       continue;
     }
     const std::uint32_t* nodes = element_nodes(*model_, e);
-    const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+    const Lame L = element_lame(*model_, e);
     const NodeColumns X = relative_positions(x, nodes), V = relative_positions(v, nodes);
     NodeColumns forces = NodeColumns::Zero();
     for (std::size_t q = slot_[e], last = slot_[e] + quadratic_points(); q < last; ++q) {
