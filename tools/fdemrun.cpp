@@ -31,9 +31,11 @@ namespace {
 constexpr const char* kDescription =
     "Run an FDEM scene: grains as elastic 4- or 10-node tetrahedral meshes (total-Lagrangian St Venant-Kirchhoff, "
     "exact under large rotations) or rigid 6-DOF bodies, explicit central differences with lumped masses (HRZ for "
-    "10-node elements), mass-proportional damping, gravity, moving platens and loading stages. The time step is the "
-    "stable limit of the elements (k h_min / c x element_safety) and of the contacts unless the scene sets a smaller "
-    "one; a larger one is refused with the numbers, and a run whose state turns NaN or whose energy runs away stops "
+    "10-node elements), mass- and stiffness-proportional (Rayleigh) and local non-viscous damping, gravity, moving "
+    "platens and loading stages. The time step is the stable limit of the elements (k h_min / c, shortened by "
+    "stiffness damping, x element_safety) and of the contacts unless the scene sets a smaller one; quasi-static runs "
+    "may lift the element limit by selective mass scaling ([run] element_step_target, the mass added bounded by "
+    "max_added_mass_share, 1 % by default). A larger step is refused with the numbers, and a run whose state turns NaN or whose energy runs away stops "
     "with the step and the likely cause. Writes kind=fdem_results: the energy and platen time series and frames of "
     "grain centroids, rotations, velocities, volume-averaged stresses (compression positive) and contacts. "
     "Checkpoints (--checkpoint) let --restart continue a run exactly; --vtk writes every frame as a .vtu of the "
@@ -164,15 +166,23 @@ void log_start(const Scene& scene, const RunStart& start) {
                  "their contact step limit {:.4g} s lifted to {:.4g} s",
                  scene.mass_scaled_share, scaling.grains, 100.0 * scaling.mass_share, scaling.largest_factor, scaling.step_before,
                  scaling.step_after);
+  const ElementMassScaling& elements = start.element_scaling;
+  if (scene.element_step_target > 0)
+    spdlog::info("selective mass scaling ([run] element_step_target = {:.4g} s): {} elements up to {:.3g} times denser, "
+                 "{:.4g} kg added ({:.3g} % of the grains' mass, bound {:.3g} %); element step limit {:.4g} s lifted to {:.4g} s",
+                 scene.element_step_target, elements.elements, elements.largest_factor, elements.added_mass,
+                 100.0 * elements.added_share(), 100.0 * elements.max_added_share, elements.step_before, elements.step_after);
   if (scene.overlaps.keep && start.solver->contact_model())
     spdlog::info("{} initial overlaps kept force-free ([run] keep_initial_overlaps), the deepest {:.3g} mm", settled.remaining.size(),
                  1e3 * settled.deepest_after);
 }
 
 void log_schedule(const Scene& scene, const Model& model, const RunSchedule& s) {
-  spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s, contact {:.4g} s), {}",
+  spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s{}, contact {:.4g} s), {}",
                model.grains.size(), model.nodes.size(), model.element_count(), model.platens.size(), s.dt,
-               s.limits.element_stable, s.limits.contact_stable,
+               s.limits.element_stable,
+               s.limits.stiffness_damping > 0 ? fmt::format(" with stiffness_damping {:.4g} s", s.limits.stiffness_damping) : "",
+               s.limits.contact_stable,
                scene.triaxial ? std::string("a triaxial test") : fmt::format("{} steps over {} stage(s)", s.total, scene.stages.size()));
 }
 

@@ -188,16 +188,35 @@ namespace {
 
 /// Green-Lagrange strain E = (F^T F - I) / 2, St Venant-Kirchhoff stress S = lambda tr(E) I + 2 mu E
 /// and the energy density lambda tr(E)^2 / 2 + mu E:E, J/m^3.
+/// The isotropic elasticity tensor applied to a strain (or strain rate): lambda tr(E) I + 2 mu E.
+Eigen::Matrix3d isotropic_stress(const Eigen::Matrix3d& E, const Lame& L) {
+  Eigen::Matrix3d S = 2 * L.mu * E;
+  S.diagonal().array() += L.lambda * E.trace();
+  return S;
+}
+
 double saint_venant_kirchhoff(const Eigen::Matrix3d& F, const Lame& L, Eigen::Matrix3d& S) {
   const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
   const double trE = E.trace();
-  S = 2 * L.mu * E;
-  S.diagonal().array() += L.lambda * trE;
+  S = isotropic_stress(E, L);
   return 0.5 * L.lambda * trE * trE + L.mu * E.squaredNorm();
+}
+
+/// Stiffness-proportional viscous stress beta C : dE, dE = sym(F^T dF) the Green-Lagrange strain rate.
+Eigen::Matrix3d viscous_stress(const Eigen::Matrix3d& F, const Eigen::Matrix3d& dF, const Lame& L, double beta) {
+  const Eigen::Matrix3d FtdF = F.transpose() * dF;
+  return beta * isotropic_stress(0.5 * (FtdF + FtdF.transpose()), L);
 }
 
 using NodeColumns = Eigen::Matrix<double, 3, 10>;
 using PointGradients = Eigen::Map<const Eigen::Matrix<double, 10, 3, Eigen::RowMajor>>;
+
+/// The Lame constants of element e's grain's material as it is now: density scaling of the grains
+/// (mass_scaling.hpp) gives a grain a copy of its material after the elements were built, beyond
+/// the materials they cached.
+Lame element_lame(const Model& model, std::size_t e) {
+  return lame_constants(model.materials[model.grains[model.element_grain[e]].material]);
+}
 
 /// A 10-node element's node positions relative to corner 0, one column each (the gradients sum to
 /// zero, so F = X G, without the grain's distance from the origin in the sum).
@@ -236,7 +255,7 @@ void ElasticElements::for_each_point(std::span<const Eigen::Vector3d> x, std::si
     return;
   }
   const std::uint32_t* nodes = element_nodes(*model_, e);
-  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  const Lame L = element_lame(*model_, e);
   const NodeColumns X = relative_positions(x, nodes);
   for (std::size_t q = slot, end = slot + quadratic_points(); q < end; ++q) {
     F = X * point_gradients(gradient_, q);
@@ -250,8 +269,13 @@ void ElasticElements::add_linear_tet_forces(std::span<const Eigen::Vector3d> x, 
   const Eigen::Matrix3d F = linear_deformation_gradient(x, t);
   Eigen::Matrix3d S;
   energy += t.volume * saint_venant_kirchhoff(F, lame_[t.material], S);
+  subtract_linear_tet_forces(t, t.volume * (F * S), f);
+}
+
+void ElasticElements::subtract_linear_tet_forces(const LinearTet& t, const Eigen::Matrix3d& stress_volume,
+                                                 std::span<Eigen::Vector3d> f) {
   // Column a - 1 is V P dN_a/dX, the force node a = 1..3 takes; node 0 takes minus their sum.
-  const Eigen::Matrix3d H = (t.volume * (F * S)) * t.gradients.transpose();
+  const Eigen::Matrix3d H = stress_volume * t.gradients.transpose();
   f[t.nodes[1]] -= H.col(0);
   f[t.nodes[2]] -= H.col(1);
   f[t.nodes[3]] -= H.col(2);
@@ -261,7 +285,7 @@ void ElasticElements::add_linear_tet_forces(std::span<const Eigen::Vector3d> x, 
 void ElasticElements::add_quadratic_tet_forces(std::span<const Eigen::Vector3d> x, std::size_t e,
                                                std::span<Eigen::Vector3d> f, double& energy) const {
   const std::uint32_t* nodes = element_nodes(*model_, e);
-  const Lame& L = lame_[model_->grains[model_->element_grain[e]].material];
+  const Lame L = element_lame(*model_, e);
   const NodeColumns X = relative_positions(x, nodes);  // gathered once for the 4 points
   NodeColumns forces = NodeColumns::Zero();
   for (std::size_t q = slot_[e], end = slot_[e] + quadratic_points(); q < end; ++q) {
@@ -285,6 +309,30 @@ double ElasticElements::add_internal_forces(std::span<const Eigen::Vector3d> x, 
       add_quadratic_tet_forces(x, e, f, energy);
   }
   return energy;
+}
+
+void ElasticElements::add_viscous_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double beta,
+                                         std::size_t begin, std::size_t end, std::span<Eigen::Vector3d> f) const {
+  for (std::size_t e = begin; e < end; ++e) {
+    if (slot_[e] == kNoSlot) continue;
+    if (model_->nodes_of(e) == 4) {
+      const LinearTet& t = linear_[slot_[e]];
+      // The deformation gradient of the velocities is the rate dF (the same linear map).
+      const Eigen::Matrix3d F = linear_deformation_gradient(x, t), dF = linear_deformation_gradient(v, t);
+      subtract_linear_tet_forces(t, t.volume * (F * viscous_stress(F, dF, lame_[t.material], beta)), f);
+      continue;
+    }
+    const std::uint32_t* nodes = element_nodes(*model_, e);
+    const Lame L = element_lame(*model_, e);
+    const NodeColumns X = relative_positions(x, nodes), V = relative_positions(v, nodes);
+    NodeColumns forces = NodeColumns::Zero();
+    for (std::size_t q = slot_[e], last = slot_[e] + quadratic_points(); q < last; ++q) {
+      const PointGradients G = point_gradients(gradient_, q);
+      const Eigen::Matrix3d F = X * G;
+      forces.noalias() += (weight_[q] * (F * viscous_stress(F, V * G, L, beta))) * G.transpose();
+    }
+    for (int a = 0; a < 10; ++a) f[nodes[a]] -= forces.col(a);
+  }
 }
 
 double ElasticElements::strain_energy(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const {
@@ -330,13 +378,15 @@ std::vector<double> lumped_masses(const Model& model) {
   return mass;
 }
 
-void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass) {
+void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass,
+                       std::span<const double> density_factor) {
   std::vector<Eigen::Vector3d> points;
   std::vector<double> weights;
   double N[10];
   for (std::size_t e = element_begin; e < element_end; ++e) {
     const int n = checked_node_count(model, e);
-    const double rho = model.materials[model.grains[model.element_grain[e]].material].density;
+    const double rho = model.materials[model.grains[model.element_grain[e]].material].density *
+                       (density_factor.empty() ? 1.0 : density_factor[e]);
     const std::uint32_t* nodes = element_nodes(model, e);
     if (n == 4) {
       const double share = rho * std::abs(element_volume(model, e)) / 4;

@@ -131,14 +131,22 @@ void parse_sample(const toml::table& root, const Table& top, const std::string& 
   }
 }
 
+/// A table's local_damping: the share of a node's unbalanced force that opposes its motion, [0, 1).
+double local_damping(const Table& t, double fallback) {
+  const double v = t.number("local_damping", fallback);
+  if (!(v >= 0 && v < 1)) t.fail(fmt::format("local_damping must lie in [0, 1) (a share of the unbalanced force; got {:g})", v));
+  return v;
+}
+
 /// The [run] table; returns its duration (0 when not given).
 double parse_run(const toml::table& root, const Table& top, const std::string& file, Scene& s) {
   double duration = 0;
   if (const toml::table* run = root["run"].as_table()) {
     const Table r(*run, file + ": [run]",
-                  {"duration", "time_step", "time_step_fraction", "element_safety", "rigid_contact_nodes", "gravity", "damping", "contact",
-                   "frame_interval", "series_interval", "checkpoint_interval", "overlap_tolerance", "relax_overlaps",
-                   "keep_initial_overlaps", "mass_scaled_share", "max_steps"});
+                  {"duration", "time_step", "time_step_fraction", "element_safety", "rigid_contact_nodes", "gravity", "damping",
+                   "stiffness_damping", "local_damping", "contact", "frame_interval", "series_interval", "checkpoint_interval",
+                   "overlap_tolerance", "relax_overlaps", "keep_initial_overlaps", "mass_scaled_share", "element_step_target",
+                   "max_added_mass_share", "max_steps"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
     s.time_step_fraction = r.positive("time_step_fraction", 1.0);
@@ -151,6 +159,8 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
     if (!(s.rigid_contact_nodes >= 1)) r.fail("rigid_contact_nodes must be at least 1");
     s.gravity = r.vector("gravity", Eigen::Vector3d::Zero());
     s.damping = r.non_negative("damping", 0);
+    s.stiffness_damping = r.non_negative("stiffness_damping", 0);
+    s.local_damping = local_damping(r, 0);
     s.contact = r.flag("contact", true);
     s.frame_interval = r.non_negative("frame_interval", 0);
     s.series_interval = r.non_negative("series_interval", 0);
@@ -166,6 +176,14 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
     if (!(s.mass_scaled_share >= 0 && s.mass_scaled_share <= 0.2))
       r.fail(fmt::format("mass_scaled_share must lie in [0, 0.2] (the share of grains whose density may be scaled; got {:g})",
                          s.mass_scaled_share));
+    s.element_step_target = r.non_negative("element_step_target", 0);
+    s.max_added_mass_share = r.number("max_added_mass_share", s.max_added_mass_share);
+    if (!(s.max_added_mass_share > 0 && s.max_added_mass_share <= 1))
+      r.fail(fmt::format("max_added_mass_share must lie in (0, 1] (the mass selective mass scaling may add, a share of the "
+                         "grains' mass; got {:g})",
+                         s.max_added_mass_share));
+    if (r.has("max_added_mass_share") && !(s.element_step_target > 0))
+      r.fail("max_added_mass_share bounds selective mass scaling, which element_step_target asks for; give both or neither");
     s.max_steps = r.number("max_steps", s.max_steps);
     // Step counts stay exact in a double and an int64 below 1e15.
     if (!(s.max_steps >= 1 && s.max_steps <= 1e15))
@@ -357,12 +375,15 @@ std::vector<std::string> parse_platens(const toml::table& root, const std::strin
 void parse_stages(const toml::table& root, const std::string& file, const std::vector<std::string>& platen_names,
                   Scene& s) {
   for (const toml::table* st : tables(root, "stages", file)) {
-    const Table t(*st, file + ": [[stages]] " + std::to_string(s.stages.size() + 1), {"name", "duration", "damping", "platens"});
+    const Table t(*st, file + ": [[stages]] " + std::to_string(s.stages.size() + 1),
+                  {"name", "duration", "damping", "stiffness_damping", "local_damping", "platens"});
     StageSpec spec;
     spec.name = t.text("name", "stage" + std::to_string(s.stages.size() + 1));
     if (!t.has("duration")) t.fail("duration is missing (s)");
     spec.duration = t.positive("duration", 0);
     if (t.has("damping")) spec.damping = t.non_negative("damping", 0);
+    if (t.has("stiffness_damping")) spec.stiffness_damping = t.non_negative("stiffness_damping", 0);
+    if (t.has("local_damping")) spec.local_damping = local_damping(t, 0);
     spec.platen_velocity.resize(s.platens.size());
     if (t.has("platens")) {
       const toml::table* velocities = t.raw()["platens"].as_table();
@@ -413,12 +434,31 @@ void finish_stages(const std::string& file, double duration, Scene& s) {
   }
 }
 
+/// Selective mass scaling changes the grains' inertia, so it is for quasi-static runs only: a
+/// triaxial test (servo-controlled consolidation, shearing at a small inertial number) or stages
+/// that all damp the grains.
+void check_element_mass_scaling(const std::string& file, const Scene& s) {
+  if (!(s.element_step_target > 0) || s.triaxial) return;
+  for (const StageSpec& st : s.stages)
+    if (!(st.damping.value_or(s.damping) > 0 || st.stiffness_damping.value_or(s.stiffness_damping) > 0 ||
+          st.local_damping.value_or(s.local_damping) > 0))
+      throw UsageError(file + ": [run] element_step_target (selective mass scaling) is for quasi-static runs only, a " +
+                       "[triaxial] test or stages that all damp the grains, and stage '" + st.name +
+                       "' has no damping; give it damping, stiffness_damping or local_damping, or drop element_step_target");
+}
+
 }  // namespace
 
 double Scene::total_duration() const {
   double t = 0;
   for (const StageSpec& s : stages) t += s.duration;
   return t;
+}
+
+double Scene::largest_stiffness_damping() const {
+  double beta = stiffness_damping;
+  for (const StageSpec& s : stages) beta = std::max(beta, s.stiffness_damping.value_or(stiffness_damping));
+  return beta;
 }
 
 namespace {
@@ -442,8 +482,8 @@ Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path
   check_grains(file, s);
   const std::vector<std::string> platen_names = parse_platens(root, file, s);
   parse_stages(root, file, platen_names, s);
-  if (parse_triaxial_table(root, top, file, duration, s)) return s;
-  finish_stages(file, duration, s);
+  if (!parse_triaxial_table(root, top, file, duration, s)) finish_stages(file, duration, s);
+  check_element_mass_scaling(file, s);
   return s;
 }
 }  // namespace

@@ -37,6 +37,14 @@ Eigen::Quaterniond rotation_by(const Eigen::Vector3d& theta) {
 
 bool finite(const Eigen::Vector3d& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
+/// Local non-viscous damping of an unbalanced force (or torque) f on a DOF moving at v:
+/// -local |f_k| sign(v_k) per component.
+Eigen::Vector3d local_damping_force(const Eigen::Vector3d& f, const Eigen::Vector3d& v, double local) {
+  Eigen::Vector3d d;
+  for (int k = 0; k < 3; ++k) d[k] = -local * std::abs(f[k]) * double((v[k] > 0) - (v[k] < 0));
+  return d;
+}
+
 /// The node masses contact uses for its dashpots and its stable step: a deformable grain's lumped
 /// node masses; for a rigid grain, the body's effective mass at the node in its stiffest direction,
 /// 1 / (1/M + |r|^2 / I_min), shared by the `rigid_contact_nodes` nodes assumed to touch at once
@@ -59,6 +67,13 @@ std::vector<double> contact_masses(const Model& model, std::span<const double> l
 
 }  // namespace
 
+double damped_critical_step(double critical, double beta) {
+  if (!std::isfinite(critical)) return critical;
+  return critical * critical / (std::sqrt(critical * critical + beta * beta) + beta);
+}
+
+double undamped_critical_step(double step, double beta) { return std::sqrt(step * (step + 2 * beta)); }
+
 Solver::Solver(const Model& model, const SolverOptions& options)
     : model_(&model), options_(options), elements_(model), mass_(lumped_masses(model)) {
   if (model.grains.empty()) throw UsageError("the FDEM model has no grain; add grains to the scene");
@@ -79,7 +94,11 @@ Solver::Solver(const Model& model, const SolverOptions& options)
   platen_force_.assign(model.platens.size(), Eigen::Vector3d::Zero());
   platen_stiffness_.assign(model.platens.size(), 0.0);
   force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
+  viscous_force_.assign(model.nodes.size(), Eigen::Vector3d::Zero());
   rigid_loads_.assign(grains, RigidLoad{});
+  if (!(options.stiffness_damping >= 0) || !(options.local_damping >= 0 && options.local_damping < 1))
+    throw UsageError(fmt::format("stiffness damping ({:g} s) must not be negative and local damping ({:g}) must lie in [0, 1)",
+                                 options.stiffness_damping, options.local_damping));
   if (!(options.rigid_contact_nodes >= 1))
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes);
@@ -106,12 +125,28 @@ void Solver::refresh_masses(std::span<const std::uint32_t> grains) {
   for (std::uint32_t g : grains) {
     const Grain& grain = m.grains.at(g);
     std::fill(mass_.begin() + grain.node_begin, mass_.begin() + grain.node_end, 0.0);
-    add_lumped_masses(m, grain.element_begin, grain.element_end, mass_);
+    add_lumped_masses(m, grain.element_begin, grain.element_end, mass_, element_density_factor_);
     bodies_[g] = body_properties(m, g);
     if (grain.kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
   }
   contact_mass_ = contact_masses(m, mass_, bodies_, options_.rigid_contact_nodes);
   if (contact_) contact_->set_node_masses(contact_mass_);
+}
+
+void Solver::scale_element_densities(std::vector<double> factor) {
+  if (state_.step != 0) throw UsageError("element densities can only be scaled before the first step");
+  const Model& m = *model_;
+  if (factor.size() != m.element_count() || !std::all_of(factor.begin(), factor.end(), [](double f) { return f >= 1; }))
+    throw UsageError("scale_element_densities takes one factor of at least 1 per element");
+  std::vector<std::uint32_t> grains;
+  for (std::size_t g = 0; g < m.grains.size(); ++g)
+    for (std::uint32_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
+      if (factor[e] != element_density_factor(e)) {
+        grains.push_back(static_cast<std::uint32_t>(g));
+        break;
+      }
+  element_density_factor_ = std::move(factor);
+  refresh_masses(grains);
 }
 
 void Solver::stop_grains() {
@@ -129,31 +164,42 @@ void Solver::set_boundary(Boundary* boundary) {
 
 void Solver::set_platen_velocity(std::size_t p, const Eigen::Vector3d& velocity) { state_.platens.at(p).velocity = velocity; }
 
-StepLimits Solver::time_step_limits() const {
-  StepLimits s;
-  s.element_critical = kInfinity;
-  for (std::size_t e = 0; e < model_->element_count(); ++e) {
+std::vector<double> Solver::element_critical_steps() const {
+  std::vector<double> steps(model_->element_count(), kInfinity);
+  for (std::size_t e = 0; e < steps.size(); ++e) {
     if (!elements_.is_elastic(e)) continue;
     const Material& m = model_->materials[model_->grains[model_->element_grain[e]].material];
     const double k = model_->nodes_of(e) == 10 ? kCriticalTet10 : kCriticalTet4;
-    const double dt = k * element_min_altitude(*model_, e) / dilatational_wave_speed(m);
-    if (dt < s.element_critical) s.element_critical = dt, s.element = e;
+    // The wave speed goes with 1 / sqrt(density).
+    steps[e] = k * element_min_altitude(*model_, e) / dilatational_wave_speed(m) * std::sqrt(element_density_factor(e));
   }
-  s.element_stable = s.element_critical * options_.element_safety;
+  return steps;
+}
+
+StepLimits Solver::time_step_limits(double stiffness_damping) const {
+  StepLimits s;
+  const std::vector<double> steps = element_critical_steps();
+  s.element_critical = kInfinity;
+  for (std::size_t e = 0; e < steps.size(); ++e)
+    if (steps[e] < s.element_critical) s.element_critical = steps[e], s.element = e;
+  // The damped step grows with the undamped one, so the element with the shortest sets both.
+  s.stiffness_damping = stiffness_damping;
+  s.element_stable = damped_critical_step(s.element_critical, stiffness_damping) * options_.element_safety;
   s.contact_stable = contact_ ? contact_->stable_time_step() : kInfinity;
   s.boundary_stable = boundary_ ? boundary_->stable_time_step(*contact_) : kInfinity;
   return s;
 }
 
-void Solver::check_time_step(double dt) const {
-  const StepLimits s = time_step_limits();
+void Solver::check_time_step(double dt, double stiffness_damping) const {
+  const StepLimits s = time_step_limits(stiffness_damping);
   if (!(dt > 0) || !std::isfinite(dt)) throw UsageError(fmt::format("the time step {:.4g} s must be positive", dt));
   if (dt > s.stable())
     throw UsageError(fmt::format(
         "the time step {:.4g} s is above the stable limit {:.4g} s (elements: {:.4g} s = {} x the critical {:.4g} s of "
-        "element {}; contact: {:.4g} s; boundary: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
-        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical, s.element, s.contact_stable,
-        s.boundary_stable, s.stable()));
+        "element {}{}; contact: {:.4g} s; boundary: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
+        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical, s.element,
+        stiffness_damping > 0 ? fmt::format(" damped by stiffness_damping {:.4g} s", stiffness_damping) : "",
+        s.contact_stable, s.boundary_stable, s.stable()));
 }
 
 Eigen::Vector3d Solver::angular_velocity(std::size_t g, const Eigen::Quaterniond& q, const Eigen::Vector3d& L) const {
@@ -194,6 +240,7 @@ StepReport Solver::step(double dt) {
   const std::size_t grains = m.grains.size();
   const bool first = state_.step == 0;
   const double a = 0.5 * options_.damping * dt;  // damping over half a step
+  const double beta = options_.stiffness_damping, local = options_.local_damping;
   const Eigen::Vector3d g_acc = options_.gravity;
   // Per-grain sums, added in grain order afterwards so the totals do not depend on the threads
   // (kept between steps: a step allocates nothing).
@@ -219,6 +266,10 @@ StepReport Solver::step(double dt) {
     if (grain.kind == GrainKind::rigid) continue;
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) force_[i].setZero();
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
+    if (beta > 0) {  // from the velocities of the last half step: the stable step is damped_critical_step's
+      for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) viscous_force_[i].setZero();
+      elements_.add_viscous_forces(state_.x, state_.v, beta, grain.element_begin, grain.element_end, viscous_force_);
+    }
   }
 
   times_.elements += seconds_since();
@@ -254,13 +305,19 @@ StepReport Solver::step(double dt) {
     if (grain.kind != GrainKind::rigid) {
       for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
         const double mi = mass_[i];
-        const Eigen::Vector3d f = force_[i] + mi * g_acc;
         const Eigen::Vector3d v_old = state_.v[i];
+        // Damping forces besides the mass-proportional one, booked as dissipated by their work.
+        Eigen::Vector3d f_damp = beta > 0 ? viscous_force_[i] : Eigen::Vector3d(Eigen::Vector3d::Zero());
+        Eigen::Vector3d f = force_[i] + mi * g_acc + f_damp;
+        if (local > 0) {
+          const Eigen::Vector3d f_local = local_damping_force(f, v_old, local);
+          f += f_local, f_damp += f_local;
+        }
         const Eigen::Vector3d v_new = first ? Eigen::Vector3d(v_old + 0.5 * dt * (f / mi - options_.damping * v_old))
                                             : Eigen::Vector3d(((1 - a) * v_old + dt * f / mi) / (1 + a));
         const Eigen::Vector3d v_mid = first ? v_old : Eigen::Vector3d(0.5 * (v_old + v_new));
         kinetic[g] += 0.5 * mi * v_mid.squaredNorm();
-        damped[g] += dt * options_.damping * mi * v_mid.squaredNorm();
+        damped[g] += dt * (options_.damping * mi * v_mid.squaredNorm() - f_damp.dot(v_mid));
         gravity_work[g] += dt * mi * g_acc.dot(v_mid);
         state_.v[i] = v_new;
         state_.x[i] += dt * v_new;
@@ -270,17 +327,24 @@ StepReport Solver::step(double dt) {
     }
     RigidBodyState& b = state_.bodies[g];
     const double M = bodies_[g].mass;
-    const Eigen::Vector3d F = M * g_acc + rigid_loads_[g].force, T = rigid_loads_[g].torque();
+    Eigen::Vector3d F = M * g_acc + rigid_loads_[g].force, T = rigid_loads_[g].torque();
     const Eigen::Vector3d V_old = b.velocity, L_old = b.angular_momentum;
+    Eigen::Vector3d F_local = Eigen::Vector3d::Zero(), T_local = Eigen::Vector3d::Zero();
+    if (local > 0) {  // on the body's six DOFs, the spin's sign from the last half step's angular velocity
+      F_local = local_damping_force(F, V_old, local);
+      T_local = local_damping_force(T, angular_velocity(g, b.orientation, L_old), local);
+      F += F_local, T += T_local;
+    }
     const Eigen::Vector3d V_new = first ? Eigen::Vector3d(V_old + 0.5 * dt * (F / M - options_.damping * V_old))
                                         : Eigen::Vector3d(((1 - a) * V_old + dt * F / M) / (1 + a));
     const Eigen::Vector3d L_new = first ? Eigen::Vector3d(L_old + 0.5 * dt * (T - options_.damping * L_old))
                                         : Eigen::Vector3d(((1 - a) * L_old + dt * T) / (1 + a));
     const Eigen::Vector3d V_mid = first ? V_old : Eigen::Vector3d(0.5 * (V_old + V_new));
     const Eigen::Vector3d L_mid = first ? L_old : Eigen::Vector3d(0.5 * (L_old + L_new));
-    const double spin = angular_velocity(g, b.orientation, L_mid).dot(L_mid);
+    const Eigen::Vector3d omega_mid = angular_velocity(g, b.orientation, L_mid);
+    const double spin = omega_mid.dot(L_mid);
     kinetic[g] = 0.5 * M * V_mid.squaredNorm() + 0.5 * spin;
-    damped[g] = dt * options_.damping * (M * V_mid.squaredNorm() + spin);
+    damped[g] = dt * (options_.damping * (M * V_mid.squaredNorm() + spin) - F_local.dot(V_mid) - T_local.dot(omega_mid));
     gravity_work[g] = dt * M * g_acc.dot(V_mid);
     // Orientation: rotate by dt times the angular velocity at the half step, found by fixed point
     // on the midpoint orientation (second order, keeps a free body's energy).

@@ -13,6 +13,8 @@ SolverOptions solver_options(const Scene& scene) {
   SolverOptions options;
   options.gravity = scene.gravity;
   options.damping = scene.damping;
+  options.stiffness_damping = scene.stiffness_damping;
+  options.local_damping = scene.local_damping;
   options.element_safety = scene.element_safety;
   options.rigid_contact_nodes = scene.rigid_contact_nodes;
   options.contact.enabled = scene.contact;
@@ -41,6 +43,10 @@ RunStart start_run(const Scene& scene, Model& model, const std::string& where) {
   // On the settled model: the grains that set the time step made heavier.
   start.scaling = scale_fastest_grains(model, *start.solver, scene.mass_scaled_share);
   if (start.scaling.grains > 0) start.solver->refresh_masses(start.scaling.scaled);
+  // Then the elements that set the element step, before any step and after the grains' densities.
+  if (scene.element_step_target > 0)
+    start.element_scaling = scale_limiting_elements(*start.solver, scene.element_step_target, scene.largest_stiffness_damping(),
+                                                    scene.max_added_mass_share, where);
   if (scene.overlaps.keep && start.solver->contact_model())
     start.solver->contact_model()->keep_initial_overlaps(start.overlaps.remaining);
   return start;
@@ -48,10 +54,10 @@ RunStart start_run(const Scene& scene, Model& model, const std::string& where) {
 
 RunSchedule schedule_run(const Scene& scene, const Solver& solver, const std::string& where) {
   RunSchedule s;
-  s.limits = solver.time_step_limits();
+  s.limits = solver.time_step_limits(scene.largest_stiffness_damping());
   s.dt = scene.time_step;
   if (s.dt > 0) {
-    solver.check_time_step(s.dt);
+    solver.check_time_step(s.dt, scene.largest_stiffness_damping());
   } else {
     s.dt = scene.time_step_fraction * s.limits.stable();
     if (!std::isfinite(s.dt))
@@ -79,6 +85,7 @@ nlohmann::json run_parameters(const Scene& scene, const std::string& scene_path,
                               const RunStart& start, const RunSchedule& schedule, int threads, const std::string& restart) {
   const OverlapSettlement& o = start.overlaps;
   const MassScaling& m = start.scaling;
+  const ElementMassScaling& em = start.element_scaling;
   return {{"scene", scene_path},
           {"scene_text", scene_text},
           {"time_step", schedule.dt},
@@ -98,7 +105,20 @@ nlohmann::json run_parameters(const Scene& scene, const std::string& scene_path,
             {"largest_factor", m.largest_factor},
             {"mass_share", m.mass_share},
             {"step_before", m.step_before},
-            {"step_after", m.step_after}}}};
+            {"step_after", m.step_after}}},
+          {"damping",
+           {{"mass_proportional", scene.damping},
+            {"stiffness_proportional", scene.stiffness_damping},
+            {"local", scene.local_damping}}},
+          {"element_mass_scaling",
+           {{"target_step", em.target_step},
+            {"step_before", em.step_before},
+            {"step_after", em.step_after},
+            {"elements", em.elements},
+            {"largest_factor", em.largest_factor},
+            {"added_mass", em.added_mass},
+            {"added_mass_share", em.added_share()},
+            {"max_added_mass_share", em.max_added_share}}}};
 }
 
 nlohmann::json triaxial_summary_json(const TriaxialRunSummary& s) {
@@ -123,6 +143,8 @@ void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule,
     while (n >= schedule.stage_end[stage]) ++stage;
     const StageSpec& s = scene.stages[stage];
     solver.set_damping(s.damping.value_or(scene.damping));
+    solver.set_stiffness_damping(s.stiffness_damping.value_or(scene.stiffness_damping));
+    solver.set_local_damping(s.local_damping.value_or(scene.local_damping));
     for (std::size_t k = 0; k < scene.platens.size(); ++k)
       solver.set_platen_velocity(k, s.platen_velocity[k].value_or(scene.platens[k].velocity));
     if (n % schedule.frame_every == 0) add_frame();

@@ -64,6 +64,13 @@ class ElasticElements {
   /// their strain energy, J. Elements of rigid grains contribute nothing.
   double add_internal_forces(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end,
                              std::span<Eigen::Vector3d> f) const;
+  /// Subtracts the stiffness-proportional (Rayleigh) damping forces of elements [begin, end) from f:
+  /// the viscous stress S_v = beta (lambda tr(dE) I + 2 mu dE) of the strain rate dE = sym(F^T dF)
+  /// (dF from the node velocities v) through the same f_a = sum_q w_q F S_v dN_a/dX as the elastic
+  /// stress, i.e. beta times the material stiffness applied to v. A rigid motion has dE = 0: spin
+  /// and flight are not damped. beta in s.
+  void add_viscous_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v, double beta,
+                          std::size_t begin, std::size_t end, std::span<Eigen::Vector3d> f) const;
   /// Strain energy of elements [begin, end), J.
   double strain_energy(std::span<const Eigen::Vector3d> x, std::size_t begin, std::size_t end) const;
   /// Cauchy stress (tension positive, Pa) at each quadrature point of element e: sigma = F S F^T / J.
@@ -98,6 +105,8 @@ class ElasticElements {
                              double& energy) const;
   void add_quadratic_tet_forces(std::span<const Eigen::Vector3d> x, std::size_t element, std::span<Eigen::Vector3d> f,
                                 double& energy) const;
+  /// Subtracts the forces of a 4-node element's first Piola-Kirchhoff stress times its volume, V F S.
+  static void subtract_linear_tet_forces(const LinearTet& tet, const Eigen::Matrix3d& stress_volume, std::span<Eigen::Vector3d> f);
 
   const Model* model_;
   std::vector<Lame> lame_;                   ///< per material
@@ -112,8 +121,11 @@ class ElasticElements {
 /// every node gets a positive mass and the total is exact: straight-edged, corners m/36 and
 /// mid-edge nodes 4m/27). Rigid grains' nodes get the lumping of their mesh kind.
 std::vector<double> lumped_masses(const Model& model);
-/// Adds the lumped masses of elements [element_begin, element_end) to `mass` (one per model node).
-void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass);
+/// Adds the lumped masses of elements [element_begin, element_end) to `mass` (one per model node);
+/// with `density_factor` (one per model element) each element's density is multiplied by its factor
+/// (selective mass scaling, mass_scaling.hpp).
+void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass,
+                       std::span<const double> density_factor = {});
 
 /// Mass properties of one grain's mesh, exact for straight and curved elements.
 struct BodyProperties {

@@ -54,6 +54,8 @@ struct StageSpec {
   std::string name;
   double duration = 0;                                        ///< s
   std::optional<double> damping;                              ///< 1/s; unset: the run's
+  std::optional<double> stiffness_damping;                    ///< s; unset: the run's
+  std::optional<double> local_damping;                        ///< unset: the run's
   std::vector<std::optional<Eigen::Vector3d>> platen_velocity;  ///< per platen; unset: the platen's own
 };
 
@@ -103,6 +105,8 @@ struct Scene {
   std::optional<TriaxialSpec> triaxial;   ///< a triaxial test instead of [[stages]]
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
   double damping = 0;                     ///< mass-proportional alpha, 1/s
+  double stiffness_damping = 0;           ///< stiffness-proportional beta, s (SolverOptions::stiffness_damping)
+  double local_damping = 0;               ///< local non-viscous damping, [0, 1) (SolverOptions::local_damping)
   double time_step = 0;                   ///< s; 0 = the stable limit times time_step_fraction
   /// The automatic step's share of the stable limit, in (0, 1]: a few per cent less is the smallest
   /// perturbation of a run, which shows how far its chaotic outcome scatters (docs/fdemrun.md).
@@ -118,9 +122,17 @@ struct Scene {
   /// [run] mass_scaled_share: the share of the grains, those with the smallest contact time steps,
   /// whose density is scaled so the step is the rest's (scale_fastest_grains); 0 = none.
   double mass_scaled_share = 0;
+  /// [run] element_step_target: the element stable step (s) selective mass scaling lifts the
+  /// deformable grains' elements to (scale_limiting_elements); 0 = none. Quasi-static runs only: a
+  /// [triaxial] test, or [[stages]] that all damp.
+  double element_step_target = 0;
+  /// [run] max_added_mass_share: the most mass selective mass scaling may add, a share of the grains' mass.
+  double max_added_mass_share = 0.01;
   /// Most steps a run may take, estimated before it starts (check_step_ceiling); [run] max_steps.
   double max_steps = 1e7;
   double total_duration() const;
+  /// The largest stiffness damping of the run and its stages, s: the one the time step must allow for.
+  double largest_stiffness_damping() const;
   /// Index in the built model of primitive grain k (the model file's grains come first).
   std::size_t primitive_grain(std::size_t k) const { return (model ? model->model->grains.size() : 0) + k; }
 };

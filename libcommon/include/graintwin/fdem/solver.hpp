@@ -1,7 +1,8 @@
 #pragma once
 // The explicit FDEM step (docs/methods.md, FDEM): M a + C v = F_ext + F_con - F_int with a lumped mass
-// M, mass-proportional damping C = alpha M and central differences (velocities at half steps,
-// positions at whole steps). Deformable grains (tet4/tet10) move node by node; rigid grains are
+// M, damping C = alpha M + beta K (mass- and stiffness-proportional; the latter settles deformable
+// grains' own vibrations), optional local non-viscous damping and central differences (velocities at
+// half steps, positions at whole steps). Deformable grains (tet4/tet10) move node by node; rigid grains are
 // 6-DOF bodies whose nodes follow the body, so contact sees every grain as a moving surface. The
 // time step is checked against the element and contact limits; NaN or runaway energy stops the
 // run with the step number and the likely cause. A rigid grain's step touches only its body: contact
@@ -46,7 +47,7 @@ struct SolverState {
   std::vector<Eigen::Vector3d> v;     ///< node velocities at time - dt/2 (at `time` before the first step), m/s
   std::vector<RigidBodyState> bodies; ///< one per grain; used by rigid grains only
   std::vector<PlatenState> platens;
-  double dissipated = 0;              ///< J, cumulative: damping, contact dashpots and slip
+  double dissipated = 0;              ///< J, cumulative: damping (all three kinds), contact dashpots and slip
   double external_work = 0;           ///< J, cumulative: gravity and platens on the grains
   double energy_input = 0;            ///< J, initial mechanical energy plus every positive work increment
 };
@@ -54,6 +55,14 @@ struct SolverState {
 struct SolverOptions {
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
   double damping = 0;            ///< alpha of C = alpha M, 1/s
+  /// beta of C = beta K, s: a viscous stress beta C : dE in the deformable grains' elements, from
+  /// their strain rate at the last half step. It damps a mode of frequency omega at the ratio
+  /// beta omega / 2 and shortens the element step (damped_critical_step).
+  double stiffness_damping = 0;
+  /// Local non-viscous (Cundall) damping: -local_damping |f_k| sign(v_k) on every component k of a
+  /// node's (a rigid grain's: its body's force and torque) unbalanced force f, v at the last half
+  /// step; in [0, 1).
+  double local_damping = 0;
   double element_safety = 0.8;   ///< fraction of the element critical step used as the stable limit
   ContactOptions contact;
   /// Nodes of a rigid grain assumed to touch at once: contact sees each node of a rigid grain as
@@ -78,11 +87,21 @@ struct Energies {
   }
 };
 
+/// The stable step of central differences for a mode of undamped critical step `critical` = 2 / omega
+/// under stiffness-proportional damping beta (s): (2 / omega)(sqrt(1 + xi^2) - xi) with
+/// xi = beta omega / 2, written sqrt(critical^2 + beta^2) - beta without its cancellation. Exact for
+/// a damping force from the velocity of the previous half step, as the solver's.
+double damped_critical_step(double critical, double beta);
+/// Its inverse: the undamped critical step whose damped step is `step`, sqrt(step (step + 2 beta)).
+double undamped_critical_step(double step, double beta);
+
 /// The time-step limits, s; infinity where a limit does not apply.
 struct StepLimits {
   double element_critical = 0;   ///< min over deformable elements of k h_min / c (k = 0.671 tet4, 0.327 tet10)
   std::size_t element = 0;       ///< the element that sets it
-  double element_stable = 0;     ///< element_critical x element_safety
+  double stiffness_damping = 0;  ///< beta (s) the element limit allows for
+  /// damped_critical_step(element_critical, stiffness_damping) x element_safety
+  double element_stable = 0;
   double contact_stable = 0;     ///< ContactModel::stable_time_step(), or infinity without contact
   double boundary_stable = std::numeric_limits<double>::infinity();  ///< Boundary::stable_time_step()
   double stable() const { return std::min({element_stable, contact_stable, boundary_stable}); }
@@ -150,14 +169,26 @@ class Solver {
   void set_platen_velocity(std::size_t platen, const Eigen::Vector3d& velocity);
   /// Sets the mass-proportional damping alpha, 1/s (loading stages change it between steps).
   void set_damping(double alpha) { options_.damping = alpha; }
+  /// Sets the stiffness-proportional damping beta, s, and the local damping (stages change them
+  /// between steps; the time step must allow for the largest beta, time_step_limits(beta)).
+  void set_stiffness_damping(double beta) { options_.stiffness_damping = beta; }
+  void set_local_damping(double local) { options_.local_damping = local; }
   /// Stops every grain: node velocities and rigid bodies' momenta to zero (the forming procedure
   /// stops the grains before the membrane replaces the wall).
   void stop_grains();
   /// The model's density of `grains` changed (mass scaling): their node masses, rigid-body
   /// properties and contact masses are computed again, as a new Solver of the model would have them
-  /// (before the first step; building one again would redo every grain's elements and the contact
-  /// trees).
+  /// with the element density factors kept (before the first step; building one again would redo
+  /// every grain's elements and the contact trees).
   void refresh_masses(std::span<const std::uint32_t> grains);
+  /// Selective mass scaling (mass_scaling.hpp): element e's density is taken `factor[e]` times
+  /// (one per model element, at least 1) in its node masses and its critical step; the masses of
+  /// the grains it touches are computed again (refresh_masses). Only before the first step.
+  void scale_element_densities(std::vector<double> factor);
+  /// Per element, its density factor (all 1 without selective mass scaling).
+  double element_density_factor(std::size_t element) const {
+    return element_density_factor_.empty() ? 1.0 : element_density_factor_[element];
+  }
   /// Steps `boundary` with the grains from the next step on (not owned; nullptr removes it).
   /// UsageError without contact (a boundary acts through it).
   void set_boundary(Boundary* boundary);
@@ -165,9 +196,16 @@ class Solver {
   ContactModel* contact_model() { return contact_.get(); }
   const ContactModel* contact_model() const { return contact_.get(); }
 
-  StepLimits time_step_limits() const;
+  /// Per element, its undamped critical step k h_min / c at its density (times its density factor),
+  /// s; infinity for elements of rigid grains.
+  std::vector<double> element_critical_steps() const;
+  /// The limits with the solver's stiffness damping, or with `stiffness_damping` (s; a run whose
+  /// stages change it takes the largest).
+  StepLimits time_step_limits() const { return time_step_limits(options_.stiffness_damping); }
+  StepLimits time_step_limits(double stiffness_damping) const;
   /// UsageError with both limits when dt is not below the stable step (or not positive).
-  void check_time_step(double dt) const;
+  void check_time_step(double dt) const { check_time_step(dt, options_.stiffness_damping); }
+  void check_time_step(double dt, double stiffness_damping) const;
   /// One central-difference step. DataError naming the step and the likely cause when the state
   /// becomes non-finite or the energy runs away.
   StepReport step(double dt);
@@ -229,6 +267,10 @@ class Solver {
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
   /// Per node, the last step's forces on deformable grains (a rigid grain's nodes hold none).
   std::vector<Eigen::Vector3d> force_;
+  /// Per node, the last step's stiffness-proportional damping forces (with stiffness damping only).
+  std::vector<Eigen::Vector3d> viscous_force_;
+  /// Per element, its density factor of selective mass scaling; empty without it.
+  std::vector<double> element_density_factor_;
   /// Per grain, the contact and boundary forces on the rigid ones in the last step (ContactModel::rigid_loads).
   std::vector<RigidLoad> rigid_loads_;
   std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact

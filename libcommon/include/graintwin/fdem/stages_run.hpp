@@ -31,19 +31,21 @@ struct RunStart {
   std::unique_ptr<Solver> solver;  ///< built on the model given to start_run, which must outlive it
   OverlapSettlement overlaps;
   MassScaling scaling;
+  ElementMassScaling element_scaling;  ///< selective mass scaling ([run] element_step_target)
 };
 
 /// Builds the solver of `scene` (gravity, damping, element safety, contact) on `model` (the scene's
 /// built model), checks or relaxes the initial overlaps (settle_initial_overlaps; `where` names the
-/// scene file in its errors), scales the fastest grains' density ([run] mass_scaled_share) and,
-/// with [run] keep_initial_overlaps, makes the overlaps left force-free. Relaxation and scaling
+/// scene file in its errors), scales the fastest grains' density ([run] mass_scaled_share), scales
+/// the elements that limit the step ([run] element_step_target; UsageError beyond [run]
+/// max_added_mass_share) and, with [run] keep_initial_overlaps, makes the overlaps left force-free. Relaxation and scaling
 /// change `model`, so the solver is built anew after each.
 RunStart start_run(const Scene& scene, Model& model, const std::string& where);
 
 /// The run's time step and its step counts.
 struct RunSchedule {
   double dt = 0;                         ///< s: the scene's [run] time_step, else the stable limit
-  StepLimits limits;                     ///< of the solver
+  StepLimits limits;                     ///< of the solver, with the scene's largest stiffness damping
   std::uint64_t total = 0;               ///< steps of all [[stages]] (0 for a triaxial test)
   std::vector<std::uint64_t> stage_end;  ///< per stage, the step count at its end
   std::uint64_t frame_every = 0;         ///< steps between frames; `total` (first frame only) without [run] frame_interval
@@ -65,7 +67,7 @@ void set_initial_velocities(Solver& solver, const Scene& scene);
 
 /// The results' parameters (JSON object): the scene (its path and text), the time step and the
 /// stages' steps, the threads, the restart checkpoint ("" for none), the model file, what was done
-/// to the initial overlaps and the mass scaling.
+/// to the initial overlaps, the damping and both kinds of mass scaling.
 nlohmann::json run_parameters(const Scene& scene, const std::string& scene_path, const std::string& scene_text,
                               const RunStart& start, const RunSchedule& schedule, int threads, const std::string& restart);
 
@@ -82,7 +84,7 @@ struct StagesRunHooks {
 
 /// Runs the scene's [[stages]] (named in the results with their start times) from the solver's
 /// current step (0, or a restart's) up to step `last` (schedule.total, or earlier to stop): each
-/// step takes its stage's damping and platen velocities; a series row every row_every steps, a
+/// step takes its stage's damping (all three kinds) and platen velocities; a series row every row_every steps, a
 /// frame every frame_every steps and one after the last step.
 void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule, std::uint64_t last, ResultsWriter& writer,
                 const StagesRunHooks& hooks);
