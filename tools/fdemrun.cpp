@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -242,6 +243,17 @@ void log_end(const ResultsWriter& writer, const Solver& solver, int threads, dou
   spdlog::info("output: {} frames in {:.3g} s{}, {} checkpoints in {:.3g} s", writer.frames(), writer.frame_seconds(),
                vtk_seconds > 0 ? fmt::format(" (and their VTK in {:.3g} s)", vtk_seconds) : std::string(), checkpoints.written,
                checkpoints.seconds);
+  const auto& grains = solver.model().grains;
+  const auto deformable = std::count_if(grains.begin(), grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; });
+  std::vector<double> differences;
+  for (double d : writer.stress_differences())
+    if (std::isfinite(d)) differences.push_back(d);
+  if (deformable > 0 && !differences.empty())
+    spdlog::info("stress of the deformable grains ({}), Love-Weber of their contact and boundary forces against their elements' "
+                 "average: median relative difference {:.3g} in the last frame that has one ({:.3g} to {:.3g} over {} frames; "
+                 "inertia, damping and gravity make it)",
+                 deformable, differences.back(), *std::min_element(differences.begin(), differences.end()),
+                 *std::max_element(differences.begin(), differences.end()), differences.size());
 }
 
 }  // namespace

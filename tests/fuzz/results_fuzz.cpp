@@ -14,6 +14,7 @@ GRAINTWIN_FUZZ_TARGET(results) {
                                     const micro::SimulationGrains grains = micro::read_simulation_grains(p);
                                     std::vector<double> times;
                                     micro::simulation_states(p, grains, &times);
+                                    graintwin::fdem::read_results_grains(p);
                                     const std::size_t frames = graintwin::fdem::results_frame_count(p);
                                     for (std::size_t k = 0; k < frames; ++k) {
                                       const auto frame = graintwin::fdem::read_results_frame(p, k);
