@@ -1,6 +1,8 @@
 // Fuzz target: kind=fdem_results files (fdem/results_file.cpp) as tracks2micro, fdem2forces and
-// report read them (micro/simulation.cpp), structure-aware (h5_mutator.hpp).
+// report (micro/simulation.cpp) and fdemrun's most_loaded rule (fdem/grain_selection.cpp) read them,
+// structure-aware (h5_mutator.hpp).
 #include "fuzz_support.hpp"
+#include "graintwin/fdem/grain_selection.hpp"
 #include "graintwin/fdem/results_file.hpp"
 #include "graintwin/micro/simulation.hpp"
 #include "h5_mutator.hpp"
@@ -20,6 +22,7 @@ GRAINTWIN_FUZZ_TARGET(results) {
                                       const auto frame = graintwin::fdem::read_results_frame(p, k);
                                       micro::frame_contacts(frame, grains, p, k);
                                       micro::frame_centroids(frame, grains, p, k);
+                                      graintwin::fdem::mean_stress_by_label(p, k);  // fdemrun's most_loaded rule
                                     }
                                     micro::simulation_branch_roses(p, {0, frames - 1}, 6, 12);
                                   });
