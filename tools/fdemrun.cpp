@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/stages_run.hpp"
 #include "graintwin/io/atomic_output.hpp"
+#include "graintwin/micro/micro_file.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
@@ -177,7 +179,20 @@ void log_start(const Scene& scene, const RunStart& start) {
                  1e3 * settled.deepest_after);
 }
 
+/// How many grains of each kind the run models, and the rule that picked a model file's deformable ones.
+nlohmann::json grain_kinds_json(const Scene& scene, const Model& model) {
+  const std::array<std::size_t, 3> n = grain_kind_counts(model);
+  const bool picked = scene.model && scene.model->deformable;
+  return {{"rigid", n[0]}, {"tet4", n[1]}, {"tet10", n[2]}, {"deformable_rule", picked ? scene.model->deformable->rule : ""}};
+}
+
 void log_schedule(const Scene& scene, const Model& model, const RunSchedule& s) {
+  const std::array<std::size_t, 3> kinds = grain_kind_counts(model);
+  spdlog::info("grains: {} rigid, {} tet4, {} tet10{}", kinds[0], kinds[1], kinds[2],
+               scene.model && scene.model->deformable
+                   ? fmt::format("; the model file's deformable ones ({}) picked by {}", scene.model->deformable->grains.size(),
+                                 scene.model->deformable->rule)
+                   : std::string());
   spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s{}, contact {:.4g} s), {}",
                model.grains.size(), model.nodes.size(), model.element_count(), model.platens.size(), s.dt,
                s.limits.element_stable,
@@ -252,6 +267,17 @@ void log_end(const ResultsWriter& writer, const Solver& solver, int threads, dou
   spdlog::info("output: {} frames in {:.3g} s{}, {} checkpoints in {:.3g} s", writer.frames(), writer.frame_seconds(),
                vtk_seconds > 0 ? fmt::format(" (and their VTK in {:.3g} s)", vtk_seconds) : std::string(), checkpoints.written,
                checkpoints.seconds);
+  const auto& grains = solver.model().grains;
+  const auto deformable = std::count_if(grains.begin(), grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; });
+  std::vector<double> differences;
+  for (double d : writer.stress_differences())
+    if (std::isfinite(d)) differences.push_back(d);
+  if (deformable > 0 && !differences.empty())
+    spdlog::info("stress of the deformable grains ({}), Love-Weber of their contact and boundary forces against their elements' "
+                 "average: median relative difference {:.3g} in the last frame that has one ({:.3g} to {:.3g} over {} frames; "
+                 "inertia, damping and gravity make it)",
+                 deformable, differences.back(), *std::min_element(differences.begin(), differences.end()),
+                 *std::max_element(differences.begin(), differences.end()), differences.size());
 }
 
 }  // namespace
@@ -265,7 +291,9 @@ int main(int argc, char** argv) {
     check_files(o, ctx.force());
     std::optional<io::AtomicOutput> vtk_out;
     if (!o.vtk.empty()) vtk_out.emplace(o.vtk, ctx.force());
-    const Scene scene = read_scene(o.scene, o.model);
+    const Scene scene = read_scene(o.scene, o.model, [](const fs::path& micro, std::size_t state, std::size_t increment) {
+      return micro::d2min_by_label(micro::read_micro_tables(micro), micro.string(), state, increment);
+    });
     if (scene.model) io::declare_input(scene.model->path);
     const std::string scene_text = file_bytes(o.scene);
     const std::string model_bytes = scene.model ? file_bytes(scene.model->path) : std::string();  // a restart needs the same model file too
@@ -284,6 +312,7 @@ int main(int argc, char** argv) {
     else if (o.restart.empty())
       set_initial_velocities(solver, scene);
     nlohmann::json p = run_parameters(scene, o.scene.string(), scene_text, start, schedule, ctx.threads(), o.restart.string());
+    p["grain_kinds"] = grain_kinds_json(scene, model);
     ResultsWriter writer(out.temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());

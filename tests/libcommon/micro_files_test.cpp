@@ -176,6 +176,25 @@ TEST(MicroFile, D2minOfAnIncrementIsFoundByLabelInItsFirstState) {
   refused(tracks, grains_labelled({5, 6, 8}), 0, 1, "made from tracks");
 }
 
+// fdemrun's [model.deformable] d2min rule: the D2min of any increment, keyed by the labels of any
+// state (the scan the twin was meshed from); tracks absent there or undefined are left out.
+TEST(MicroFile, D2minByLabelOfAStateOverAnIncrement) {
+  const MicroTables m = three_grain_micro();
+  EXPECT_EQ(d2min_by_label(m, "m.h5", 0, 0), (std::map<std::uint32_t, double>{{5, 0.1}, {6, 0.3}, {8, 0.5}}));
+  EXPECT_EQ(d2min_by_label(m, "m.h5", 0, 1), (std::map<std::uint32_t, double>{{5, 0.2}, {6, 0.4}}));  // grain 8's is NaN
+  EXPECT_EQ(d2min_by_label(m, "m.h5", 2, 0), (std::map<std::uint32_t, double>{{5, 0.1}, {6, 0.3}}));  // grain 8 left before state 2
+  const auto refusal = [&](std::size_t state, std::size_t increment) {
+    try {
+      d2min_by_label(m, "m.h5", state, increment);
+    } catch (const UsageError& e) {
+      return e.message();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal(3, 0), "m.h5 has no state 3 (it holds 3); give a state below 3");
+  EXPECT_EQ(refusal(0, 2), "m.h5 has no increment 2 (it holds 2); give an increment below 2");
+}
+
 TEST(ForcesAnalysis, FrameRangeAndWindowsFollowTheOptions) {
   ForcesOptions o = forces_frame_range(6, -1, -1, 0, "r.h5");
   EXPECT_EQ(o.first, 0u);

@@ -2,11 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interval.hpp"
+#include "graintwin/core/statistics.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/table_checks.hpp"
@@ -22,6 +24,13 @@ namespace {
 std::string frame_group(std::size_t k) { return fmt::format("{}/{:06d}", sr::frames, k); }
 
 void push(std::vector<double>& out, const Eigen::Vector3d& v) { out.insert(out.end(), {v[0], v[1], v[2]}); }
+
+/// Appends the 9 components of `s`, compression positive (docs/conventions.md), row by row.
+template <class T>
+void push_compression(std::vector<T>& out, const Eigen::Matrix3d& s) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) out.push_back(static_cast<T>(-s(i, j)));
+}
 
 }  // namespace
 
@@ -42,6 +51,14 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& path, const Solver& so
   file_.write(sr::grain_kind, kind);
   file_.write(sr::grain_mass, mass, units("kg"));
   file_.write(sr::grain_volume, volume, units("m^3"));
+  // The rows of every frame's element stresses: the deformable grains' elements, in model order.
+  std::vector<std::uint32_t> element, element_grain;
+  for (std::size_t g = 0; g < m.grains.size(); ++g)
+    if (m.grains[g].kind != GrainKind::rigid)
+      for (std::uint32_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
+        element.push_back(e), element_grain.push_back(static_cast<std::uint32_t>(g));
+  file_.write(sr::element_index, element);
+  file_.write(sr::element_grain, element_grain);
   std::vector<std::string> names;
   for (const Platen& p : m.platens) names.push_back(p.name);
   file_.write_strings(sr::platen_name, names);
@@ -91,20 +108,34 @@ void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boun
   }
   const Model& m = solver.model();
   const hsize_t G = m.grains.size();
-  std::vector<double> centroid, rotation, stress, velocity, spin;
+  std::vector<double> centroid, rotation, stress, love_weber_stress, velocity, spin;
+  std::vector<Eigen::Matrix3d> grain_stress(G);
+  const std::vector<Eigen::Matrix3d> love_weber = solver.love_weber_stresses();
   for (std::size_t g = 0; g < G; ++g) {
     push(centroid, solver.grain_centroid(g));
     push(velocity, solver.grain_velocity(g));
     push(spin, solver.grain_spin(g));
     const Eigen::Quaterniond q = solver.grain_rotation(g);
     rotation.insert(rotation.end(), {q.w(), q.x(), q.y(), q.z()});
-    const Eigen::Matrix3d s = -solver.grain_stress(g);  // compression positive (docs/conventions.md)
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) stress.push_back(s(i, j));
+    grain_stress[g] = solver.grain_stress(g);
+    push_compression(stress, grain_stress[g]);
+    push_compression(love_weber_stress, love_weber[g]);
   }
   file_.write(group + "/" + sr::frame_centroid, centroid.data(), {G, 3}, units("m"));
   file_.write(group + "/" + sr::frame_rotation, rotation.data(), {G, 4}, units("1"));
   file_.write(group + "/" + sr::frame_stress, stress.data(), {G, 3, 3}, units("Pa"));
+  file_.write(group + "/" + sr::frame_love_weber_stress, love_weber_stress.data(), {G, 3, 3}, units("Pa"));
+  const double difference = median_stress_difference(grain_stress, love_weber, m.grains);
+  file_.set_attr(group, sr::frame_stress_difference, difference);
+  stress_differences_.push_back(difference);
+  // float32: 7 digits are far below the elements' discretisation error and halve the largest
+  // dataset of a deformable twin (docs/formats.md).
+  std::vector<float> element_stress;
+  for (std::size_t g = 0; g < G; ++g)
+    if (m.grains[g].kind != GrainKind::rigid)
+      for (std::uint32_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
+        push_compression(element_stress, solver.element_stress(e));
+  file_.write(group + "/" + sr::frame_element_stress, element_stress.data(), {element_stress.size() / 9, 3, 3}, units("Pa"));
   file_.write(group + "/" + sr::frame_velocity, velocity.data(), {G, 3}, units("m/s"));
   file_.write(group + "/" + sr::frame_spin, spin.data(), {G, 3}, units("rad/s"));
   std::vector<std::uint32_t> pair;
@@ -242,6 +273,51 @@ std::size_t results_frame_count(const std::filesystem::path& path) {
   return f.list(sr::frames).size();
 }
 
+double relative_stress_difference(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  const double scale = std::max(a.norm(), b.norm());
+  return scale > 0 ? (a - b).norm() / scale : std::numeric_limits<double>::quiet_NaN();
+}
+
+double median_stress_difference(std::span<const Eigen::Matrix3d> element_average, std::span<const Eigen::Matrix3d> love_weber,
+                                std::span<const Grain> grains) {
+  std::vector<double> differences;
+  for (std::size_t g = 0; g < grains.size(); ++g)
+    if (grains[g].kind != GrainKind::rigid)
+      if (const double d = relative_stress_difference(element_average[g], love_weber[g]); std::isfinite(d)) differences.push_back(d);
+  return differences.empty() ? std::numeric_limits<double>::quiet_NaN() : median(std::move(differences));
+}
+
+ResultsGrains read_results_grains(const std::filesystem::path& path) {
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
+  ResultsGrains r;
+  r.label = f.read<std::uint32_t>(sr::grain_label);
+  const auto kind = f.read<std::uint8_t>(sr::grain_kind);
+  if (kind.size() != r.label.size())
+    throw DataError(path.string() + ": /grains/label and /grains/kind differ in length; rerun fdemrun");
+  for (std::uint8_t k : kind) {
+    if (k > static_cast<std::uint8_t>(GrainKind::tet10))
+      throw DataError(path.string() + ": /grains/kind holds " + std::to_string(k) + ", not a grain kind (0 rigid, 1 tet4, 2 tet10); rerun fdemrun");
+    r.kind.push_back(static_cast<GrainKind>(k));
+  }
+  return r;
+}
+
+FrameElementStress read_frame_element_stress(const std::filesystem::path& path, std::size_t k) {
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
+  const std::string g = frame_group(k), stress = g + "/" + sr::frame_element_stress;
+  if (!f.exists(g)) throw DataError(path.string() + " has no frame " + std::to_string(k) + "; it holds " +
+                                    std::to_string(f.list(sr::frames).size()));
+  if (!f.exists(sr::element_grain) || !f.exists(stress))
+    throw DataError(path.string() + " holds no element stresses (written before they were kept); rerun fdemrun");
+  FrameElementStress r;
+  r.element = f.read<std::uint32_t>(sr::element_index);
+  r.grain = f.read<std::uint32_t>(sr::element_grain);
+  r.stress = f.read<float>(stress);
+  if (r.grain.size() != r.element.size() || r.stress.size() != 9 * r.element.size())
+    throw DataError(path.string() + ": frame " + std::to_string(k) + "'s element stresses do not match /elements; rerun fdemrun");
+  return r;
+}
+
 ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k) {
   const io::H5File f = io::open_kind(path, schema::kind::fdem_results, "pass the output of fdemrun");
   const std::string g = frame_group(k);
@@ -256,6 +332,7 @@ ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t k
   r.stress = f.read<double>(at(sr::frame_stress));
   r.velocity = f.read<double>(at(sr::frame_velocity));
   if (f.exists(at(sr::frame_spin))) r.spin = f.read<double>(at(sr::frame_spin));  // files before 2026-11-28 have none
+  if (f.exists(at(sr::frame_love_weber_stress))) r.love_weber_stress = f.read<double>(at(sr::frame_love_weber_stress));
   r.pair = f.read<std::uint32_t>(at(sr::contact_pair));
   r.platen = f.read<std::int32_t>(at(sr::contact_platen));
   r.point = f.read<double>(at(sr::contact_point));

@@ -15,7 +15,9 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/message.hpp"
 #include "graintwin/core/strings.hpp"
+#include "graintwin/fdem/grain_selection.hpp"
 #include "graintwin/fdem/model_file.hpp"
+#include "graintwin/fdem/results_file.hpp"
 #include "scene_table.hpp"
 
 namespace graintwin::fdem {
@@ -83,13 +85,114 @@ TriaxialSpec parse_triaxial(const Table& t, const std::optional<SampleCylinder>&
   return spec;
 }
 
+/// A whole number in [0, 2^32) under `key`, or `fallback` when it is absent.
+std::size_t whole(const Table& t, const char* key, std::size_t fallback) {
+  const double v = t.non_negative(key, static_cast<double>(fallback));
+  if (v != std::floor(v) || v >= 4294967296.0) t.fail(std::string(key) + " must be a whole number, e.g. 0");
+  return static_cast<std::size_t>(v);
+}
+
+/// An input file of a rule, relative to the scene's folder; it must exist.
+std::filesystem::path rule_file(const Table& t, const std::filesystem::path& scene, const std::string& what) {
+  if (!t.has("file")) t.fail("file is missing: the " + what);
+  const std::filesystem::path file = scene.parent_path() / t.text("file", "");
+  if (!std::filesystem::exists(file))
+    t.fail("file " + file.string() + " does not exist (paths are relative to the scene's folder); give the " + what);
+  return file;
+}
+
+/// The [model.deformable] table: the rule that picks the model file's deformable grains (each rule
+/// takes only its own keys) and the grains it picks, checked before any heavy work.
+DeformableSelection parse_deformable(const toml::table& table, const std::string& where, const std::filesystem::path& scene,
+                                     const Model& model, const std::string& model_name, const D2minByLabel& d2min) {
+  const toml::node* rule_node = table.get("rule");
+  if (!rule_node) throw UsageError(where + ": rule is missing: pick the deformable grains by labels, box, d2min or most_loaded");
+  const std::string rule = rule_node->value<std::string>().value_or("");
+  const Table t = [&] {  // each rule takes only its own keys
+    if (rule == "labels") return Table(table, where, {"rule", "labels"});
+    if (rule == "box") return Table(table, where, {"rule", "min", "max"});
+    if (rule == "d2min") return Table(table, where, {"rule", "file", "state", "increment", "above"});
+    if (rule == "most_loaded") return Table(table, where, {"rule", "file", "frame", "count", "share"});
+    throw UsageError(where + ": rule '" + excerpt(rule) + "' is unknown; use labels, box, d2min or most_loaded");
+  }();
+  DeformableSelection out;
+  const auto wrap = [&](const auto& read) {  // a reader's refusal, named under this table
+    try {
+      return read();
+    } catch (const UsageError& e) {
+      t.fail(e.message());
+    }
+  };
+  if (rule == "labels") {
+    const toml::array* a = table.get("labels") ? table.get("labels")->as_array() : nullptr;
+    const std::string usage = "labels must be a non-empty array of grain labels, e.g. [3, 7, 12]";
+    if (!a || a->empty()) t.fail(usage);
+    std::vector<std::uint32_t> labels;
+    for (const toml::node& item : *a) {
+      const auto v = item.value<double>();
+      if (!v || *v < 1 || *v != std::floor(*v) || *v >= 4294967296.0) t.fail(usage);
+      labels.push_back(static_cast<std::uint32_t>(*v));
+    }
+    std::vector<std::uint32_t> unknown;
+    out.grains = grains_with_labels(model, labels, unknown);
+    if (!unknown.empty())
+      t.fail(fmt::format("label {} is not a grain of {}{}; give labels of its grains", unknown.front(), model_name,
+                         unknown.size() > 1 ? fmt::format(" (nor are {} more)", unknown.size() - 1) : std::string()));
+    out.rule = fmt::format("labels ({} given)", labels.size());
+  } else if (rule == "box") {
+    if (!t.has("min") || !t.has("max")) t.fail("a box needs min and max, its corners in m, e.g. min = [-1e-3, -1e-3, 0]");
+    const Eigen::Vector3d lo = t.vector("min", Eigen::Vector3d::Zero()), hi = t.vector("max", Eigen::Vector3d::Zero());
+    if (!(lo.array() < hi.array()).all()) t.fail("min must lie below max on every axis");
+    out.grains = grains_in_box(model, lo, hi);
+    out.rule = fmt::format("centroids in the box [{:g}, {:g}, {:g}] to [{:g}, {:g}, {:g}] m", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  } else if (rule == "d2min") {
+    const std::filesystem::path micro = rule_file(t, scene, "kind=micro file of tracks2micro");
+    if (!t.has("increment")) t.fail("increment is missing: the row of the micro file's /increments whose D2min picks the grains");
+    if (!t.has("above")) t.fail("above is missing: the D2min / d50^2 above which a grain deforms, e.g. 0.01");
+    const std::size_t state = whole(t, "state", 0), increment = whole(t, "increment", 0);
+    const double above = t.non_negative("above", 0);
+    if (!d2min) t.fail("this program cannot read kind=micro files; run the scene with fdemrun");
+    const std::map<std::uint32_t, double> values = wrap([&] { return d2min(micro, state, increment); });
+    out.grains = grains_above(model, values, above);
+    out.rule = fmt::format("D2min / d50^2 above {:g} over increment {} of {} (labels of its state {})", above, increment,
+                           micro.filename().string(), state);
+  } else {
+    const std::filesystem::path results = rule_file(t, scene, "kind=fdem_results file of an earlier run, e.g. a rigid twin's consolidation");
+    if (t.has("count") == t.has("share")) t.fail("give count (a number of grains) or share (of the model file's grains), one of them");
+    const std::size_t frames = wrap([&] { return results_frame_count(results); });
+    if (frames == 0) t.fail(results.string() + " holds no frame; give the results of a run that saved frames");
+    const std::size_t frame = whole(t, "frame", frames - 1);
+    if (frame >= frames) t.fail(fmt::format("frame {} is not in {} (it holds {}); give a frame below {}", frame, results.string(), frames, frames));
+    std::size_t count = 0;
+    if (t.has("count")) {
+      count = whole(t, "count", 0);
+      if (count < 1 || count > model.grains.size())
+        t.fail(fmt::format("count must lie in [1, {}], the model file's grains (got {})", model.grains.size(), count));
+    } else {
+      const double share = t.number("share", 0);
+      if (!(share > 0 && share <= 1)) t.fail(fmt::format("share must lie in (0, 1] (got {:g})", share));
+      count = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(share * static_cast<double>(model.grains.size()))));
+    }
+    const std::map<std::uint32_t, double> stress = wrap([&] { return mean_stress_by_label(results, frame); });
+    std::size_t missing = 0;
+    for (const Grain& g : model.grains) missing += stress.count(g.label) == 0;
+    if (missing > 0)
+      t.fail(fmt::format("{} lacks {} of the {} grains of {}; give the results of a run of the same model file", results.string(),
+                         missing, model.grains.size(), model_name));
+    out.grains = grains_highest(model, stress, count);
+    out.rule = fmt::format("the {} grains of highest mean stress in frame {} of {}", count, frame, results.filename().string());
+  }
+  if (out.grains.empty()) t.fail("the rule picks no grain of " + model_name + "; widen it (or leave [model.deformable] out)");
+  return out;
+}
+
 /// The [model] table (or --model, or a model given in memory): the shapes2mesh model and its sample cylinder.
 void parse_model(toml::table& root, const Table& top, const std::filesystem::path& path,
                  const std::filesystem::path& model_file, const std::shared_ptr<const Model>& given,
-                 const std::string& file, Scene& s) {
+                 const D2minByLabel& d2min, const std::string& file, Scene& s) {
   if ((!model_file.empty() || given) && !root.contains("model")) root.insert("model", toml::table{});
   if (const toml::table* model = root["model"].as_table()) {
-    const Table t(*model, file + ": [model]", {"file", "kind"});
+    const Table t(*model, file + ": [model]", {"file", "kind", "deformable"});
     ModelSource source;
     if (given) {
       source.model = given;
@@ -105,6 +208,13 @@ void parse_model(toml::table& root, const Table& top, const std::filesystem::pat
       if (parse_kind(t) != GrainKind::rigid)
         t.fail("kind may only be \"rigid\" (a mesh keeps its own element order); leave it out to keep the file's kinds");
       source.kind = GrainKind::rigid;
+    }
+    if (t.has("deformable")) {
+      const toml::table* deformable = (*model)["deformable"].as_table();
+      if (!deformable) t.fail("deformable must be a [model.deformable] table");
+      if (source.kind) t.fail("kind = \"rigid\" and [model.deformable] contradict each other; keep one");
+      const std::string name = source.path.empty() ? std::string("the model") : source.path.filename().string();
+      source.deformable = parse_deformable(*deformable, file + ": [model.deformable]", path, *source.model, name, d2min);
     }
     s.sample = source.model->sample;
     s.model = std::move(source);
@@ -463,7 +573,7 @@ double Scene::largest_stiffness_damping() const {
 
 namespace {
 Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path& model_file,
-                  const std::shared_ptr<const Model>& given) {
+                  const std::shared_ptr<const Model>& given, const D2minByLabel& d2min) {
   const std::string file = path.string();
   toml::table root;
   try {
@@ -474,7 +584,7 @@ Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path
   }
   const Table top(root, file, {"run", "model", "sample", "materials", "grains", "platens", "stages", "triaxial"});
   Scene s;
-  parse_model(root, top, path, model_file, given, file, s);
+  parse_model(root, top, path, model_file, given, d2min, file, s);
   parse_sample(root, top, file, s);
   const double duration = parse_run(root, top, file, s);
   const std::vector<std::string> material_names = parse_materials(root, file, s);
@@ -488,13 +598,13 @@ Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path
 }
 }  // namespace
 
-Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file) {
-  return parse_scene(path, model_file, nullptr);
+Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file, const D2minByLabel& d2min) {
+  return parse_scene(path, model_file, nullptr, d2min);
 }
 
-Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model) {
+Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model, const D2minByLabel& d2min) {
   if (!model) throw UsageError("read_scene: give a model");
-  return parse_scene(path, {}, model);
+  return parse_scene(path, {}, model, d2min);
 }
 
 }  // namespace graintwin::fdem

@@ -20,6 +20,17 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
     m = *scene.model->model;
     if (scene.model->kind)
       for (Grain& g : m.grains) g.kind = *scene.model->kind;
+    if (const auto& deformable = scene.model->deformable) {
+      // The picked grains deform with their mesh's element order (also where the file models them
+      // rigid), the others are rigid.
+      std::vector<char> picked(m.grains.size(), 0);
+      for (std::uint32_t g : deformable->grains) picked[g] = 1;
+      for (std::size_t g = 0; g < m.grains.size(); ++g) {
+        Grain& grain = m.grains[g];
+        const bool quadratic = grain.element_end > grain.element_begin && m.nodes_of(grain.element_begin) == 10;
+        grain.kind = !picked[g] ? GrainKind::rigid : quadratic ? GrainKind::tet10 : GrainKind::tet4;
+      }
+    }
   }
   m.materials = scene.materials;
   m.platens.clear();
@@ -49,6 +60,12 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
                                    m.materials[k].name, rule.per_size, h, problem));
   }
   return m;
+}
+
+std::array<std::size_t, 3> grain_kind_counts(const Model& model) {
+  std::array<std::size_t, 3> counts{};
+  for (const Grain& g : model.grains) ++counts[static_cast<std::size_t>(g.kind)];
+  return counts;
 }
 
 double contact_element_size(const Model& model, std::uint32_t material) {

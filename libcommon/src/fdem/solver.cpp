@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -44,6 +45,9 @@ Eigen::Vector3d local_damping_force(const Eigen::Vector3d& f, const Eigen::Vecto
   for (int k = 0; k < 3; ++k) d[k] = -local * std::abs(f[k]) * double((v[k] > 0) - (v[k] < 0));
   return d;
 }
+
+/// The Love-Weber average stress (1/V) sym(sum_n r_n f_n^T) of a moment sum over a volume.
+Eigen::Matrix3d love_weber(const Eigen::Matrix3d& moment, double volume) { return 0.5 * (moment + moment.transpose()) / volume; }
 
 /// The node masses contact uses for its dashpots and its stable step: a deformable grain's lumped
 /// node masses; for a rigid grain, the body's effective mass at the node in its stiffest direction,
@@ -150,6 +154,7 @@ void Solver::scale_element_densities(std::vector<double> factor) {
 }
 
 void Solver::stop_grains() {
+  last_dt_ = 0;  // the velocities no longer lead back to where the last step's forces acted
   for (auto& v : state_.v) v.setZero();
   for (RigidBodyState& b : state_.bodies) {
     b.velocity.setZero();
@@ -384,6 +389,7 @@ StepReport Solver::step(double dt) {
   check_health(e);
   state_.time += dt;
   ++state_.step;
+  last_dt_ = dt;
   times_.motion += seconds_since();
   ++times_.steps;
   return report;
@@ -459,8 +465,49 @@ Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
   // A rigid body has no strain, but its average stress follows from the forces on its surface
   // (Love-Weber): sigma = (1/V) sum_n r_n (x) f_n, the symmetric part, with the contact and
   // boundary forces of the last step where they acted (gravity acts on the body, not on the nodes).
-  const Eigen::Matrix3d& sum = rigid_loads_[g].moment;
-  return 0.5 * (sum + sum.transpose()) / bodies_[g].volume;
+  return love_weber(rigid_loads_[g].moment, bodies_[g].volume);
+}
+
+std::vector<Eigen::Matrix3d> Solver::love_weber_stresses() const {
+  const Model& m = *model_;
+  std::vector<Eigen::Matrix3d> out(m.grains.size(), Eigen::Matrix3d::Zero());
+  // A deformable grain's contact and boundary forces are what the step added to force_ beside
+  // minus its internal forces, f = force_ + f_int, at the positions x_n = x - dt v where they acted.
+  std::vector<Eigen::Vector3d> then, internal;
+  if (last_dt_ > 0) then.resize(m.nodes.size()), internal.resize(m.nodes.size());
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> weights;
+  for (std::size_t g = 0; g < m.grains.size(); ++g) {
+    const Grain& grain = m.grains[g];
+    if (grain.kind == GrainKind::rigid) {
+      out[g] = grain_stress(g);
+      continue;
+    }
+    if (!(last_dt_ > 0)) {  // no step since the start, a stop or an old checkpoint: the forces are unknown
+      out[g].setConstant(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    double mass = 0;
+    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+      then[i] = state_.x[i] - last_dt_ * state_.v[i];
+      internal[i].setZero();
+      centroid += mass_[i] * then[i], mass += mass_[i];
+    }
+    centroid /= mass;
+    elements_.add_internal_forces(then, grain.element_begin, grain.element_end, internal);  // -f_int
+    Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
+    for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i)
+      moment += (then[i] - centroid) * (force_[i] - internal[i]).transpose();
+    double volume = 0;  // at x_n: sum_q w_q det F_q
+    for (std::uint32_t e = grain.element_begin; e < grain.element_end; ++e) {
+      map_rule(m, e, stiffness_rule(m.nodes_of(e)), points, weights);
+      const std::vector<Eigen::Matrix3d> F = elements_.deformation_gradient(then, e);
+      for (std::size_t q = 0; q < F.size(); ++q) volume += weights[q] * F[q].determinant();
+    }
+    out[g] = love_weber(moment, volume);
+  }
+  return out;
 }
 
 Eigen::Matrix3d Solver::element_stress(std::size_t e) const {
@@ -517,6 +564,12 @@ void Solver::save(io::H5File& f, const std::string& group) const {
     for (int r = 0; r < 3; ++r) loads.insert(loads.end(), {l.moment(r, 0), l.moment(r, 1), l.moment(r, 2)});
   }
   f.write(group + "/" + ck::rigid_loads, loads.data(), {rigid_loads_.size(), 12}, exact);
+  // Deformable grains' Love-Weber stress reads the last step's node forces (love_weber_stresses).
+  const auto& grains = model_->grains;
+  if (std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; })) {
+    f.set_attr(group, ck::last_time_step, last_dt_);
+    write_vectors(f, group + "/" + ck::node_force, force_);
+  }
   if (contact_) contact_->save(f, group + "/" + ck::contact);
   if (boundary_) boundary_->save(f, group + "/" + ck::boundary);
 }
@@ -565,9 +618,14 @@ void Solver::load(const io::H5File& f, const std::string& group) {
       rigid_loads[g].moment = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d + 3);
     }
   }
+  const bool has_forces = f.exists(group + "/" + ck::node_force);
+  auto node_force = has_forces ? read_vectors(f, group + "/" + ck::node_force, force_.size())
+                               : std::vector<Eigen::Vector3d>(force_.size(), Eigen::Vector3d::Zero());
   if (contact_) contact_->load(f, group + "/" + ck::contact);
   if (boundary_) boundary_->load(f, group + "/" + ck::boundary);
   state_ = std::move(s);
+  force_ = std::move(node_force);
+  last_dt_ = has_forces ? f.attr_double(group, ck::last_time_step) : 0.0;
   sum_platen_contacts();          // the stiffness, from the restored records
   platen_force_ = platen_force;  // as saved: checkpoints of older runs hold no records
   rigid_loads_ = std::move(rigid_loads);

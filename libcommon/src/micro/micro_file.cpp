@@ -296,4 +296,19 @@ std::vector<double> d2min_of_increment(const MicroTables& m, const std::string& 
   return out;
 }
 
+std::map<std::uint32_t, double> d2min_by_label(const MicroTables& m, const std::string& name, std::size_t state,
+                                               std::size_t increment) {
+  const std::size_t t = m.states.size(), k = m.increments.size();
+  if (state >= t) throw UsageError(fmt::format("{} has no state {} (it holds {}); give a state below {}", name, state, t, t));
+  if (increment >= k)
+    throw UsageError(fmt::format("{} has no increment {} (it holds {}); give an increment below {}", name, increment, k, k));
+  std::map<std::uint32_t, double> out;
+  for (std::size_t i = 0; i < m.grains; ++i) {
+    const std::uint32_t label = m.grain_label[i * t + state];
+    const double d2min = m.grain_d2min[i * k + increment];
+    if (label != 0 && std::isfinite(d2min)) out[label] = d2min;
+  }
+  return out;
+}
+
 }  // namespace graintwin::micro

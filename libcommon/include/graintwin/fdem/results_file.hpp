@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,10 @@ class ResultsWriter {
   void add_frame(const Solver& solver, const TriaxialBoundary* boundary = nullptr,
                  std::optional<double> axial_strain = std::nullopt);
   std::size_t frames() const { return frames_; }
+  /// Per frame, the median over the deformable grains that carry stress of the relative difference
+  /// between their Love-Weber and element-averaged stresses (median_stress_difference); NaN where
+  /// none does.
+  const std::vector<double>& stress_differences() const { return stress_differences_; }
   /// Wall-clock seconds spent writing frames so far.
   double frame_seconds() const { return frame_seconds_; }
   /// Writes the series, the stages, the parameters and the provenance; the file is complete afterwards.
@@ -66,6 +71,7 @@ class ResultsWriter {
   io::H5File file_;
   std::size_t platens_ = 0;
   std::size_t frames_ = 0;
+  std::vector<double> stress_differences_;
   double frame_seconds_ = 0;
   std::vector<SeriesRow> rows_;
   std::string parameters_;
@@ -75,11 +81,21 @@ class ResultsWriter {
   double reference_height_ = 0, reference_volume_ = 0;
 };
 
+/// ||a - b|| / max(||a||, ||b||) (Frobenius norms); NaN when both are zero.
+double relative_stress_difference(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
+/// The median of relative_stress_difference(element_average[g], love_weber[g]) over the deformable
+/// grains g (kind not rigid) where it is defined; NaN when it is nowhere.
+double median_stress_difference(std::span<const Eigen::Matrix3d> element_average, std::span<const Eigen::Matrix3d> love_weber,
+                                std::span<const Grain> grains);
+
 /// Frame k of a results file, as stored.
 struct ResultsFrame {
   double time = 0;
   std::uint64_t step = 0;
   std::vector<double> centroid, rotation, stress, velocity;  ///< G x 3, G x 4, G x 9, G x 3
+  /// G x 9 Love-Weber stress of each grain's contact and boundary forces (compression positive);
+  /// empty in files written before it was kept. A rigid grain's equals its `stress`.
+  std::vector<double> love_weber_stress;
   std::vector<double> spin;  ///< G x 3 angular velocity (rad/s); empty in files written before it was kept
   std::vector<std::uint32_t> pair;                           ///< M x 2
   std::vector<std::int32_t> platen;                          ///< M
@@ -112,6 +128,23 @@ TriaxialSeries read_triaxial_series(const std::filesystem::path& path);
 void check_results_tables(const io::H5File& file);
 std::size_t results_frame_count(const std::filesystem::path& path);
 ResultsFrame read_results_frame(const std::filesystem::path& path, std::size_t frame);
+/// The grain table of a results file: labels and kinds (GrainKind codes), one row per grain of
+/// every frame.
+struct ResultsGrains {
+  std::vector<std::uint32_t> label;
+  std::vector<GrainKind> kind;
+};
+ResultsGrains read_results_grains(const std::filesystem::path& path);
+/// The element stresses of frame k: one row per element of the deformable grains, in model order.
+/// Read apart from read_results_frame: at 16 000 grains of ~170 elements a frame holds 98 MB of them.
+struct FrameElementStress {
+  std::vector<std::uint32_t> element;  ///< E: row in the model's element table
+  std::vector<std::uint32_t> grain;    ///< E: grain row (of /grains and the frames' grain columns)
+  std::vector<float> stress;           ///< E x 9, Pa, volume average over the element, compression positive
+};
+/// DataError naming the file when the frame or the element table is missing (files written before
+/// element stresses were kept; rerun fdemrun).
+FrameElementStress read_frame_element_stress(const std::filesystem::path& path, std::size_t frame);
 
 /// Writes a checkpoint (solver state, contact history, `scene_digest`) to `path`; `also` adds more
 /// (a triaxial test's progress).

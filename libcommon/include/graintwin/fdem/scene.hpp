@@ -6,8 +6,10 @@
 // silently ignored setting.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -59,11 +61,26 @@ struct StageSpec {
   std::vector<std::optional<Eigen::Vector3d>> platen_velocity;  ///< per platen; unset: the platen's own
 };
 
+/// The deformable grains of a model file ([model.deformable], docs/fdemrun.md): the rule that
+/// picked them and the grains it picked; the file's other grains are modelled rigid, the picked
+/// ones keep their mesh's order (tet4 or tet10).
+struct DeformableSelection {
+  std::string rule;                   ///< e.g. "labels 3, 7", "D2min above 0.01 in micro.h5 (increment 2)"
+  std::vector<std::uint32_t> grains;  ///< rows of the model file's grains, ascending, never empty
+};
+
+/// D2min / d50^2 of each track of a kind=micro file over increment `increment`, keyed by the
+/// track's label in state `state`; tracks absent from that state or with D2min undefined are left
+/// out. Given to read_scene by programs that link the micro module (fdemrun: micro::d2min_by_label).
+using D2minByLabel = std::function<std::map<std::uint32_t, double>(const std::filesystem::path& micro, std::size_t state,
+                                                                   std::size_t increment)>;
+
 /// Grains of a kind=fdem_model file (shapes2mesh) taken into the scene.
 struct ModelSource {
   std::filesystem::path path;           ///< empty for a model given in memory
   std::shared_ptr<const Model> model;   ///< as read; build_model copies it
   std::optional<GrainKind> kind;        ///< every grain of the file modelled as this (only rigid: a mesh keeps its order)
+  std::optional<DeformableSelection> deformable;  ///< only these grains deformable, the rest rigid
 };
 
 /// A triaxial test ([triaxial], docs/fdem_triaxial.md): its stages are goal-based (isotropic
@@ -140,10 +157,13 @@ struct Scene {
 /// Parses and checks a scene (and reads its model file, a path relative to the scene's folder, or
 /// `model_file` when given, which replaces [model] file); UsageError naming the file, the table
 /// and the fix on any problem.
-Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file = {});
+/// `d2min` reads the kind=micro file of a [model.deformable] d2min rule (UsageError when the scene
+/// has one and it is not given).
+Scene read_scene(const std::filesystem::path& path, const std::filesystem::path& model_file = {},
+                 const D2minByLabel& d2min = {});
 /// The same with the model's grains given in memory (ModelSource::path empty): [model] file, if
 /// any, is not read.
-Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model);
+Scene read_scene(const std::filesystem::path& path, std::shared_ptr<const Model> model, const D2minByLabel& d2min = {});
 
 /// Appends a sphere or ellipsoid grain to a model. gmsh is linked only into graintwin_mesh, so
 /// programs that mesh pass mesh::append_ellipsoid_grain (mesh/ellipsoid_grain.hpp).
@@ -154,6 +174,9 @@ using CurvedGrainMesher = std::function<void(Model&, const GrainSpec&)>;
 /// penalties set per element size are resolved on the built meshes. UsageError when the scene has
 /// curved grains and no mesher is given, or a per-size penalty names a material no grain uses.
 Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved = {});
+
+/// How many grains of the model are rigid, tet4 and tet10 (indexed by GrainKind).
+std::array<std::size_t, 3> grain_kind_counts(const Model& model);
 
 /// Median element edge at the surfaces of the grains of `material`, m: the surface triangles'
 /// median edge, doubled for 10-node grains (their curved faces are split through the mid-edge

@@ -226,6 +226,14 @@ class Solver {
   Eigen::Matrix3d grain_stress(std::size_t grain) const;
   /// Volume-averaged Cauchy stress of element e, tension positive, Pa (zero in rigid grains).
   Eigen::Matrix3d element_stress(std::size_t element) const;
+  /// Every grain's Love-Weber stress, tension positive, Pa: (1/V) sym(sum_n (x_n - c) (x) f_n) of
+  /// the contact and boundary forces f_n on its nodes in the last step, x_n and c where they acted.
+  /// A rigid grain's is its grain_stress(); a deformable grain's (V its volume at x_n) equals its
+  /// element average when it is at rest in equilibrium without gravity (divergence theorem), so the
+  /// difference measures inertia, damping and gravity. A rigid grain's is zero before the first
+  /// step; a deformable grain's is NaN while its last step's forces are unknown (before the first
+  /// step, after stop_grains, after restoring a checkpoint written before they were kept).
+  std::vector<Eigen::Matrix3d> love_weber_stresses() const;
   /// Grain-pair and grain-platen resultants of the last step (empty without contact).
   std::span<const ContactRecord> contacts() const;
   /// Force the grains exert on platen p in the last step, N.
@@ -273,6 +281,9 @@ class Solver {
   std::vector<double> element_density_factor_;
   /// Per grain, the contact and boundary forces on the rigid ones in the last step (ContactModel::rigid_loads).
   std::vector<RigidLoad> rigid_loads_;
+  /// The last step's time step (0 before the first): with the half-step velocities it gives the
+  /// positions where force_ acted, for the Love-Weber stress of deformable grains.
+  double last_dt_ = 0;
   std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   std::vector<double> platen_stiffness_;       ///< per platen, last step, N/m

@@ -295,16 +295,22 @@ inline constexpr const char* stages = "/stages";                      ///< group
 inline constexpr const char* stage_name = "/stages/name";             ///< string (S)
 inline constexpr const char* stage_start = "/stages/start";           ///< (S) s
 inline constexpr const char* parameters = "/run/parameters";          ///< string (1), JSON
+inline constexpr const char* elements = "/elements";                  ///< group of (E) columns: the deformable grains' elements
+inline constexpr const char* element_index = "/elements/element";     ///< uint32 (E), the element's row in the model (kind=fdem_model /elements)
+inline constexpr const char* element_grain = "/elements/grain";       ///< uint32 (E), its grain's row of /grains
 inline constexpr const char* frames = "/frames";                      ///< group; attrs time, step per frame group
 // Attributes of each frame group.
 inline constexpr const char* frame_time = "time";                     ///< s
 inline constexpr const char* frame_step = "step";                     ///< the solver's step count
 inline constexpr const char* frame_axial_strain = "axial_strain";     ///< triaxial scenes: eps_1 from the start of shearing
+inline constexpr const char* frame_stress_difference = "love_weber_difference";  ///< median relative difference, Love-Weber against element stress
 // Members of each frame group.
 inline constexpr const char* frame_grains = "grains";                 ///< group of the frame's (G) columns below
 inline constexpr const char* frame_centroid = "grains/centroid";      ///< (G x 3) m
 inline constexpr const char* frame_rotation = "grains/rotation";      ///< (G x 4) quaternion (w, x, y, z) from the reference
 inline constexpr const char* frame_stress = "grains/stress";          ///< (G x 3 x 3) Pa, compression positive, volume average
+inline constexpr const char* frame_love_weber_stress = "grains/love_weber_stress";  ///< (G x 3 x 3) Pa, compression positive, of the contact and boundary forces
+inline constexpr const char* frame_element_stress = "elements/stress";  ///< float32 (E x 3 x 3) Pa, compression positive, rows of /elements
 inline constexpr const char* frame_velocity = "grains/velocity";      ///< (G x 3) m/s, centroid velocity (half step)
 inline constexpr const char* frame_spin = "grains/spin";              ///< (G x 3) rad/s, angular velocity, world axes (half step)
 inline constexpr const char* contact_pair = "contacts/pair";          ///< uint32 (M x 2) labels, low first; platen contacts: (label, 0)
@@ -327,6 +333,7 @@ inline constexpr const char* time = "time";                        ///< s
 inline constexpr const char* dissipated = "dissipated";            ///< J
 inline constexpr const char* external_work = "external_work";      ///< J
 inline constexpr const char* energy_input = "energy_input";        ///< J
+inline constexpr const char* last_time_step = "last_time_step";    ///< s, the step node_force belongs to (models with deformable grains)
 // Members of /state.
 inline constexpr const char* node_position = "x";                  ///< (nodes x 3) m
 inline constexpr const char* node_velocity = "v";                  ///< (nodes x 3) m/s, at the half step
@@ -334,6 +341,7 @@ inline constexpr const char* bodies = "bodies";                    ///< (G x 13)
 inline constexpr const char* platens = "platens";                  ///< (P x 10) point, normal, velocity, friction
 inline constexpr const char* platen_force = "platen_force";        ///< (P x 3) N, the last step's
 inline constexpr const char* rigid_loads = "rigid_loads";          ///< (G x 12) force and moment sum of rigid grains
+inline constexpr const char* node_force = "node_force";            ///< (nodes x 3) N, the last step's forces on deformable grains' nodes
 inline constexpr const char* contact = "contact";                  ///< group: the contact history, members below
 inline constexpr const char* boundary = "boundary";                ///< group: the sample boundary, members below
 // Attributes and members of /state/contact.

@@ -4,6 +4,7 @@
 // ParaView. Written by tracks2micro.
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -98,5 +99,13 @@ MicroTables read_micro_tables(const std::filesystem::path& path);
 /// from tracks, has no such increment, or lacks some of the grains.
 std::vector<double> d2min_of_increment(const MicroTables& micro, const std::string& name, const SimulationGrains& grains,
                                        std::size_t from, std::size_t to);
+
+/// D2min / d50^2 of each track of `micro` (read from the file `name`) over its increment
+/// `increment`, keyed by the track's label in state `state` (e.g. the scan a twin was meshed from);
+/// tracks absent from that state or whose D2min is undefined are left out. UsageError naming the
+/// file and what it holds when it has no such state or increment (fdemrun's [model.deformable]
+/// d2min rule, fdem::D2minByLabel).
+std::map<std::uint32_t, double> d2min_by_label(const MicroTables& micro, const std::string& name, std::size_t state,
+                                               std::size_t increment);
 
 }  // namespace graintwin::micro
