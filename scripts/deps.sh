@@ -12,6 +12,8 @@ PACKAGES=(
   libtiff-dev libpng-dev libgtest-dev
   # fdemrun scene files (TOML with arrays of tables)
   libtomlplusplus-dev
+  # fdemrun across ranks and machines (mpi/ library; its tests run through mpirun)
+  libopenmpi-dev openmpi-bin
   # tetrahedral meshing of grains (shapes2mesh, fdemrun): only the mesh/ library links it
   libgmsh-dev
   # surface remeshing of grains before gmsh fills them (mesh/surface_remesh.cpp only)

@@ -1,0 +1,60 @@
+#pragma once
+// The MPI layer of fdemrun across ranks (issue 28): one Session per process starts and ends MPI,
+// and the collective operations the decomposed solver needs take it, so none can run before MPI
+// is started. Only this module (library graintwin_mpi) includes <mpi.h>; fdem/decomposition is
+// plain code every rank runs alike. Ranks are MPI_COMM_WORLD's. Run through
+// `mpirun -np N program` (as root: `--allow-run-as-root`; more ranks than cores: `--oversubscribe`;
+// docs/fdemrun.md); a program started without mpirun is a run of one rank.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace graintwin::mpi {
+
+class Session {
+ public:
+  /// Starts MPI (MPI_Init_thread, funneled: OpenMP threads inside a rank, MPI calls from the
+  /// thread that made the session). One per process: UsageError when MPI was started before.
+  Session(int& argc, char**& argv);
+  /// Ends MPI (MPI_Finalize) on every rank alike. When the session is left by an exception on a
+  /// run of several ranks it aborts the whole job (MPI_Abort, exit 1) instead, since the other
+  /// ranks may be waiting in a collective for this one and would wait for ever: so let an error
+  /// found on one rank alone leave main through the session rather than catching it above it.
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  int rank() const { return rank_; }  ///< 0 .. size() - 1
+  int size() const { return size_; }  ///< number of ranks
+
+ private:
+  int rank_ = 0, size_ = 1;
+  int uncaught_at_start_ = 0;  ///< std::uncaught_exceptions() when made: more at the end means unwinding
+};
+
+/// Sums per-grain contributions over all ranks in global grain order: the same bits on every rank
+/// and on every rank count, so a run on R ranks reproduces the one-rank run's sums exactly.
+///
+/// Inputs (each rank its own):
+///   grains      the grains this rank contributes for, any order; each grain by one rank at most
+///   values      grains.size() x components doubles, row-major: grain grains[i]'s at
+///               [i * components, (i + 1) * components)
+///   components  >= 1, the same on every rank (3 for a force)
+/// Returns `components` sums, on every rank: per component, 0.0 + v(g0) + v(g1) + ... over the
+/// contributed grains g0 < g1 < ..., added left to right: what one rank's loop over the grains in
+/// index order computes (a grain that contributes nothing is one that adds 0.0, which changes no
+/// sum but turns -0.0 into +0.0).
+/// How: the contributions are gathered to rank 0 (MPI_Gatherv), sorted by grain there, summed in
+/// that order and the sums broadcast (MPI_Bcast); three collectives. Rank 0 receives
+/// 4 + 8 x components bytes per contribution: cheap for the few grains touching a platen each
+/// step, a cost to measure for sums over every grain on many ranks (docs/fdemrun.md).
+/// Throws DataError on every rank alike when a grain is contributed twice; UsageError on the
+/// calling rank when values' length is not grains' times components.
+std::vector<double> ordered_sum(const Session& session, std::span<const std::uint32_t> grains,
+                                std::span<const double> values, std::size_t components);
+
+/// The sum of one count per rank, on every rank (integers: exact in any order).
+std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count);
+
+}  // namespace graintwin::mpi

@@ -1,0 +1,159 @@
+// mpi/session on 1, 2, 3 and 4 ranks (ctest runs this program through mpirun, label `mpi`): grains
+// owned by the ranks of fdem/decomposition's subdomains are summed in grain order, and every rank
+// count must give the bits one rank's plain loop gives.
+#include "graintwin/mpi/session.hpp"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <random>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/decomposition.hpp"
+
+using namespace graintwin;
+
+namespace {
+
+const mpi::Session* g_session = nullptr;
+
+constexpr std::size_t kGrains = 2000;
+
+// Every rank builds the same scene: centroids in a 4 x 4 x 8 mm box and per-grain values whose
+// magnitudes span 16 decades with both signs, so that the order of a sum changes its bits.
+struct Scene {
+  std::vector<Eigen::Vector3d> centroids;
+  std::vector<double> radii, work, values;  // values: 3 per grain (a force)
+};
+
+Scene make_scene() {
+  std::mt19937_64 rng(2026);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Scene s;
+  for (std::size_t i = 0; i < kGrains; ++i) {
+    s.centroids.emplace_back(4e-3 * unit(rng), 4e-3 * unit(rng), 8e-3 * unit(rng));
+    s.radii.push_back(0.1e-3);
+    s.work.push_back(1.0 + unit(rng));
+    for (int c = 0; c < 3; ++c) s.values.push_back((unit(rng) < 0.5 ? -1 : 1) * std::pow(10.0, 16 * unit(rng) - 8));
+  }
+  return s;
+}
+
+// This rank's share: the grains whose centroid its subdomain holds, and their values.
+struct Share {
+  std::vector<std::uint32_t> grains;
+  std::vector<double> values;
+};
+
+Share owned_share(const Scene& s, int rank, int ranks) {
+  const fdem::Aabb box{Eigen::Vector3d::Zero(), Eigen::Vector3d(4e-3, 4e-3, 8e-3)};
+  const fdem::Subdomains subdomains = fdem::bisect_domain(s.centroids, s.radii, s.work, box, ranks, 0.02e-3);
+  Share share;
+  for (std::uint32_t g = 0; g < kGrains; ++g)
+    if (fdem::owner_rank(subdomains, s.centroids[g]) == rank) {
+      share.grains.push_back(g);
+      share.values.insert(share.values.end(), s.values.begin() + 3 * g, s.values.begin() + 3 * g + 3);
+    }
+  return share;
+}
+
+// One rank's loop over the grains in index order, as the solver sums on a single rank.
+std::vector<double> serial_sum(const Scene& s, bool (*included)(std::uint32_t)) {
+  std::vector<double> sum(3, 0.0);
+  for (std::uint32_t g = 0; g < kGrains; ++g)
+    if (included(g))
+      for (int c = 0; c < 3; ++c) sum[c] += s.values[3 * g + c];
+  return sum;
+}
+
+std::vector<std::uint64_t> bits(const std::vector<double>& v) {
+  std::vector<std::uint64_t> b;
+  for (double x : v) b.push_back(std::bit_cast<std::uint64_t>(x));
+  return b;
+}
+
+bool every_grain(std::uint32_t) { return true; }
+bool platen_grains(std::uint32_t g) { return g % 7 == 3; }  // a sparse few, as those touching a platen
+
+}  // namespace
+
+TEST(MpiSession, RanksAreNumberedFromZero) {
+  EXPECT_GE(g_session->rank(), 0);
+  EXPECT_LT(g_session->rank(), g_session->size());
+  EXPECT_EQ(mpi::sum_over_ranks(*g_session, 1), static_cast<std::uint64_t>(g_session->size()));
+}
+
+TEST(MpiSession, EveryGrainHasExactlyOneOwner) {
+  const Scene s = make_scene();
+  const Share share = owned_share(s, g_session->rank(), g_session->size());
+  EXPECT_EQ(mpi::sum_over_ranks(*g_session, share.grains.size()), kGrains);
+  if (g_session->size() > 1) {
+    EXPECT_LT(share.grains.size(), kGrains) << "each rank owns a part";
+  }
+}
+
+TEST(MpiSession, OrderedSumHasTheOneRankBitsOnAnyRankCount) {
+  const Scene s = make_scene();
+  const std::vector<double> expected = serial_sum(s, every_grain);
+  // The data are order-sensitive: summed backwards they give other bits, so this test can fail.
+  std::vector<double> backwards(3, 0.0);
+  for (std::size_t g = kGrains; g-- > 0;)
+    for (int c = 0; c < 3; ++c) backwards[c] += s.values[3 * g + c];
+  EXPECT_NE(bits(backwards), bits(expected));
+
+  Share share = owned_share(s, g_session->rank(), g_session->size());
+  EXPECT_EQ(bits(mpi::ordered_sum(*g_session, share.grains, share.values, 3)), bits(expected))
+      << "rank " << g_session->rank() << " of " << g_session->size();
+}
+
+TEST(MpiSession, OrderedSumOfAFewGrainsEqualsTheLoopOverAll) {
+  const Scene s = make_scene();
+  Share share = owned_share(s, g_session->rank(), g_session->size());
+  Share few;  // handed over in reverse: the order a rank lists its grains in must not matter
+  for (std::size_t i = share.grains.size(); i-- > 0;)
+    if (platen_grains(share.grains[i])) {
+      few.grains.push_back(share.grains[i]);
+      few.values.insert(few.values.end(), share.values.begin() + 3 * i, share.values.begin() + 3 * i + 3);
+    }
+  EXPECT_EQ(bits(mpi::ordered_sum(*g_session, few.grains, few.values, 3)), bits(serial_sum(s, platen_grains)));
+  const std::vector<double> none = mpi::ordered_sum(*g_session, {}, {}, 2);
+  EXPECT_EQ(none, (std::vector<double>{0.0, 0.0}));
+}
+
+TEST(MpiSession, AGrainSummedTwiceIsRefusedOnEveryRank) {
+  const std::vector<std::uint32_t> grains{7, 7};  // on one rank a duplicate; on several, each rank's too
+  const std::vector<double> values{1.0, 2.0};
+  try {
+    mpi::ordered_sum(*g_session, grains, values, 1);
+    ADD_FAILURE() << "no DataError on rank " << g_session->rank();
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.message(), "grain 7 was summed twice by the ranks: each grain must be contributed by its owner alone");
+  }
+  EXPECT_THROW(mpi::ordered_sum(*g_session, grains, values, 2), UsageError) << "two values for two grains of 2";
+}
+
+namespace {
+
+// `--throw-on-last-rank`: the last rank leaves by an exception, caught above its session, while the
+// others wait for it in a collective. The session must end the whole job (ctest looks for MPI's
+// abort message) where a plain MPI_Finalize would leave the others waiting for ever.
+int leave_one_rank_by_exception(int argc, char** argv) {
+  try {
+    mpi::Session session(argc, argv);
+    if (session.rank() == session.size() - 1) throw DataError("a refusal found on one rank alone");
+    mpi::sum_over_ranks(session, 1);
+  } catch (const Error&) {
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--throw-on-last-rank") return leave_one_rank_by_exception(argc, argv);
+  mpi::Session session(argc, argv);
+  g_session = &session;
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
