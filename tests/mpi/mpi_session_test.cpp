@@ -7,6 +7,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "graintwin/core/error.hpp"
@@ -136,12 +137,17 @@ TEST(MpiSession, AGrainSummedTwiceIsRefusedOnEveryRank) {
 namespace {
 
 // `--throw-on-last-rank`: the last rank leaves by an exception, caught above its session, while the
-// others wait for it in a collective. The session must end the whole job (ctest looks for MPI's
-// abort message) where a plain MPI_Finalize would leave the others waiting for ever.
+// others wait for it in a collective. The session must end the whole job where a plain MPI_Finalize
+// would leave the others waiting for ever (ctest's timeout fails that). ctest looks for this
+// program's own line, not for MPI's abort message, whose printing races with the abort.
 int leave_one_rank_by_exception(int argc, char** argv) {
   try {
     mpi::Session session(argc, argv);
-    if (session.rank() == session.size() - 1) throw DataError("a refusal found on one rank alone");
+    if (session.rank() == session.size() - 1) {
+      std::fprintf(stderr, "rank %d leaves by an exception\n", session.rank());
+      std::fflush(stderr);
+      throw DataError("a refusal found on one rank alone");
+    }
     mpi::sum_over_ranks(session, 1);
   } catch (const Error&) {
   }
