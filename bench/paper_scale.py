@@ -268,7 +268,7 @@ def targets_lines(results):
     return "\n".join(lines) + "\n"
 
 
-# The triaxial twin's rate the project aims for at paper scale, membrane included (issue 25).
+# The triaxial twin's rate the project aims for at paper scale, membrane included (docs/fdem_triaxial.md).
 TARGET_GRAIN_STEPS_PER_CORE = 1e5
 
 

@@ -31,7 +31,7 @@ RollingSetup sand_sphere(double cells, double froude, double beta) {
 
 // Slow rolling (v^2 / (g R) = 0.005) with a contact that does not rebound (beta = 0.7, restitution
 // 0.05): the pivots from vertex to vertex keep the plane loaded, and the sphere turns by the
-// distance over R. The targets: contact in at least 95 % of the steps, rotation x R over
+// distance over R. The targets (docs/fdemrun.md, rolling): contact in at least 95 % of the steps, rotation x R over
 // distance within 1 %.
 TEST(FdemVerifyRolling, ASlowRigidSphereWithADeadContactRollsWithoutHopping) {
   const RollingOutcome r = run_rolling(sand_sphere(8, 0.005, 0.7), mesh::append_ellipsoid_grain);

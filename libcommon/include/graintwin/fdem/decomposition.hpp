@@ -1,5 +1,5 @@
 #pragma once
-// Spatial domain decomposition of an FDEM sample over MPI ranks (issue 28): weighted recursive
+// Spatial domain decomposition of an FDEM sample over MPI ranks (docs/fdemrun.md, across machines): weighted recursive
 // coordinate bisection (RCB) of the grains' centroids into axis-aligned boxes, one per rank, that
 // tile the sample's box; which rank owns a point; which ranks must hold a ghost copy of a grain;
 // the load imbalance and when to rebalance. Plain functions without MPI: every rank computes the
@@ -14,7 +14,7 @@
 
 namespace graintwin::fdem {
 
-/// Imbalance (max load / mean load - 1) above which the grains are bisected again (issue 28).
+/// Imbalance (max load / mean load - 1) above which the grains are bisected again.
 inline constexpr double kRebalanceImbalance = 0.10;
 
 /// One cut of the bisection tree. Points with coordinate < `cut` along `axis` go to `low`, the

@@ -1,5 +1,5 @@
 #pragma once
-// The MPI layer of fdemrun across ranks (issue 28): one Session per process starts and ends MPI,
+// The MPI layer of fdemrun across ranks (docs/fdemrun.md, across machines): one Session per process starts and ends MPI,
 // and the collective operations the decomposed solver needs take it, so none can run before MPI
 // is started. Only this module (library graintwin_mpi) includes <mpi.h>; fdem/decomposition is
 // plain code every rank runs alike. Ranks are MPI_COMM_WORLD's. Run through
