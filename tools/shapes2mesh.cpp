@@ -47,8 +47,9 @@ constexpr const char* kDescription =
     "--elements-per-diameter overrides both. Quality (gamma = 3 inradius / circumradius) is measured per element; "
     "a grain with elements below --gamma-floor is remeshed once at 0.7 h. Slivers, which set fdemrun's element step "
     "(its smallest element altitude), are then removed within each grain to --min-dihedral and --min-altitude by "
-    "moving interior nodes, flipping elements and splitting interior edges, boundary nodes kept (a boundary element "
-    "nothing else lifts is taken out, its volume lost); each "
+    "moving interior nodes, flipping elements and splitting interior edges; where nothing inside lifts an element on "
+    "the boundary (a boundary triangle with a small height bounds it), its boundary nodes slide along the exact "
+    "surface, and what still stays is taken out, its volume lost; each "
     "grain's worst element is written to /mesh/quality, and grains that cannot reach the thresholds are named. Grains smaller than --rigid-below d50 get "
     "a coarse linear mesh and are marked rigid. LABELS also gives the sample cylinder (ct2labels' region) when it "
     "is bounded; otherwise the cylinder encloses the meshed grains. Grains run in parallel: -j threads, each "
@@ -112,8 +113,8 @@ void add_options(cli::Tool& tool, Options& o) {
       ->check(number_in(closed(0, 0.9)))->capture_default_str();
   app.add_option("--min-dihedral", o.mesh.slivers.min_dihedral_degrees,
                  "Sliver removal: every element's smallest dihedral angle at least this (degrees; 0: not checked). Interior "
-                 "nodes are moved, elements flipped and interior edges split, boundary nodes kept (a boundary element nothing "
-                 "else lifts is taken out); a grain that cannot reach it is named in a warning and recorded in /mesh/quality")
+                 "nodes are moved, elements flipped and interior edges split; then boundary nodes slide along the exact surface "
+                 "(a boundary element nothing lifts is taken out); a grain that cannot reach it is named in a warning and recorded in /mesh/quality")
       ->check(number_in(closed(0, 60, "degrees")))->capture_default_str();
   app.add_option("--min-altitude", o.mesh.slivers.min_altitude_ratio,
                  "Sliver removal: every element's smallest altitude at least this share of the grain's median element "
@@ -316,10 +317,14 @@ void log_summary(const mesh::TwinModel& twin, const mesh::TwinSample& sample, co
     std::vector<double> ratios(q.step_ratio);
     std::sort(ratios.begin(), ratios.end());
     const auto worst = static_cast<std::size_t>(std::min_element(q.step_ratio.begin(), q.step_ratio.end()) - q.step_ratio.begin());
+    double volume = 0.0;
+    for (const double v : twin.table.volume) volume += v;
     spdlog::info("slivers (--min-dihedral {:g}, --min-altitude {:g}): {} elements below before the pass, {:.2f} s in it; {} "
-                 "deformable grains still below ({} elements); smallest altitude over the grain's median: {:.2f} at the "
-                 "median grain, {:.2f} at worst (grain {}, element {}, min dihedral {:.1f} deg)",
+                 "boundary nodes slid along the surface ({:+.2g} % of the grains' volume), {} boundary elements taken out "
+                 "({:.2g} %); {} deformable grains still below ({} elements); smallest altitude over the grain's median: "
+                 "{:.2f} at the median grain, {:.2f} at worst (grain {}, element {}, min dihedral {:.1f} deg)",
                  o.mesh.slivers.min_dihedral_degrees, o.mesh.slivers.min_altitude_ratio, c.slivers_before, c.sliver_seconds,
+                 c.slid, volume > 0 ? 100 * c.slid_volume / volume : 0.0, c.peeled, volume > 0 ? 100 * c.peeled_volume / volume : 0.0,
                  c.below_thresholds, c.sliver_elements, ratios[ratios.size() / 2], ratios.front(), q.label[worst], q.worst_element[worst],
                  q.min_dihedral[worst]);
   }

@@ -1,12 +1,16 @@
 // mesh/sliver_removal and the element measures it works with: dihedral angles and altitudes of
 // known tetrahedra (the altitude as fdemrun measures it); a sliver planted among a gmsh mesh's
 // interior nodes, and one whose four corners all lie on the boundary, removed to the thresholds
-// with the boundary, the volume and (10-node) the curved boundary kept; thresholds honoured, and
-// one no element can reach leaving a valid mesh and the count of what stays below.
+// with the boundary, the volume and (10-node) the curved boundary kept; a cap and a needle planted
+// on the boundary, lifted by sliding boundary nodes along the surface (which stay on it) and left
+// without a surface to slide on; thresholds honoured, and one no element can reach leaving a valid
+// mesh and the count of what stays below.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -115,6 +119,46 @@ mesh::TetMesh roof() {
   return m;
 }
 
+constexpr double kBallRadius = 1e-3;
+Vector3d onto_ball(const Vector3d& p) { return kBallRadius * p.normalized(); }
+
+/// The smallest height of any boundary triangle over the mesh's median element altitude.
+double worst_boundary_height(const mesh::TetMesh& m) {
+  double worst = std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh::boundary_triangles(m)) {
+    const Vector3d &a = m.nodes[t[0]], &b = m.nodes[t[1]], &c = m.nodes[t[2]];
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    worst = std::min(worst, (b - a).cross(c - a).norm() / longest);
+  }
+  return worst / mesh::median_altitude(m);
+}
+
+/// Slides one boundary node of a gmsh ball along the sphere towards the middle of the opposite
+/// edge of one of its boundary triangles (a cap) or towards one of that edge's ends (a needle),
+/// until that triangle's height is under 0.12 of the median element altitude with every element
+/// still positive: the element on it is then a sliver that no interior operation can lift.
+void plant_boundary_sliver(mesh::TetMesh& m, bool needle) {
+  const auto all_positive = [&] {
+    for (std::size_t e = 0; e < m.element_count(); ++e) {
+      const std::uint32_t* n = m.element(e);
+      if (!(mesh::tet_min_altitude(m.nodes[n[0]], m.nodes[n[1]], m.nodes[n[2]], m.nodes[n[3]]) > 0.0)) return false;
+    }
+    return true;
+  };
+  for (const auto& t : mesh::boundary_triangles(m)) {
+    const std::uint32_t c = t[2];
+    const Vector3d start = m.nodes[c];
+    const Vector3d target = needle ? m.nodes[t[0]] : Vector3d(0.5 * (m.nodes[t[0]] + m.nodes[t[1]]));
+    for (double share = 0.5; share < 0.995; share += 0.005) {
+      m.nodes[c] = onto_ball(start + share * (target - start));
+      if (!all_positive()) break;
+      if (worst_boundary_height(m) < 0.12) return;
+    }
+    m.nodes[c] = start;
+  }
+  FAIL() << "no boundary node could be slid into a " << (needle ? "needle" : "cap");
+}
+
 }  // namespace
 
 TEST(SliverMeasures, DihedralAndAltitudeOfKnownTetrahedra) {
@@ -204,4 +248,39 @@ TEST(SliverRemoval, ThresholdsAreHonouredAndAnUnreachableOneLeavesAValidMesh) {
   expect_positive(m);
   EXPECT_EQ(boundary_positions(m), surface);
   EXPECT_NEAR(mesh::mesh_volume(m), volume, 1e-9 * volume);
+}
+
+TEST(SliverRemoval, CapAndNeedleOnTheBoundaryAreLiftedBySlidingAlongTheSurface) {
+  for (const bool needle : {false, true})
+    for (const int order : {1, 2}) {
+      SCOPED_TRACE(fmt::format("{}, {}-node", needle ? "needle" : "cap", order == 1 ? 4 : 10));
+      mesh::TetMesh planted = ball(1);
+      plant_boundary_sliver(planted, needle);
+      if (order == 2) {
+        planted = quadratic(planted);
+        for (const auto& t : mesh::boundary_triangles(planted))  // a curved boundary, as snapping leaves it
+          for (const std::uint32_t v : t) planted.nodes[v] = onto_ball(planted.nodes[v]);
+      }
+      const mesh::SliverThresholds t{0.0, 0.3};
+      ASSERT_GE(mesh::mesh_quality(planted, 0.1, t).below_thresholds, 1u);
+      // Without a surface the boundary stays, and so does the sliver on it.
+      mesh::TetMesh kept = planted;
+      const mesh::SliverReport stuck = mesh::remove_slivers(kept, t);
+      EXPECT_GE(stuck.after, 1u);
+      EXPECT_EQ(stuck.slid, 0u);
+      EXPECT_EQ(boundary_positions(kept), boundary_positions(planted));
+      // With the sphere: lifted, its nodes still on it, the volume changed by what is reported.
+      mesh::TetMesh m = planted;
+      const double volume = mesh::mesh_volume(m);
+      const mesh::SliverReport r = mesh::remove_slivers(m, t, onto_ball);
+      EXPECT_EQ(r.after, 0u);
+      EXPECT_GE(r.slid, 1u);
+      EXPECT_EQ(r.peeled, 0u);
+      EXPECT_GE(mesh::mesh_quality(m, 0.1).min_altitude / mesh::median_altitude(planted), 0.3 * 0.999);
+      expect_positive(m);
+      for (const auto& tri : mesh::boundary_triangles(m))
+        for (const std::uint32_t v : tri) EXPECT_NEAR(m.nodes[v].norm(), kBallRadius, 1e-12 * kBallRadius) << "node " << v;
+      if (order == 1) EXPECT_NEAR(mesh::mesh_volume(m) - volume, r.slid_volume, 1e-9 * volume);
+      EXPECT_LT(std::abs(mesh::mesh_volume(m) - volume), 2e-3 * volume);
+    }
 }

@@ -221,7 +221,7 @@ TetMesh run(detail::GmshRequest& q, const TetOptions& o, TetReport* report, Gmsh
   TetMesh m = workers ? workers->run(q, r, o.deadline) : detail::run_gmsh(q, r);
   if (place) place(m);
   if (o.project) snap_to_surface(m, o.project, r);
-  r.slivers = remove_slivers(m, o.slivers);
+  r.slivers = remove_slivers(m, o.slivers, o.project);
   return m;
 }
 

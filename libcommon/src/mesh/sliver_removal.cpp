@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <utility>
 
 #include <Eigen/Geometry>
@@ -18,7 +20,7 @@ using Vec = Eigen::Vector3d;
 using Tet = std::array<std::uint32_t, 4>;
 
 /// Passes over the elements still below the thresholds; each pass tries every one of them.
-constexpr int kPasses = 4;
+constexpr int kPasses = 8;
 /// Largest ring of elements around an edge that edge removal retriangulates (fans from each of
 /// its corners; rings are 4 to 6 in Delaunay meshes).
 constexpr std::size_t kLargestRing = 8;
@@ -30,7 +32,8 @@ constexpr double kSplitShare = 0.25;
 /// which elements are alive and which elements use each node.
 class CornerMesh {
  public:
-  CornerMesh(const TetMesh& mesh, const SliverThresholds& thresholds) : thresholds_(thresholds), x_(mesh.nodes) {
+  CornerMesh(const TetMesh& mesh, const SliverThresholds& thresholds, SurfaceProjection project)
+      : thresholds_(thresholds), project_(std::move(project)), x_(mesh.nodes) {
     fixed_.assign(x_.size(), 0);
     for (const auto& t : boundary_triangles(mesh))
       for (const std::uint32_t v : t) fixed_[v] = 1;
@@ -66,7 +69,8 @@ class CornerMesh {
     return n;
   }
 
-  /// One attempt to lift element e: its interior corners moved, then flips, then a split.
+  /// One attempt to lift element e: its interior corners moved, then flips, then a split, then
+  /// (with a surface to slide on) its boundary corners moved along the surface, then a peel.
   bool improve(std::uint32_t e, SliverReport& report, std::size_t& splits_left) {
     bool any = false;
     for (const std::uint32_t v : tets_[e])
@@ -74,6 +78,13 @@ class CornerMesh {
     if (quality(e) >= 1.0) return true;
     if (flip_faces(e) || remove_edges(e)) return ++report.flips, true;
     if (splits_left > 0 && split_edges(e)) return ++report.splits, --splits_left, true;
+    if (project_) {
+      bool slid = false;
+      for (const std::uint32_t v : tets_[e])
+        if (fixed_[v] && slide(v, report.slid_volume)) ++report.slid, slid = true;
+      if (quality(e) >= 1.0) return true;
+      any = any || slid;
+    }
     if (peel(e, report.peeled_volume)) return ++report.peeled, true;
     return any;
   }
@@ -107,6 +118,9 @@ class CornerMesh {
           if (!moved_[a] && !moved_[b]) mid.emplace(key(a, b), n[4 + k]);
         }
       }
+    // A new mid-edge node on the boundary goes onto the surface the corners were slid along.
+    const std::set<std::pair<std::uint32_t, std::uint32_t>> on_boundary =
+        quadratic && project_ ? boundary_edges() : std::set<std::pair<std::uint32_t, std::uint32_t>>{};
     std::vector<std::uint32_t> elements;
     for (std::uint32_t e = 0; e < tets_.size(); ++e) {
       if (!alive_[e]) continue;
@@ -116,7 +130,10 @@ class CornerMesh {
       for (const auto& edge : fdem::kTet10Edges) {
         const std::uint32_t a = t[static_cast<std::size_t>(edge[0])], b = t[static_cast<std::size_t>(edge[1])];
         const auto [it, added] = mid.emplace(key(a, b), static_cast<std::uint32_t>(nodes.size()));
-        if (added) nodes.push_back(0.5 * (x_[a] + x_[b]));
+        if (added) {
+          const Vec midpoint = 0.5 * (x_[a] + x_[b]);
+          nodes.push_back(on_boundary.contains(key(a, b)) ? project_(midpoint) : midpoint);
+        }
         elements.push_back(it->second);
       }
     }
@@ -200,8 +217,46 @@ class CornerMesh {
     return v == r.front();
   }
 
-  /// Moves free node v within its elements by compass search to raise their worst quality.
-  bool smooth(std::uint32_t v) {
+  /// Edges (lower corner first) of the faces that only one alive element has.
+  std::set<std::pair<std::uint32_t, std::uint32_t>> boundary_edges() const {
+    std::map<std::array<std::uint32_t, 3>, int> faces;
+    for (std::uint32_t e = 0; e < tets_.size(); ++e)
+      if (alive_[e])
+        for (std::size_t i = 0; i < 4; ++i) {
+          std::array<std::uint32_t, 3> f{tets_[e][(i + 1) % 4], tets_[e][(i + 2) % 4], tets_[e][(i + 3) % 4]};
+          std::sort(f.begin(), f.end());
+          ++faces[f];
+        }
+    std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+    for (const auto& [f, count] : faces)
+      if (count == 1) edges.insert({{f[0], f[1]}, {f[0], f[2]}, {f[1], f[2]}});
+    return edges;
+  }
+
+  /// Moves boundary node v along the surface (each trial point projected onto it) to raise the
+  /// worst quality of its elements; what the elements' volume gained goes to `volume`. A cap or
+  /// needle boundary triangle bounds the altitude of the element on it (the distance of its apex
+  /// to the plane through any other face holding the opposite edge is at most the triangle's
+  /// height), which no interior operation changes.
+  bool slide(std::uint32_t v, double& volume) {
+    const double before = star_volume(v);
+    if (!smooth(v, project_)) return false;
+    volume += star_volume(v) - before;
+    return true;
+  }
+  double star_volume(std::uint32_t v) const {
+    double sum = 0.0;
+    for (const std::uint32_t e : around_[v]) {
+      const Tet& t = tets_[e];
+      const Vec &a = x_[t[0]], &b = x_[t[1]], &c = x_[t[2]], &d = x_[t[3]];
+      sum += (b - a).cross(c - a).dot(d - a) / 6.0;
+    }
+    return sum;
+  }
+
+  /// Moves node v within its elements by compass search to raise their worst quality; with
+  /// `onto`, every trial point is first placed by it (a boundary node kept on the surface).
+  bool smooth(std::uint32_t v, const SurfaceProjection& onto = {}) {
     const std::vector<std::uint32_t> star = around_[v];
     const Vec start = x_[v];
     double best = worst(star);
@@ -229,7 +284,7 @@ class CornerMesh {
       const Vec here = x_[v];
       for (const Vec& d : directions) {
         if (d.squaredNorm() == 0.0) continue;
-        x_[v] = here + step * d;
+        x_[v] = onto ? onto(here + step * d) : Vec(here + step * d);
         const double q = worst(star);
         if (q > best + 1e-9) {
           best = q, improved = true;
@@ -366,6 +421,7 @@ class CornerMesh {
   }
 
   SliverThresholds thresholds_;
+  SurfaceProjection project_;
   std::vector<Vec> x_;
   std::vector<char> fixed_, moved_;
   std::vector<Tet> tets_;
@@ -376,11 +432,11 @@ class CornerMesh {
 
 }  // namespace
 
-SliverReport remove_slivers(TetMesh& mesh, const SliverThresholds& thresholds) {
+SliverReport remove_slivers(TetMesh& mesh, const SliverThresholds& thresholds, const SurfaceProjection& project) {
   const auto started = std::chrono::steady_clock::now();
   SliverReport report;
   if (!thresholds.any() || mesh.element_count() == 0) return report;
-  CornerMesh corners(mesh, thresholds);
+  CornerMesh corners(mesh, thresholds, project);
   report.before = report.after = corners.below();
   if (report.before == 0) return report;
   std::size_t splits_left = static_cast<std::size_t>(std::ceil(kSplitShare * static_cast<double>(mesh.element_count())));

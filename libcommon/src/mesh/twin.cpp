@@ -180,6 +180,8 @@ TwinModel assemble_twin(const TwinGrains& grains, const std::vector<GrainMeshRes
     // Rigid grains carry no stress and set no element step.
     if (r.kind != fdem::GrainKind::rigid && r.quality.below_thresholds > 0) ++c.below_thresholds, c.sliver_elements += r.quality.below_thresholds;
     c.slivers_before += r.gmsh.slivers.before;
+    c.slid += r.gmsh.slivers.slid, c.slid_volume += r.gmsh.slivers.slid_volume;
+    c.peeled += r.gmsh.slivers.peeled, c.peeled_volume += r.gmsh.slivers.peeled_volume;
     c.sliver_seconds += r.gmsh.slivers.seconds;
     ++c.origin[static_cast<int>(r.origin)];
     ++c.path[static_cast<int>(r.path)];

@@ -41,8 +41,8 @@ struct TetOptions {
   /// (remesh_isotropic), of any genus. Without it gmsh remeshes the surface and needs it one
   /// sphere-like piece.
   bool keep_surface = false;
-  /// After meshing and snapping: remove_slivers to these thresholds (the boundary kept as it is).
-  /// None asked by default.
+  /// After meshing and snapping: remove_slivers to these thresholds (with `project`, boundary nodes
+  /// may slide along the surface where nothing inside lifts an element). None asked by default.
   SliverThresholds slivers;
   /// gmsh must answer by then, or GmshOverrun is thrown (a worker is killed and replaced; in this
   /// process the run is refused when the time has already passed, since it cannot be stopped).

@@ -116,6 +116,10 @@ struct TwinCounts {
   std::size_t below_thresholds = 0;     ///< deformable grains with elements still below the sliver thresholds
   std::size_t sliver_elements = 0;      ///< their elements below the thresholds
   std::size_t slivers_before = 0;       ///< elements below the thresholds before the sliver pass, all grains
+  std::size_t slid = 0;                 ///< boundary nodes the sliver pass slid along the surface, all grains
+  double slid_volume = 0.0;             ///< m^3, the volume those slides added (signed), all grains
+  std::size_t peeled = 0;               ///< boundary elements the sliver pass took out, all grains
+  double peeled_volume = 0.0;           ///< m^3, their volume
   double gmsh_seconds = 0.0, seconds = 0.0;  ///< s, summed over the grains
   double sliver_seconds = 0.0;          ///< s in the sliver pass, summed over the grains
 };
