@@ -150,6 +150,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   s.sphere_radius.resize(grain_count);
   s.pose.resize(grain_count);
   s.loads.assign(grain_count, RigidLoad{});
+  if (s.record_node_forces) s.node_forces.assign(s.node_count, Eigen::Vector3d::Zero());
   if (!poses.empty() && poses.size() != grain_count)
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
@@ -265,6 +266,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
         const auto& tri = s.triangles[h.triangle];
         for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * h.law.force;
       }
+      s.record(h.node, platen ? kNoTriangle : h.triangle, h.weights, h.law.force);
       s.history.push_back({c.a, c.b, h.node, h.law.spring, h.offset});
     }
     const CandidateSum& sum = s.sums[i];
@@ -293,6 +295,13 @@ void ContactModel::keep_initial_overlaps(std::span<const Overlap> overlaps) {
 }
 
 std::span<const RigidLoad> ContactModel::rigid_loads() const { return state_->loads; }
+
+void ContactModel::record_node_forces(bool on) {
+  state_->record_node_forces = on;
+  if (!on) state_->node_forces.clear();
+}
+
+std::span<const Eigen::Vector3d> ContactModel::node_forces() const { return state_->node_forces; }
 
 std::span<const ContactRecord> ContactModel::contacts() const { return state_->records; }
 

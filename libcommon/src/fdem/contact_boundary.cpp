@@ -48,6 +48,7 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
     for (const auto& [node, arm, law] : s.wall_hits[g]) {
       if (s.pose[g].rigid) s.loads[g].add(arm, law.force);
       else f[node] += law.force;
+      s.record(node, kNoTriangle, Eigen::Vector3d::Zero(), law.force);
       stats.radial_force += law.normal_force;
       stats.radial_stiffness += law.normal_stiffness;
       stats.elastic_energy += law.elastic_energy;
@@ -136,6 +137,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
         const auto& tri = s.triangles[h.triangle];
         for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
       }
+      s.record(kNoNode, h.triangle, h.weights, force);
       stats.elastic_energy += h.law.elastic_energy;
       stats.dissipated += h.law.dissipated;
       stats.max_overlap = std::max(stats.max_overlap, h.overlap);

@@ -23,6 +23,7 @@
 namespace graintwin::fdem::contact_detail {
 
 inline constexpr std::uint32_t kNoTriangle = UINT32_MAX;
+inline constexpr std::uint32_t kNoNode = UINT32_MAX;
 /// Fraction of the contact limit 2 sqrt(m / k) (damped) that stable_time_step() returns: a node
 /// can meet two contacts at once (a grain and a platen, or both directions), which halves m / k.
 inline constexpr double kTimeStepSafety = 0.5;
@@ -251,6 +252,17 @@ struct ContactModel::State {
   double ball_lists_radius = 0;                      ///< the ball radius they were built for
 
   std::vector<RigidLoad> loads;  ///< per grain, this step's (rigid_loads())
+  bool record_node_forces = false;
+  std::vector<Eigen::Vector3d> node_forces;  ///< per model node, this step's when recording (node_forces())
+  /// Adds force to node `node` (kNoNode: a membrane ball's, not a model node) and -force over
+  /// triangle t's nodes by `weights` (kNoTriangle: a platen or the wall, nothing to spread), when
+  /// recording.
+  void record(std::uint32_t node, std::uint32_t t, const Eigen::Vector3d& weights, const Eigen::Vector3d& force) {
+    if (!record_node_forces) return;
+    if (node != kNoNode) node_forces[node] += force;
+    if (t != kNoTriangle)
+      for (int k = 0; k < 3; ++k) node_forces[triangles[t][k]] -= weights[k] * force;
+  }
 
   std::vector<Candidate> candidates;
   std::vector<std::array<double, 2>> candidate_motion;  ///< per grain-pair candidate: pair_motion

@@ -13,6 +13,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interval.hpp"
 #include "graintwin/core/parallel.hpp"
+#include "graintwin/fdem/elastostatic.hpp"
 #include "graintwin/fdem/vector_io.hpp"
 #include "graintwin/io/h5file.hpp"
 #include "graintwin/io/schema.hpp"
@@ -466,6 +467,24 @@ Eigen::Matrix3d Solver::grain_stress(std::size_t g) const {
   // (Love-Weber): sigma = (1/V) sum_n r_n (x) f_n, the symmetric part, with the contact and
   // boundary forces of the last step where they acted (gravity acts on the body, not on the nodes).
   return love_weber(rigid_loads_[g].moment, bodies_[g].volume);
+}
+
+std::vector<Eigen::Matrix3d> Solver::elastostatic_stresses(std::size_t g) const {
+  const Grain& grain = model_->grains.at(g);
+  if (grain.kind != GrainKind::rigid)
+    throw UsageError(fmt::format("elastostatic stresses are for rigid grains; grain {} (label {}) is deformable and has its own.",
+                                 g, grain.label));
+  const std::span<const Eigen::Vector3d> forces = contact_ ? contact_->node_forces() : std::span<const Eigen::Vector3d>{};
+  if (forces.size() != model_->nodes.size())
+    throw UsageError("elastostatic stresses need the node forces of the last step: record them (ContactModel::record_node_forces) before it.");
+  const Eigen::Matrix3d R = grain_rotation(g).toRotationMatrix();
+  std::vector<Eigen::Vector3d> loads;  // body frame
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i)
+    loads.push_back(R.transpose() * (forces[i] + mass_[i] * options_.gravity));
+  const ElastostaticGrain body(*model_, g, mass_);
+  std::vector<Eigen::Matrix3d> stress = body.solve(loads).stress;
+  for (Eigen::Matrix3d& s : stress) s = R * s * R.transpose();
+  return stress;
 }
 
 std::vector<Eigen::Matrix3d> Solver::love_weber_stresses() const {

@@ -203,6 +203,14 @@ class ContactModel {
   /// Per grain, the forces on the rigid ones (those with a pose) in this step: from add_forces, which
   /// starts them, and add_wall_forces and add_ball_forces after it.
   std::span<const RigidLoad> rigid_loads() const;
+  /// Whether each step also keeps its contact and boundary forces node by node, rigid grains'
+  /// included (node_forces()): what the elastostatic stress of rigid grains needs. Off by default.
+  void record_node_forces(bool on);
+  /// With recording on, the forces of this step on every model node, N (from add_forces, which
+  /// starts them, and add_wall_forces and add_ball_forces after it): a node's own contact force, and
+  /// the reaction on a surface it touched spread over the touched triangle's nodes by its
+  /// barycentric weights. Empty with recording off.
+  std::span<const Eigen::Vector3d> node_forces() const;
   /// Grain-pair (and grain-platen) resultants of the last step, sorted by (a, b).
   /// Replaces the node masses the contact laws damp with (one per model node).
   void set_node_masses(std::span<const double> node_mass);

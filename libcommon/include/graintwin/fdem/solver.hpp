@@ -224,6 +224,13 @@ class Solver {
   /// grain the Love-Weber average (1/V) sym(sum_n r_n (x) f_n) of the contact and boundary forces on
   /// its nodes in the last step (zero before the first step).
   Eigen::Matrix3d grain_stress(std::size_t grain) const;
+  /// Element stresses of rigid grain g, world axes, tension positive, Pa, one per element of its
+  /// mesh: its elastostatic state (fdem/elastostatic.hpp) under the last step's contact and
+  /// boundary forces on its nodes and gravity, their net force and moment balanced by its rigid
+  /// acceleration. Their volume average is its Love-Weber stress with gravity's share. Needs the
+  /// contact model recording node forces (contact_model()->record_node_forces(true)) before that
+  /// step; throws UsageError otherwise or for a grain that is not rigid.
+  std::vector<Eigen::Matrix3d> elastostatic_stresses(std::size_t grain) const;
   /// Volume-averaged Cauchy stress of element e, tension positive, Pa (zero in rigid grains).
   Eigen::Matrix3d element_stress(std::size_t element) const;
   /// Every grain's Love-Weber stress, tension positive, Pa: (1/V) sym(sum_n (x_n - c) (x) f_n) of
