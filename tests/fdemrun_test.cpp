@@ -18,6 +18,7 @@
 #include <numbers>
 #include <regex>
 
+#include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/primitives.hpp"
 #include "graintwin/fdem/results_file.hpp"
@@ -147,7 +148,7 @@ TEST(Fdemrun, AMixedTwinRecordsItsKindsAndComparesItsStresses) {
     fdem::add_grain(stack, fdem::box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d(0, 0, 1e-3 * (k - 1)),
                     fdem::GrainKind::tet10, 0, static_cast<std::uint32_t>(7 + k));
   fdem::write_model_file(dir / "stack.h5", stack, {"test"});
-  const auto scene = write_text(dir, "scene.toml", R"(
+  const std::string stack_scene = R"(
 [run]
 duration = 2e-5
 damping = 5e6
@@ -165,7 +166,8 @@ normal = [0, 0, 1]
 name = "top"
 point = [0, 0, 1.499e-3]
 normal = [0, 0, -1]
-)");
+)";
+  const auto scene = write_text(dir, "scene.toml", stack_scene);
   const auto out = dir / "results.h5";
   const auto r = run_tool("fdemrun", {scene.string(), out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -185,7 +187,35 @@ normal = [0, 0, -1]
   const auto booked = [&](std::size_t k) { return s.kinetic[k] + s.strain[k] + s.contact_elastic[k] + s.dissipated[k] - s.external_work[k]; };
   ASSERT_GT(s.time.size(), 100u);
   EXPECT_NEAR(booked(s.time.size() - 1), booked(0), 1e-3 * booked(0));
+
+  // The same stack with the rigid cubes' elastostatic stresses: every element of the three cubes
+  // has a row, and the rigid cubes' elements carry the load the deformable one does (on average:
+  // the coarse cubes' element stresses range over 0.4-1.0 of it, from the face the tet10 cube's
+  // nodes press on to the platen's).
+  const auto elastostatic = write_text(dir, "elastostatic.toml", replaced(stack_scene, "[run]\n", "[run]\nrigid_stress = \"elastostatic\"\n"));
+  const auto both = dir / "both.h5";
+  const auto e = run_tool("fdemrun", {elastostatic.string(), both.string(), "--vtk", (dir / "frames").string()});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const auto rows = fdem::read_frame_element_stress(both, fdem::results_frame_count(both) - 1);
+  ASSERT_EQ(rows.grain.size(), stack.element_count());
+  const auto frame = fdem::read_results_frame(both, fdem::results_frame_count(both) - 1);
+  EXPECT_EQ(frame.centroid, fdem::read_results_frame(out, frames - 1).centroid);  // the run is the same run
+  EXPECT_EQ(frame.stress, fdem::read_results_frame(out, frames - 1).stress);
+  const double load = frame.stress[9 * 1 + 8];  // the deformable cube's sigma_zz, compression positive
+  ASSERT_GT(load, 0);
+  // Each rigid cube's element stresses, volume-averaged, are its Love-Weber stress: the load.
+  for (const std::uint32_t g : {0u, 2u}) {
+    double average = 0, volume = 0;
+    for (std::size_t k = 0; k < rows.grain.size(); ++k)
+      if (rows.grain[k] == g) {
+        const double v = fdem::element_volume(stack, rows.element[k]);
+        average += v * rows.stress[9 * k + 8], volume += v;
+      }
+    EXPECT_NEAR(average / volume, frame.stress[9 * g + 8], 1e-5 * load) << "grain " << g;
+    EXPECT_NEAR(average / volume, load, 1e-3 * load) << "grain " << g;
+  }
 }
+
 
 namespace {
 
@@ -237,6 +267,8 @@ TEST(Fdemrun, BadInputsFailCleanly) {
   test::expect_clean_failure("fdemrun", dir, {syntax.string(), out}, 2, "syntax.toml line 1");
   const auto material = write_text(dir, "material.toml", replaced(kTwoBoxScene, "material = \"glass\"", "material = \"steel\""));
   test::expect_clean_failure("fdemrun", dir, {material.string(), out}, 2, "material 'steel' is not among the [[materials]]");
+  const auto rigid_stress = write_text(dir, "rigid_stress.toml", replaced(kTwoBoxScene, "[run]\n", "[run]\nrigid_stress = \"exact\"\n"));
+  test::expect_clean_failure("fdemrun", dir, {rigid_stress.string(), out}, 2, "rigid_stress must be \"love_weber\"");
   test::expect_clean_failure("fdemrun", dir, {good.string(), (dir / "out.txt").string()}, 2, "must end in .h5");
   // A checkpoint of another scene is refused before anything is written.
   const auto ckpt = dir / "ckpt.h5";

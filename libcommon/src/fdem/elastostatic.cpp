@@ -103,32 +103,43 @@ ElastostaticGrain::ElastostaticGrain(const Model& model, std::size_t grain, std:
   std::vector<char> held(3 * node_count_, 0);
   for (const std::size_t k : held_) held[k] = 1;
 
-  // K_ab,ij = sum_q w [lambda g_a,i g_b,j + mu g_a,j g_b,i + mu (g_a . g_b) delta_ij]; held
-  // components become identity rows and columns.
+  // K_ab,ij = sum_q w [lambda g_a,i g_b,j + mu g_a,j g_b,i + mu (g_a . g_b) delta_ij], summed per
+  // element first; only the lower triangle, which the factorisation reads. Held components become
+  // identity rows and columns.
   std::vector<Eigen::Triplet<double>> triplets;
-  for (const Element& element : elements_)
+  Eigen::Matrix<double, 30, 30> Ke;
+  for (const Element& element : elements_) {
+    const int n = element.node_count;
+    Ke.topLeftCorner(3 * n, 3 * n).setZero();
     for (const Point& p : element.points)
-      for (int a = 0; a < element.node_count; ++a)
-        for (int b = 0; b < element.node_count; ++b) {
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b <= a; ++b) {
           const Eigen::Vector3d& ga = p.gradient[static_cast<std::size_t>(a)];
           const Eigen::Vector3d& gb = p.gradient[static_cast<std::size_t>(b)];
-          const Eigen::Matrix3d block =
+          Ke.block<3, 3>(3 * a, 3 * b) +=
               p.weight * (lambda_ * ga * gb.transpose() + mu_ * gb * ga.transpose() + mu_ * ga.dot(gb) * Eigen::Matrix3d::Identity());
-          for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) {
-              const std::size_t row = 3 * element.nodes[static_cast<std::size_t>(a)] + static_cast<std::size_t>(i);
-              const std::size_t col = 3 * element.nodes[static_cast<std::size_t>(b)] + static_cast<std::size_t>(j);
-              if (!held[row] && !held[col])
-                triplets.emplace_back(static_cast<int>(row), static_cast<int>(col), block(i, j));
-            }
         }
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b <= a; ++b)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) {
+            std::size_t row = 3 * element.nodes[static_cast<std::size_t>(a)] + static_cast<std::size_t>(i);
+            std::size_t col = 3 * element.nodes[static_cast<std::size_t>(b)] + static_cast<std::size_t>(j);
+            if (held[row] || held[col]) continue;
+            if (row < col) {
+              if (a == b) continue;  // the diagonal block's upper half: its lower half holds it
+              std::swap(row, col);
+            }
+            triplets.emplace_back(static_cast<int>(row), static_cast<int>(col), Ke(3 * a + i, 3 * b + j));
+          }
+  }
   for (const std::size_t k : held_) triplets.emplace_back(static_cast<int>(k), static_cast<int>(k), 1.0);
   Eigen::SparseMatrix<double> K(static_cast<Eigen::Index>(3 * node_count_), static_cast<Eigen::Index>(3 * node_count_));
   K.setFromTriplets(triplets.begin(), triplets.end());
   // The identity rows stand beside stiffnesses of order E h: scale them alike, so the pivot test
   // below compares like with like.
   double scale = 0;
-  for (Eigen::Index k = 0; k < K.outerSize(); ++k) scale = std::max(scale, K.coeff(k, k));
+  for (Eigen::Index k = 0; k < K.outerSize(); ++k) scale = std::max(scale, K.coeff(k, k));  // K is lower triangular here
   for (const std::size_t k : held_) K.coeffRef(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k)) = scale;
   factor_.compute(K);
   const Eigen::VectorXd pivots = factor_.vectorD();

@@ -51,10 +51,11 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& path, const Solver& so
   file_.write(sr::grain_kind, kind);
   file_.write(sr::grain_mass, mass, units("kg"));
   file_.write(sr::grain_volume, volume, units("m^3"));
-  // The rows of every frame's element stresses: the deformable grains' elements, in model order.
+  // The rows of every frame's element stresses: the elements of the grains that carry stress (the
+  // deformable ones, and the rigid ones with their elastostatic stress), in model order.
   std::vector<std::uint32_t> element, element_grain;
   for (std::size_t g = 0; g < m.grains.size(); ++g)
-    if (m.grains[g].kind != GrainKind::rigid)
+    if (solver.carries_element_stress(g))
       for (std::uint32_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
         element.push_back(e), element_grain.push_back(static_cast<std::uint32_t>(g));
   file_.write(sr::element_index, element);
@@ -132,7 +133,7 @@ void ResultsWriter::add_frame(const Solver& solver, const TriaxialBoundary* boun
   // dataset of a deformable twin (docs/formats.md).
   std::vector<float> element_stress;
   for (std::size_t g = 0; g < G; ++g)
-    if (m.grains[g].kind != GrainKind::rigid)
+    if (solver.carries_element_stress(g))
       for (std::uint32_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
         push_compression(element_stress, solver.element_stress(e));
   file_.write(group + "/" + sr::frame_element_stress, element_stress.data(), {element_stress.size() / 9, 3, 3}, units("Pa"));

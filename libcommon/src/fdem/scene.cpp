@@ -256,7 +256,7 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
                   {"duration", "time_step", "time_step_fraction", "element_safety", "rigid_contact_nodes", "gravity", "damping",
                    "stiffness_damping", "local_damping", "contact", "frame_interval", "series_interval", "checkpoint_interval",
                    "overlap_tolerance", "relax_overlaps", "keep_initial_overlaps", "mass_scaled_share", "element_step_target",
-                   "max_added_mass_share", "max_steps"});
+                   "max_added_mass_share", "max_steps", "rigid_stress"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
     s.time_step_fraction = r.positive("time_step_fraction", 1.0);
@@ -271,6 +271,11 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
     s.damping = r.non_negative("damping", 0);
     s.stiffness_damping = r.non_negative("stiffness_damping", 0);
     s.local_damping = local_damping(r, 0);
+    const std::string rigid_stress = r.text("rigid_stress", "love_weber");
+    if (rigid_stress != "love_weber" && rigid_stress != "elastostatic")
+      r.fail("rigid_stress must be \"love_weber\" (each rigid grain's stress from its contact forces) or \"elastostatic\" "
+             "(also its elements' static stresses), not \"" + rigid_stress + "\"");
+    s.elastostatic_stress = rigid_stress == "elastostatic";
     s.contact = r.flag("contact", true);
     s.frame_interval = r.non_negative("frame_interval", 0);
     s.series_interval = r.non_negative("series_interval", 0);

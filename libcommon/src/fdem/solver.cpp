@@ -108,6 +108,7 @@ Solver::Solver(const Model& model, const SolverOptions& options)
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes);
   if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, contact_mass_, options.contact);
+  if (contact_ && options.elastostatic_stress) contact_->record_node_forces(true);
 }
 
 Solver::~Solver() = default;
@@ -530,8 +531,22 @@ std::vector<Eigen::Matrix3d> Solver::love_weber_stresses() const {
 }
 
 Eigen::Matrix3d Solver::element_stress(std::size_t e) const {
-  if (!elements_.is_elastic(e)) return Eigen::Matrix3d::Zero();
-  return elements_.average_cauchy_stress(state_.x, e, e + 1);
+  if (elements_.is_elastic(e)) return elements_.average_cauchy_stress(state_.x, e, e + 1);
+  const std::size_t g = model_->element_grain[e];
+  if (!options_.elastostatic_stress || model_->grains[g].kind != GrainKind::rigid || !contact_) return Eigen::Matrix3d::Zero();
+  if (elastostatic_step_ != static_cast<std::int64_t>(state_.step)) {
+    if (contact_->node_forces().empty()) return Eigen::Matrix3d::Zero();  // no step yet
+    elastostatic_.assign(model_->grains.size(), {});
+    parallel_for_each_index(model_->grains.size(), [&](std::size_t k) {
+      if (model_->grains[k].kind == GrainKind::rigid) elastostatic_[k] = elastostatic_stresses(k);
+    });
+    elastostatic_step_ = static_cast<std::int64_t>(state_.step);
+  }
+  return elastostatic_[g][e - model_->grains[g].element_begin];
+}
+
+bool Solver::carries_element_stress(std::size_t g) const {
+  return model_->grains.at(g).kind != GrainKind::rigid || (options_.elastostatic_stress && contact_);
 }
 
 std::span<const ContactRecord> Solver::contacts() const {

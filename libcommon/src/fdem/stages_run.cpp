@@ -18,6 +18,7 @@ SolverOptions solver_options(const Scene& scene) {
   options.element_safety = scene.element_safety;
   options.rigid_contact_nodes = scene.rigid_contact_nodes;
   options.contact.enabled = scene.contact;
+  options.elastostatic_stress = scene.elastostatic_stress;
   return options;
 }
 

@@ -135,7 +135,8 @@ struct ResultsGrains {
   std::vector<GrainKind> kind;
 };
 ResultsGrains read_results_grains(const std::filesystem::path& path);
-/// The element stresses of frame k: one row per element of the deformable grains, in model order.
+/// The element stresses of frame k: one row per element of the grains that carry stress (the
+/// deformable ones, and rigid ones run with [run] rigid_stress = "elastostatic"), in model order.
 /// Read apart from read_results_frame: at 16 000 grains of ~170 elements a frame holds 98 MB of them.
 struct FrameElementStress {
   std::vector<std::uint32_t> element;  ///< E: row in the model's element table

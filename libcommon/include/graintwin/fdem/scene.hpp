@@ -124,6 +124,9 @@ struct Scene {
   double damping = 0;                     ///< mass-proportional alpha, 1/s
   double stiffness_damping = 0;           ///< stiffness-proportional beta, s (SolverOptions::stiffness_damping)
   double local_damping = 0;               ///< local non-viscous damping, [0, 1) (SolverOptions::local_damping)
+  /// [run] rigid_stress = "elastostatic": rigid grains' element stresses from their elastostatic state
+  /// (SolverOptions::elastostatic_stress); "love_weber", the default: their Love-Weber grain stress only.
+  bool elastostatic_stress = false;
   double time_step = 0;                   ///< s; 0 = the stable limit times time_step_fraction
   /// The automatic step's share of the stable limit, in (0, 1]: a few per cent less is the smallest
   /// perturbation of a run, which shows how far its chaotic outcome scatters (docs/fdemrun.md).

@@ -72,6 +72,10 @@ struct SolverOptions {
   /// A run stops when the mechanical energy exceeds this multiple of the energy put in (plus a floor
   /// of 1e-12 E V summed over the grains, below which energy is round-off).
   double runaway_factor = 10;
+  /// Rigid grains get element stresses too: their elastostatic state (elastostatic_stresses) in
+  /// element_stress(), the frames and the VTK frames. The contact model then keeps each step's
+  /// node forces.
+  bool elastostatic_stress = false;
 };
 
 /// Energies at the start of a step (time t_n), J.
@@ -231,8 +235,12 @@ class Solver {
   /// contact model recording node forces (contact_model()->record_node_forces(true)) before that
   /// step; throws UsageError otherwise or for a grain that is not rigid.
   std::vector<Eigen::Matrix3d> elastostatic_stresses(std::size_t grain) const;
-  /// Volume-averaged Cauchy stress of element e, tension positive, Pa (zero in rigid grains).
+  /// Volume-averaged Cauchy stress of element e, tension positive, Pa: of a rigid grain's elements
+  /// their elastostatic stress with SolverOptions::elastostatic_stress (every rigid grain's is
+  /// computed, in parallel, on the first call after a step), else zero. Not for concurrent calls.
   Eigen::Matrix3d element_stress(std::size_t element) const;
+  /// Whether grain g's elements carry stress: deformable, or rigid with elastostatic_stress.
+  bool carries_element_stress(std::size_t grain) const;
   /// Every grain's Love-Weber stress, tension positive, Pa: (1/V) sym(sum_n (x_n - c) (x) f_n) of
   /// the contact and boundary forces f_n on its nodes in the last step, x_n and c where they acted.
   /// A rigid grain's is its grain_stress(); a deformable grain's (V its volume at x_n) equals its
@@ -303,6 +311,9 @@ class Solver {
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
   mutable SolverState state_;
   mutable bool rigid_nodes_stale_ = false;
+  /// Rigid grains' elastostatic element stresses (per grain, world axes) and the step they are of.
+  mutable std::vector<std::vector<Eigen::Matrix3d>> elastostatic_;
+  mutable std::int64_t elastostatic_step_ = -1;
 };
 
 }  // namespace graintwin::fdem
