@@ -25,6 +25,9 @@ Eigen::Vector3d inner_point(const Membrane& m, const Eigen::Vector3d& x) {
   return {m.axis_xy[0] + rho[0], m.axis_xy[1] + rho[1], x[2]};
 }
 
+/// Below this many balls a parallel region costs more than the loop.
+constexpr std::size_t kParallelBalls = 2048;
+
 /// A polygon of at most 5 corners: a triangle clipped by two parallel planes. Fixed storage, so
 /// the volumes, computed every step of a triaxial test, allocate nothing per triangle.
 struct SlabPolygon {
@@ -62,11 +65,10 @@ SlabPolygon clip_to_slab(const Eigen::Vector3d& a, const Eigen::Vector3d& b, con
   return poly;
 }
 
-/// Calls visit(polygon corners) for every lateral triangle of the inner surface clipped to the slab;
-/// DataError when the membrane does not span the slab (the surface would not be closed by the caps).
-template <class Visit>
-void for_each_clipped_triangle(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top,
-                               Visit&& visit) {
+/// Every lateral triangle of the inner surface clipped to the slab, in triangle order (clipped in
+/// parallel; the sums over them stay serial, in that order); DataError when the membrane does not
+/// span the slab (the surface would not be closed by the caps).
+std::vector<SlabPolygon> clipped_triangles(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top) {
   if (!(z_bottom < z_top)) throw UsageError("the platens must satisfy z_bottom < z_top to enclose a volume");
   double lowest_top = std::numeric_limits<double>::infinity(), highest_bottom = -lowest_top;
   for (std::size_t i = 0; i < m.per_ring; ++i) {
@@ -77,12 +79,32 @@ void for_each_clipped_triangle(const Membrane& m, std::span<const Eigen::Vector3
     throw DataError(fmt::format("the membrane (end rings up to z = {:.4g} m and from z = {:.4g} m) does not span the "
                                 "platens at z = {:.4g} and {:.4g} m; extend it beyond both platens",
                                 highest_bottom, lowest_top, z_bottom, z_top));
+  const bool parallel = x.size() >= kParallelBalls;
   std::vector<Eigen::Vector3d> inner(x.size());
+#pragma omp parallel for schedule(static) if (parallel)
   for (std::size_t b = 0; b < x.size(); ++b) inner[b] = inner_point(m, x[b]);
-  for (const auto& t : m.triangles) {
-    const SlabPolygon poly = clip_to_slab(inner[t[0]], inner[t[1]], inner[t[2]], z_bottom, z_top);
-    if (poly.size >= 3) visit(poly.points());
+  std::vector<SlabPolygon> out(m.triangles.size());
+#pragma omp parallel for schedule(static) if (parallel)
+  for (std::size_t k = 0; k < m.triangles.size(); ++k) {
+    const auto& t = m.triangles[k];
+    out[k] = clip_to_slab(inner[t[0]], inner[t[1]], inner[t[2]], z_bottom, z_top);
   }
+  return out;
+}
+
+/// For each of `balls` balls, the items (bonds or triangles) that hold it, ascending, as offsets
+/// and a flat list.
+template <std::size_t N>
+void incidence(std::size_t balls, const std::vector<std::array<std::uint32_t, N>>& items, std::vector<std::uint32_t>& offset,
+               std::vector<std::uint32_t>& list) {
+  offset.assign(balls + 1, 0);
+  for (const auto& item : items)
+    for (const std::uint32_t b : item) ++offset[b + 1];
+  for (std::size_t b = 0; b < balls; ++b) offset[b + 1] += offset[b];
+  list.resize(offset.back());
+  std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
+  for (std::uint32_t k = 0; k < items.size(); ++k)
+    for (const std::uint32_t b : items[k]) list[fill[b]++] = k;
 }
 
 }  // namespace
@@ -171,6 +193,8 @@ Membrane build_membrane(const MembraneMaterial& material, const Eigen::Vector2d&
       }
     }
   for (const auto& b : m.bonds) m.rest_length.push_back((m.reference[b[1]] - m.reference[b[0]]).norm());
+  incidence(m.balls(), m.bonds, m.bond_offset, m.ball_bonds);
+  incidence(m.balls(), m.triangles, m.triangle_offset, m.ball_triangles);
   return m;
 }
 
@@ -186,8 +210,13 @@ MembraneState rest_state(const Membrane& m) {
 double add_bond_forces(const Membrane& m, MembraneState& s, double dt, std::span<Eigen::Vector3d> force,
                        std::span<Eigen::Vector3d> moment) {
   const double kn = m.stiffness.normal, ks = m.stiffness.shear;
-  double energy = 0;
-  for (std::size_t j = 0; j < m.bonds.size(); ++j) {
+  const std::size_t bonds = m.bonds.size(), balls = m.balls();
+  // Each bond's force on its second ball, the moment on both, and its two energy terms; then each
+  // ball gathers its bonds' in bond order, and the energies are summed in bond order.
+  std::vector<Eigen::Vector3d> on_second(bonds), turn(bonds);
+  std::vector<std::array<double, 2>> energy_terms(bonds);
+#pragma omp parallel for schedule(static) if (balls >= kParallelBalls)
+  for (std::size_t j = 0; j < bonds; ++j) {
     const auto [a, b] = m.bonds[j];
     const Eigen::Vector3d d = s.x[b] - s.x[a];
     const double length = d.norm();
@@ -201,25 +230,40 @@ double add_bond_forces(const Membrane& m, MembraneState& s, double dt, std::span
     const double arm = 0.5 * length;
     const Eigen::Vector3d relative = (s.v[b] - s.spin[b].cross(arm * n)) - (s.v[a] + s.spin[a].cross(arm * n));
     shear -= ks * dt * (relative - relative.dot(n) * n);
-    const Eigen::Vector3d on_b = -kn * (length - m.rest_length[j]) * n + shear;
-    force[b] += on_b;
-    force[a] -= on_b;
-    const Eigen::Vector3d turn = -arm * n.cross(shear);  // the shear force at the contact point, on both balls
-    moment[a] += turn;
-    moment[b] += turn;
-    energy += 0.5 * kn * (length - m.rest_length[j]) * (length - m.rest_length[j]);
-    if (ks > 0) energy += 0.5 * shear.squaredNorm() / ks;
+    on_second[j] = -kn * (length - m.rest_length[j]) * n + shear;
+    turn[j] = -arm * n.cross(shear);  // the shear force at the contact point, on both balls
+    energy_terms[j] = {0.5 * kn * (length - m.rest_length[j]) * (length - m.rest_length[j]),
+                       ks > 0 ? 0.5 * shear.squaredNorm() / ks : 0.0};
+  }
+#pragma omp parallel for schedule(static) if (balls >= kParallelBalls)
+  for (std::size_t i = 0; i < balls; ++i)
+    for (std::uint32_t k = m.bond_offset[i]; k < m.bond_offset[i + 1]; ++k) {
+      const std::uint32_t j = m.ball_bonds[k];
+      if (m.bonds[j][1] == i) force[i] += on_second[j];
+      else force[i] -= on_second[j];
+      moment[i] += turn[j];
+    }
+  double energy = 0;
+  for (std::size_t j = 0; j < bonds; ++j) {
+    energy += energy_terms[j][0];
+    if (ks > 0) energy += energy_terms[j][1];
   }
   return energy;
 }
 
 void add_pressure_forces(const Membrane& m, std::span<const Eigen::Vector3d> x, double pressure,
                          std::span<Eigen::Vector3d> force) {
-  for (const auto& t : m.triangles) {
+  std::vector<Eigen::Vector3d> share(m.triangles.size());
+  const bool parallel = m.balls() >= kParallelBalls;
+#pragma omp parallel for schedule(static) if (parallel)
+  for (std::size_t k = 0; k < m.triangles.size(); ++k) {
+    const auto& t = m.triangles[k];
     // (x1 - x0) x (x2 - x0) is twice the area times the outward normal.
-    const Eigen::Vector3d share = -pressure / 6.0 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
-    for (std::uint32_t b : t) force[b] += share;
+    share[k] = -pressure / 6.0 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
   }
+#pragma omp parallel for schedule(static) if (parallel)
+  for (std::size_t i = 0; i < m.balls(); ++i)
+    for (std::uint32_t k = m.triangle_offset[i]; k < m.triangle_offset[i + 1]; ++k) force[i] += share[m.ball_triangles[k]];
 }
 
 double membrane_stable_time_step(const Membrane& m) {
@@ -241,7 +285,8 @@ double integrate_balls(const Membrane& m, MembraneState& s, std::span<const Eige
                        std::span<const Eigen::Vector3d> clamp_velocity, bool first) {
   const double a = 0.5 * damping * dt;
   const double mass = m.ball_mass, inertia = m.ball_inertia;
-  double kinetic = 0;
+  std::vector<double> kinetic_of(m.balls(), 0.0);
+#pragma omp parallel for schedule(static) if (m.balls() >= kParallelBalls)
   for (std::size_t i = 0; i < m.balls(); ++i) {
     if (motion[i] == BallMotion::clamped) {
       s.v[i] = clamp_velocity[clamp_group[i]];
@@ -256,11 +301,14 @@ double integrate_balls(const Membrane& m, MembraneState& s, std::span<const Eige
                                         : Eigen::Vector3d(((1 - a) * w_old + dt * moment[i] / inertia) / (1 + a));
     const Eigen::Vector3d v_mid = first ? v_old : Eigen::Vector3d(0.5 * (v_old + v_new));
     const Eigen::Vector3d w_mid = first ? w_old : Eigen::Vector3d(0.5 * (w_old + w_new));
-    kinetic += 0.5 * mass * v_mid.squaredNorm() + 0.5 * inertia * w_mid.squaredNorm();
+    kinetic_of[i] = 0.5 * mass * v_mid.squaredNorm() + 0.5 * inertia * w_mid.squaredNorm();
     s.v[i] = v_new;
     s.spin[i] = w_new;
     s.x[i] += dt * v_new;
   }
+  double kinetic = 0;  // in ball order, whatever the threads
+  for (std::size_t i = 0; i < m.balls(); ++i)
+    if (motion[i] != BallMotion::clamped) kinetic += kinetic_of[i];
   return kinetic;
 }
 
@@ -288,33 +336,27 @@ MembraneState relax_membrane(const Membrane& m, double damping,
                               max_steps, tolerance));
 }
 
-double enclosed_volume(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top) {
+EnclosedVolumes enclosed_volumes(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top) {
   const Eigen::Vector3d o(m.axis_xy[0], m.axis_xy[1], z_bottom);
-  double lateral = 0, top_area = 0;
-  for_each_clipped_triangle(m, x, z_bottom, z_top, [&](std::span<const Eigen::Vector3d> poly) {
-    for (std::size_t i = 1; i + 1 < poly.size(); ++i)
+  double lateral = 0, top_area = 0, radial = 0;
+  for (const SlabPolygon& clipped : clipped_triangles(m, x, z_bottom, z_top)) {
+    if (clipped.size < 3) continue;
+    const std::span<const Eigen::Vector3d> poly = clipped.points();
+    for (std::size_t i = 1; i + 1 < poly.size(); ++i) {
       lateral += (poly[0] - o).dot((poly[i] - poly[0]).cross(poly[i + 1] - poly[0])) / 6.0;
+      const Eigen::Vector3d area2 = (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);  // 2 A n
+      const Eigen::Vector3d centroid = (poly[0] + poly[i] + poly[i + 1]) / 3.0;
+      const Eigen::Vector3d rho(centroid[0] - m.axis_xy[0], centroid[1] - m.axis_xy[1], 0);
+      radial += rho.dot(area2) / 4.0;
+    }
     // Edges on the top plane bound the cap, traversed against the cap's own (outward, +z) sense.
     for (std::size_t i = 0; i < poly.size(); ++i) {
       const Eigen::Vector3d& p = poly[i];
       const Eigen::Vector3d& q = poly[(i + 1) % poly.size()];
       if (p[2] == z_top && q[2] == z_top) top_area -= 0.5 * ((p - o).cross(q - o))[2];
     }
-  });
-  return lateral + (z_top - z_bottom) * top_area / 3.0;
-}
-
-double enclosed_volume_radial(const Membrane& m, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top) {
-  double volume = 0;
-  for_each_clipped_triangle(m, x, z_bottom, z_top, [&](std::span<const Eigen::Vector3d> poly) {
-    for (std::size_t i = 1; i + 1 < poly.size(); ++i) {
-      const Eigen::Vector3d area2 = (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);  // 2 A n
-      const Eigen::Vector3d centroid = (poly[0] + poly[i] + poly[i + 1]) / 3.0;
-      const Eigen::Vector3d rho(centroid[0] - m.axis_xy[0], centroid[1] - m.axis_xy[1], 0);
-      volume += rho.dot(area2) / 4.0;
-    }
-  });
-  return volume;
+  }
+  return {lateral + (z_top - z_bottom) * top_area / 3.0, radial};
 }
 
 }  // namespace graintwin::fdem

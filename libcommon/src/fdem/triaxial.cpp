@@ -120,21 +120,20 @@ void TriaxialBoundary::set_membrane_fixed(bool fixed) {
   }
 }
 
-template <class Compute>
-double TriaxialBoundary::cached(VolumeCache& cache, Compute&& compute) const {
-  if (cache.moves != membrane_moves_ || cache.z_bottom != z_bottom_ || cache.z_top != z_top_)
-    cache = {membrane_moves_, z_bottom_, z_top_, compute()};
-  return cache.value;
+const EnclosedVolumes& TriaxialBoundary::enclosed() const {
+  if (volume_cache_.moves != membrane_moves_ || volume_cache_.z_bottom != z_bottom_ || volume_cache_.z_top != z_top_)
+    volume_cache_ = {membrane_moves_, z_bottom_, z_top_, enclosed_volumes(*membrane_, membrane_state_.x, z_bottom_, z_top_)};
+  return volume_cache_.volumes;
 }
 
 double TriaxialBoundary::volume() const {
   if (!membrane_) return kPi * wall_.radius * wall_.radius * (z_top_ - z_bottom_);
-  return cached(volume_cache_, [&] { return enclosed_volume(*membrane_, membrane_state_.x, z_bottom_, z_top_); });
+  return enclosed().volume;
 }
 
 double TriaxialBoundary::volume_radial() const {
   if (!membrane_) return volume();
-  return cached(radial_cache_, [&] { return enclosed_volume_radial(*membrane_, membrane_state_.x, z_bottom_, z_top_); });
+  return enclosed().radial;
 }
 
 BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,

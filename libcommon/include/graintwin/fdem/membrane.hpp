@@ -58,6 +58,11 @@ struct Membrane {
   std::vector<std::array<std::uint32_t, 2>> bonds;     ///< ball pairs, first < second
   std::vector<double> rest_length;                     ///< per bond, m
   std::vector<std::array<std::uint32_t, 3>> triangles; ///< counter-clockwise seen from outside
+  /// Per ball, its bonds and its triangles in ascending order (ball b's are
+  /// ball_bonds[bond_offset[b] .. bond_offset[b + 1]), likewise triangles): a ball gathers its
+  /// bonds' and triangles' forces in the order a serial pass over them would add them, so the
+  /// passes run in parallel and give the same bits.
+  std::vector<std::uint32_t> bond_offset, ball_bonds, triangle_offset, ball_triangles;
   std::size_t balls() const { return reference.size(); }
   std::size_t ring_of(std::size_t ball) const { return ball / per_ring; }
 };
@@ -120,16 +125,19 @@ MembraneState relax_membrane(const Membrane& membrane, double damping,
                              const std::function<void(const MembraneState&, std::vector<Eigen::Vector3d>&)>& load,
                              double tolerance = 1e-10, int max_steps = 200000);
 
-/// Volume enclosed by the membrane's inner surface (ball centres moved towards the axis by the ball
-/// radius) between the horizontal planes z_bottom < z_top (the platens), m^3, by the divergence
-/// theorem with F = (x - o) / 3 (eq. 27; o on the axis in the bottom plane): the lateral triangles
-/// clipped to the slab plus the top cap (the bottom cap contributes nothing).
-double enclosed_volume(const Membrane& membrane, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top);
-/// The same volume from the radial field F = (x - axis) / 2 without its z part (eq. 28): the sum
-/// over the clipped lateral triangles of half their area times rho_c . n_c (rho_c: horizontal
-/// vector from the axis to the centroid); the platens contribute nothing. It needs no caps, so its
-/// agreement with enclosed_volume checks the caps and the clipping.
-double enclosed_volume_radial(const Membrane& membrane, std::span<const Eigen::Vector3d> x, double z_bottom,
-                              double z_top);
+/// The volume enclosed by the membrane's inner surface (ball centres moved towards the axis by the
+/// ball radius) between the horizontal planes z_bottom < z_top (the platens), m^3, two ways, by the
+/// divergence theorem over the lateral triangles clipped to the slab (one pass computes both):
+/// - `volume` with F = (x - o) / 3 (eq. 27; o on the axis in the bottom plane): the clipped lateral
+///   triangles plus the top cap (the bottom cap contributes nothing);
+/// - `radial` with the radial field F = (x - axis) / 2 without its z part (eq. 28): the sum over the
+///   clipped lateral triangles of half their area times rho_c . n_c (rho_c: horizontal vector from
+///   the axis to the centroid); the platens contribute nothing. It needs no caps, so its agreement
+///   with `volume` checks the caps and the clipping.
+/// The same bits on any thread count. DataError when the membrane does not span the slab.
+struct EnclosedVolumes {
+  double volume = 0, radial = 0;
+};
+EnclosedVolumes enclosed_volumes(const Membrane& membrane, std::span<const Eigen::Vector3d> x, double z_bottom, double z_top);
 
 }  // namespace graintwin::fdem

@@ -103,16 +103,16 @@ class TriaxialBoundary final : public Boundary {
   std::optional<Membrane> membrane_;
   MembraneState membrane_state_;
   /// The enclosed volumes are read several times a step (servo, observer, results row) and cost a
-  /// pass over every membrane triangle: each is kept until the balls or the platens move.
+  /// pass over every membrane triangle: they are kept until the balls or the platens move.
   struct VolumeCache {
     std::uint64_t moves = ~std::uint64_t{0};
-    double z_bottom = 0, z_top = 0, value = 0;
+    double z_bottom = 0, z_top = 0;
+    EnclosedVolumes volumes;
   };
   std::uint64_t membrane_moves_ = 0;  ///< counts the changes of membrane_state_
-  mutable VolumeCache volume_cache_, radial_cache_;
-  /// `cache`'s value while it is current, else compute() stored in it.
-  template <class Compute>
-  double cached(VolumeCache& cache, Compute&& compute) const;
+  mutable VolumeCache volume_cache_;
+  /// Both enclosed volumes of the membrane now (computed once per membrane move or platen move).
+  const EnclosedVolumes& enclosed() const;
   std::vector<BallMotion> motion_;
   std::vector<std::uint8_t> clamp_group_;  ///< 0 bottom, 1 top
   std::vector<Eigen::Vector3d> ball_force_, ball_moment_;  ///< per ball, scratch of apply()
