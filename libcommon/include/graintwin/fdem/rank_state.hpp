@@ -1,0 +1,118 @@
+#pragma once
+// The plain-data side of a run split over ranks (docs/fdemrun.md, across machines): what travels
+// between ranks after each step (rigid grains' states, and the friction history of a grain that
+// changes owner) packed as doubles, who must receive what, each grain's role on a rank after the
+// exchange, and the step's sums rebuilt in the one-rank order from the rows the ranks gathered.
+// No MPI here: mpi/distributed_run moves the buffers. Every rank keeps the whole model (grains'
+// shapes never change), so only state and history travel.
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "graintwin/fdem/contact.hpp"
+#include "graintwin/fdem/decomposition.hpp"
+#include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/solver.hpp"
+
+namespace graintwin::fdem {
+
+/// A rigid grain's state as it travels: its global index and its 6-DOF state.
+struct GrainBody {
+  std::uint32_t grain = 0;
+  RigidBodyState state;
+};
+
+/// What one rank sends another after a step: the states of the grains the receiver owns or ghosts
+/// from now on, and the friction history of the pairs of those among them that change owner.
+struct RankMessage {
+  std::vector<GrainBody> bodies;
+  std::vector<ContactHistoryEntry> history;
+};
+
+/// Doubles per packed RigidBodyState (position 3, quaternion w x y z, velocity 3, angular
+/// momentum 3), per packed GrainBody (the grain's index, then its state) and per packed
+/// ContactHistoryEntry (a, b, node, spring 3, offset).
+inline constexpr std::size_t kStateDoubles = 13, kBodyDoubles = 1 + kStateDoubles, kHistoryDoubles = 7;
+
+/// Appends `state`'s kStateDoubles to `out`, bits kept.
+void append_state(const RigidBodyState& state, std::vector<double>& out);
+/// The state append_state wrote at `packed` (kStateDoubles read).
+RigidBodyState state_from(const double* packed);
+
+/// Appends `message` to `out` as doubles: [bodies, kBodyDoubles each..., entries, kHistoryDoubles
+/// each...]; indices are exact (below 2^53), values keep their bits.
+void pack_message(const RankMessage& message, std::vector<double>& out);
+/// The message pack_message wrote into `packed` (all of it). DataError when its counts do not
+/// fit its length or an index is not a whole number in [0, 2^32).
+RankMessage unpack_message(std::span<const double> packed);
+
+/// A rank's sends after a step and what stays with it.
+struct ExchangePlan {
+  std::vector<RankMessage> to;          ///< per rank (this rank's own entry stays empty)
+  std::vector<std::uint32_t> kept;      ///< owned grains still owned here, sorted
+  std::vector<std::uint32_t> ghosted;   ///< owned grains that left but stay ghosts here, sorted
+};
+
+/// Who must hear of this rank's owned grains after a step.
+///
+/// Inputs:
+///   subdomains  the ranks' boxes (bisect_domain); R = subdomains.ranks()
+///   rank        this rank, in [0, R)
+///   owned       the grains this rank advanced in the step, sorted
+///   bodies      every grain's state, indexed by grain (the owned ones current)
+///   radii       every grain's bounding radius about its centroid, m (grain_bounding_radii)
+///   contact     this rank's contact model: the friction history of leaving grains
+/// Returns, per grain g of `owned` with new owner o = owner_rank(centroid): its state to o and to
+/// every rank of ghost_ranks(centroid, radius, o), this rank excepted; when o is another rank,
+/// also the history of g's pairs to o. A grain that leaves stays here as a ghost when this rank is
+/// one of its ghost ranks.
+ExchangePlan plan_exchange(const Subdomains& subdomains, int rank, std::span<const std::uint32_t> owned,
+                           std::span<const RigidBodyState> bodies, std::span<const double> radii,
+                           const ContactModel& contact);
+
+/// Every grain's role on `rank` after an exchange: owned if it stayed (plan.kept) or arrived with
+/// its centroid in this rank's box, ghost if it left but stays in reach (plan.ghosted) or arrived
+/// for another owner, else absent. `received`: the messages from the other ranks.
+std::vector<GrainRole> roles_after_exchange(const Subdomains& subdomains, int rank, std::size_t grains,
+                                            const ExchangePlan& plan, std::span<const RankMessage> received);
+
+/// Every grain's role on `rank` at the start, when every rank holds every grain's state: owned by
+/// its centroid's box, ghost when `rank` is one of its ghost ranks.
+std::vector<GrainRole> initial_roles(const Subdomains& subdomains, int rank, std::span<const RigidBodyState> bodies,
+                                     std::span<const double> radii);
+
+/// The sorted grains whose role is `role`.
+std::vector<std::uint32_t> grains_with_role(std::span<const GrainRole> roles, GrainRole role);
+
+/// Per grain, the radius of a sphere about its reference centroid (bodies[g].centroid) holding
+/// all its nodes, m: a rigid grain's reach in any pose.
+std::vector<double> grain_bounding_radii(const Model& model, std::span<const BodyProperties> bodies);
+
+/// Per grain, its number of surface nodes: the work weight of bisect_domain until measured
+/// weights replace it (contact cost grows with the surface nodes).
+std::vector<double> surface_node_work(const Model& model);
+
+// The step's sums across ranks: each rank contributes rows for what it owns, the rows of all ranks
+// are gathered sorted by key, and these rebuild the one-rank sums from them.
+
+/// Columns of a grain row: strain, kinetic, damped, gravity work, bad (0 or 1).
+inline constexpr std::size_t kGrainTermColumns = 5;
+/// Columns of a pair row: elastic energy, dissipated, overlap, node contacts.
+inline constexpr std::size_t kPairTermColumns = 4;
+
+/// The owned grains' rows (kGrainTermColumns each, in `owned` order).
+std::vector<double> grain_term_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned);
+/// Writes every grain's terms from rows keyed by grain (kGrainTermColumns each); DataError
+/// unless every grain of `sums` has exactly one row.
+void set_grain_terms(std::span<const std::uint64_t> grains, std::span<const double> rows, GrainStepSums& sums);
+
+/// A candidate's key in candidate order: a x (grains + platens) + b (b as in ContactRecord).
+std::uint64_t pair_key(std::uint32_t a, std::uint32_t b, std::size_t grains_and_platens);
+/// The rows of `pairs` (kPairTermColumns each, in their order).
+std::vector<double> pair_term_rows(std::span<const PairStepSum> pairs);
+/// contact's elastic_energy, dissipated, node_contacts and max_overlap from every owned
+/// candidate's row in key order: added from zero as the one-rank contact step adds them.
+void set_pair_terms(std::span<const double> rows_in_key_order, ContactStepStats& contact);
+
+}  // namespace graintwin::fdem
