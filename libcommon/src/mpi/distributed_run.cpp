@@ -1,0 +1,125 @@
+#include "graintwin/mpi/distributed_run.hpp"
+
+#include <fmt/format.h>
+#include <mpi.h>
+
+#include <limits>
+#include <numeric>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/rank_state.hpp"
+
+namespace graintwin::mpi {
+namespace {
+
+int int_count(std::size_t n) {
+  if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw UsageError(fmt::format("{} doubles for one rank exceed MPI's int counts: use more ranks", n));
+  return static_cast<int>(n);
+}
+
+/// Every rank's buffer for every other (outgoing[r]: to rank r), exchanged: returns, per rank r,
+/// what r sent this one. Two collectives: the counts (MPI_Alltoall), then the doubles (MPI_Alltoallv).
+std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<double>>& outgoing) {
+  const std::size_t ranks = outgoing.size();
+  std::vector<int> send_counts(ranks), receive_counts(ranks);
+  for (std::size_t r = 0; r < ranks; ++r) send_counts[r] = int_count(outgoing[r].size());
+  MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  std::vector<int> send_offsets(ranks, 0), receive_offsets(ranks, 0);
+  std::exclusive_scan(send_counts.begin(), send_counts.end(), send_offsets.begin(), 0);
+  std::exclusive_scan(receive_counts.begin(), receive_counts.end(), receive_offsets.begin(), 0);
+  std::vector<double> sent, received(static_cast<std::size_t>(receive_offsets.back()) + receive_counts.back());
+  for (const auto& buffer : outgoing) sent.insert(sent.end(), buffer.begin(), buffer.end());
+  MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_DOUBLE, received.data(), receive_counts.data(),
+                receive_offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  std::vector<std::vector<double>> incoming(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    incoming[r].assign(received.begin() + receive_offsets[r], received.begin() + receive_offsets[r] + receive_counts[r]);
+  return incoming;
+}
+
+std::vector<std::uint64_t> as_keys(std::span<const std::uint32_t> grains) { return {grains.begin(), grains.end()}; }
+
+}  // namespace
+
+DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain)
+    : session_(session), solver_(solver) {
+  solver.set_rank_share(this);  // refuses what does not run across ranks yet
+  try {
+    const fdem::Model& m = solver.model();
+    std::vector<fdem::BodyProperties> bodies(m.grains.size());
+    for (std::size_t g = 0; g < bodies.size(); ++g) bodies[g] = solver.body(g);
+    radii_ = fdem::grain_bounding_radii(m, bodies);
+    const std::span<const fdem::RigidBodyState> states = solver.rigid_states();
+    std::vector<Eigen::Vector3d> centroids;
+    for (const fdem::RigidBodyState& s : states) centroids.push_back(s.position);
+    subdomains_ = fdem::bisect_domain(centroids, radii_, fdem::surface_node_work(m), domain, session.size(),
+                                      solver.contact_model()->skin());
+    roles_ = fdem::initial_roles(subdomains_, session.rank(), states, radii_);
+    owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
+  } catch (...) {
+    solver.set_rank_share(nullptr);
+    throw;
+  }
+}
+
+DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
+
+fdem::StepReport DistributedRun::step(double dt) {
+  const fdem::StepReport report = solver_.step(dt);
+  exchange();
+  return report;
+}
+
+void DistributedRun::exchange() {
+  const int rank = session_.rank();
+  const fdem::ExchangePlan plan =
+      fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
+  std::vector<std::vector<double>> outgoing(plan.to.size());
+  for (std::size_t r = 0; r < plan.to.size(); ++r) {
+    if (plan.to[r].bodies.empty() && plan.to[r].history.empty()) continue;  // nothing: an empty buffer
+    fdem::pack_message(plan.to[r], outgoing[r]);
+    traffic_.bodies += plan.to[r].bodies.size();
+    traffic_.history += plan.to[r].history.size();
+    traffic_.doubles += outgoing[r].size();
+  }
+  traffic_.migrations += owned_.size() - plan.kept.size();
+  const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
+  std::vector<fdem::RankMessage> received;
+  for (const auto& buffer : incoming)
+    if (!buffer.empty()) received.push_back(fdem::unpack_message(buffer));
+  roles_ = fdem::roles_after_exchange(subdomains_, rank, roles_.size(), plan, received);
+  owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
+  for (const fdem::RankMessage& m : received) {
+    for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
+    solver_.contact_model()->merge_history(m.history);
+  }
+}
+
+void DistributedRun::complete_sums(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
+                                   fdem::ContactStepStats& contact) {
+  const SortedRows grain_rows = gather_sorted(session_, as_keys(owned_), fdem::grain_term_rows(grains, owned_),
+                                              fdem::kGrainTermColumns);
+  fdem::set_grain_terms(grain_rows.keys, grain_rows.values, grains);
+  const std::size_t partners = solver_.model().grains.size() + solver_.model().platens.size();
+  std::vector<std::uint64_t> pair_keys;
+  for (const fdem::PairStepSum& p : owned_pairs) pair_keys.push_back(fdem::pair_key(p.a, p.b, partners));
+  const SortedRows pair_rows = gather_sorted(session_, pair_keys, fdem::pair_term_rows(owned_pairs), fdem::kPairTermColumns);
+  fdem::set_pair_terms(pair_rows.values, contact);
+}
+
+std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {
+  std::vector<double> values;
+  const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
+  for (std::uint32_t g : owned_) fdem::append_state(states[g], values);
+  const SortedRows rows = gather_sorted(session_, as_keys(owned_), values, fdem::kStateDoubles);
+  if (rows.keys.size() != states.size())
+    throw DataError(fmt::format("the ranks own {} of {} grains: every grain needs one owner", rows.keys.size(),
+                                states.size()));
+  std::vector<fdem::RigidBodyState> all(states.size());
+  for (std::size_t i = 0; i < rows.keys.size(); ++i)
+    all[rows.keys[i]] = fdem::state_from(rows.values.data() + i * fdem::kStateDoubles);
+  return all;
+}
+
+}  // namespace graintwin::mpi
