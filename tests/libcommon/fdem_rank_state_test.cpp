@@ -190,34 +190,42 @@ TEST(FdemRankState, StepSumsAreRebuiltInTheOneRankOrder) {
   sums.bad.assign(3, 0);
   sums.kinetic = {1.0, 2.0, 3.0};
   sums.bad[2] = 1;
+  // Order-sensitive energies: added from zero in key order, as the contact step adds them. With 3
+  // grains and 2 platens, candidate (0, 5) is grain 0 against platen 0: before (1, 2).
+  const std::vector<PairStepSum> pairs{{2, 4, -1e16, 1e16, 2e-6, 2}, {0, 1, 1e16, 1.0, 1e-6, 3}, {0, 5, 1.0, -1e16, 3e-6, 1}};
   const std::vector<std::uint32_t> owned{2, 0};
-  const std::vector<double> rows = grain_term_rows(sums, owned);
-  ASSERT_EQ(rows.size(), 2 * kGrainTermColumns);
-  EXPECT_EQ(rows[1], 3.0);
-  EXPECT_EQ(rows[4], 1.0);
+  const StepRows rows = step_rows(sums, owned, pairs, 2);
+  ASSERT_EQ(rows.keys, (std::vector<std::uint64_t>{2, 0, 3 + 2 * 5 + 4, 3 + 1, 3 + 5}));
+  ASSERT_EQ(rows.values.size(), 5 * kTermColumns);
+  EXPECT_EQ(rows.values[1], 3.0);
+  EXPECT_EQ(rows.values[4], 1.0);
 
+  // What gather_sorted hands every rank: the rows sorted by key.
+  std::vector<std::size_t> order{1, 0, 3, 4, 2};
+  std::vector<std::uint64_t> keys;
+  std::vector<double> values;
+  for (std::size_t i : order) {
+    keys.push_back(rows.keys[i]);
+    values.insert(values.end(), rows.values.begin() + i * kTermColumns, rows.values.begin() + (i + 1) * kTermColumns);
+  }
+  sums.kinetic[1] = 7.0;  // grain 1's row comes below, from its owner
+  keys.insert(keys.begin() + 1, 1);
+  values.insert(values.begin() + kTermColumns, {0.0, 11.0, 0.0, 0.0, 0.0});
   GrainStepSums whole = sums;
   whole.kinetic.assign(3, 0.0);
   whole.bad.assign(3, 0);
-  std::vector<double> all(3 * kGrainTermColumns, 0.0);
-  for (int g = 0; g < 3; ++g) all[g * kGrainTermColumns + 1] = 10.0 + g;
-  all[2 * kGrainTermColumns + 4] = 1.0;
-  set_grain_terms(std::vector<std::uint64_t>{0, 1, 2}, all, whole);
-  EXPECT_EQ(whole.kinetic, (std::vector<double>{10, 11, 12}));
-  EXPECT_EQ(whole.bad, (std::vector<char>{0, 0, 1}));
-  EXPECT_THROW(set_grain_terms(std::vector<std::uint64_t>{0, 2}, std::span(all).first(2 * kGrainTermColumns), whole),
-               DataError)
-      << "grain 1 has no owner";
-
-  // Order-sensitive energies: added from zero in key order, as the contact step adds them.
-  const std::vector<PairStepSum> pairs{{0, 1, 1e16, 1.0, 1e-6, 3}, {0, 5, 1.0, -1e16, 3e-6, 1}, {2, 3, -1e16, 1e16, 2e-6, 2}};
   ContactStepStats stats;
-  set_pair_terms(pair_term_rows(pairs), stats);
+  set_step_terms(keys, values, whole, stats);
+  EXPECT_EQ(whole.kinetic, (std::vector<double>{1, 11, 3}));
+  EXPECT_EQ(whole.bad, (std::vector<char>{0, 0, 1}));
   EXPECT_EQ(bits(stats.elastic_energy), bits((1e16 + 1.0) + -1e16));
   EXPECT_EQ(bits(stats.dissipated), bits((1.0 + -1e16) + 1e16));
   EXPECT_EQ(stats.max_overlap, 3e-6);
   EXPECT_EQ(stats.node_contacts, 6u);
-  EXPECT_LT(pair_key(0, 5, 6), pair_key(1, 2, 6)) << "(a, b) order, platens after the grains";
+
+  keys.erase(keys.begin() + 1);  // grain 1 without an owner
+  values.erase(values.begin() + kTermColumns, values.begin() + 2 * kTermColumns);
+  EXPECT_THROW(set_step_terms(keys, values, whole, stats), DataError);
 }
 
 TEST(FdemRankState, ShareOwningEveryGrainStepsExactlyAsWithout) {

@@ -184,47 +184,40 @@ std::vector<double> surface_node_work(const Model& model) {
   return work;
 }
 
-std::vector<double> grain_term_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned) {
-  std::vector<double> rows;
-  rows.reserve(owned.size() * kGrainTermColumns);
-  for (std::uint32_t g : owned)
-    rows.insert(rows.end(), {sums.strain[g], sums.kinetic[g], sums.damped[g], sums.gravity_work[g], double(sums.bad[g])});
-  return rows;
-}
-
-void set_grain_terms(std::span<const std::uint64_t> grains, std::span<const double> rows, GrainStepSums& sums) {
-  const std::size_t n = sums.kinetic.size();
-  std::vector<char> seen(n, 0);
-  for (std::size_t i = 0; i < grains.size(); ++i) {
-    const std::uint64_t g = grains[i];
-    if (g >= n || seen[g]++)
-      throw DataError(fmt::format("the ranks sent step terms for grain {} twice or outside a model of {} grains", g, n));
-    const double* r = rows.data() + i * kGrainTermColumns;
-    sums.strain[g] = r[0], sums.kinetic[g] = r[1], sums.damped[g] = r[2], sums.gravity_work[g] = r[3];
-    sums.bad[g] = r[4] != 0;
+StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
+                   std::size_t platens) {
+  const std::uint64_t grains = sums.kinetic.size(), partners = grains + platens;
+  StepRows rows;
+  for (std::uint32_t g : owned) {
+    rows.keys.push_back(g);
+    rows.values.insert(rows.values.end(),
+                       {sums.strain[g], sums.kinetic[g], sums.damped[g], sums.gravity_work[g], double(sums.bad[g])});
   }
-  if (const auto missing = std::find(seen.begin(), seen.end(), 0); missing != seen.end())
-    throw DataError(fmt::format("no rank advanced grain {} in this step: every grain needs one owner",
-                                missing - seen.begin()));
-}
-
-std::uint64_t pair_key(std::uint32_t a, std::uint32_t b, std::size_t grains_and_platens) {
-  return std::uint64_t{a} * grains_and_platens + b;
-}
-
-std::vector<double> pair_term_rows(std::span<const PairStepSum> pairs) {
-  std::vector<double> rows;
-  rows.reserve(pairs.size() * kPairTermColumns);
-  for (const PairStepSum& p : pairs)
-    rows.insert(rows.end(), {p.elastic_energy, p.dissipated, p.overlap, static_cast<double>(p.node_contacts)});
+  for (const PairStepSum& p : pairs) {
+    rows.keys.push_back(grains + p.a * partners + p.b);
+    rows.values.insert(rows.values.end(), {p.elastic_energy, p.dissipated, p.overlap, double(p.node_contacts), 0.0});
+  }
   return rows;
 }
 
-void set_pair_terms(std::span<const double> rows_in_key_order, ContactStepStats& contact) {
+void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
+                    ContactStepStats& contact) {
+  const std::size_t grains = sums.kinetic.size();
+  const auto unowned = [](std::size_t g) {
+    return DataError(fmt::format("no rank advanced grain {} in this step: every grain needs one owner", g));
+  };
+  std::size_t i = 0;
+  for (; i < keys.size() && keys[i] < grains; ++i) {
+    if (keys[i] != i) throw unowned(i);  // the keys are sorted and distinct: grain i has none
+    const double* r = values.data() + i * kTermColumns;
+    sums.strain[i] = r[0], sums.kinetic[i] = r[1], sums.damped[i] = r[2], sums.gravity_work[i] = r[3];
+    sums.bad[i] = r[4] != 0;
+  }
+  if (i != grains) throw unowned(i);
   contact.elastic_energy = contact.dissipated = contact.max_overlap = 0;
   contact.node_contacts = 0;
-  for (std::size_t i = 0; i + kPairTermColumns <= rows_in_key_order.size(); i += kPairTermColumns) {
-    const double* r = rows_in_key_order.data() + i;
+  for (; i < keys.size(); ++i) {
+    const double* r = values.data() + i * kTermColumns;
     contact.elastic_energy += r[0];
     contact.dissipated += r[1];
     contact.max_overlap = std::max(contact.max_overlap, r[2]);

@@ -72,6 +72,7 @@ fdem::StepReport DistributedRun::step(double dt) {
 }
 
 void DistributedRun::exchange() {
+  const double start = MPI_Wtime();
   const int rank = session_.rank();
   const fdem::ExchangePlan plan =
       fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
@@ -94,18 +95,16 @@ void DistributedRun::exchange() {
     for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
     solver_.contact_model()->merge_history(m.history);
   }
+  traffic_.exchange_seconds += MPI_Wtime() - start;
 }
 
 void DistributedRun::complete_sums(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
                                    fdem::ContactStepStats& contact) {
-  const SortedRows grain_rows = gather_sorted(session_, as_keys(owned_), fdem::grain_term_rows(grains, owned_),
-                                              fdem::kGrainTermColumns);
-  fdem::set_grain_terms(grain_rows.keys, grain_rows.values, grains);
-  const std::size_t partners = solver_.model().grains.size() + solver_.model().platens.size();
-  std::vector<std::uint64_t> pair_keys;
-  for (const fdem::PairStepSum& p : owned_pairs) pair_keys.push_back(fdem::pair_key(p.a, p.b, partners));
-  const SortedRows pair_rows = gather_sorted(session_, pair_keys, fdem::pair_term_rows(owned_pairs), fdem::kPairTermColumns);
-  fdem::set_pair_terms(pair_rows.values, contact);
+  const double start = MPI_Wtime();
+  const fdem::StepRows mine = fdem::step_rows(grains, owned_, owned_pairs, solver_.model().platens.size());
+  const SortedRows all = gather_sorted(session_, mine.keys, mine.values, fdem::kTermColumns);
+  fdem::set_step_terms(all.keys, all.values, grains, contact);
+  traffic_.sums_seconds += MPI_Wtime() - start;
 }
 
 std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {

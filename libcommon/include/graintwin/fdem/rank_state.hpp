@@ -93,26 +93,31 @@ std::vector<double> grain_bounding_radii(const Model& model, std::span<const Bod
 /// weights replace it (contact cost grows with the surface nodes).
 std::vector<double> surface_node_work(const Model& model);
 
-// The step's sums across ranks: each rank contributes rows for what it owns, the rows of all ranks
-// are gathered sorted by key, and these rebuild the one-rank sums from them.
+// The step's sums across ranks: each rank contributes keyed rows for what it owns, the rows of all
+// ranks are gathered sorted by key (one collective for both kinds), and set_step_terms rebuilds the
+// one-rank sums from them.
 
-/// Columns of a grain row: strain, kinetic, damped, gravity work, bad (0 or 1).
-inline constexpr std::size_t kGrainTermColumns = 5;
-/// Columns of a pair row: elastic energy, dissipated, overlap, node contacts.
-inline constexpr std::size_t kPairTermColumns = 4;
+/// Columns of a row: a grain's strain, kinetic, damped, gravity work and bad (0 or 1), J; a contact
+/// candidate's elastic energy and dissipated (J), deepest overlap (m), node contacts and 0.
+inline constexpr std::size_t kTermColumns = 5;
 
-/// The owned grains' rows (kGrainTermColumns each, in `owned` order).
-std::vector<double> grain_term_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned);
-/// Writes every grain's terms from rows keyed by grain (kGrainTermColumns each); DataError
-/// unless every grain of `sums` has exactly one row.
-void set_grain_terms(std::span<const std::uint64_t> grains, std::span<const double> rows, GrainStepSums& sums);
+/// Keyed rows, kTermColumns values each.
+struct StepRows {
+  std::vector<std::uint64_t> keys;
+  std::vector<double> values;
+};
 
-/// A candidate's key in candidate order: a x (grains + platens) + b (b as in ContactRecord).
-std::uint64_t pair_key(std::uint32_t a, std::uint32_t b, std::size_t grains_and_platens);
-/// The rows of `pairs` (kPairTermColumns each, in their order).
-std::vector<double> pair_term_rows(std::span<const PairStepSum> pairs);
-/// contact's elastic_energy, dissipated, node_contacts and max_overlap from every owned
-/// candidate's row in key order: added from zero as the one-rank contact step adds them.
-void set_pair_terms(std::span<const double> rows_in_key_order, ContactStepStats& contact);
+/// This rank's rows: each owned grain g's terms under key g, then each owned candidate (a, b)'s
+/// sums under grains + a x (grains + platens) + b (b as in ContactRecord), so that key order is
+/// grain order, then candidate order.
+StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
+                   std::size_t platens);
+
+/// From every rank's rows in increasing key order: every grain's terms into `sums` (whose size is
+/// the grain count), and contact's elastic_energy, dissipated, node_contacts and max_overlap added
+/// from zero in candidate order, as the one-rank contact step adds them. DataError unless every
+/// grain has exactly one row.
+void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
+                    ContactStepStats& contact);
 
 }  // namespace graintwin::fdem

@@ -18,12 +18,15 @@
 
 namespace graintwin::mpi {
 
-/// What a rank sent since the run started (its own sends; sum_over_ranks for the run's).
+/// What a rank sent since the run started (its own sends; sum_over_ranks for the run's), and the
+/// time its steps spent talking (waiting for slower ranks included).
 struct RankTraffic {
   std::uint64_t bodies = 0;      ///< grain states sent (ghost updates and migrations)
   std::uint64_t history = 0;     ///< friction history entries sent with migrating grains
   std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
   std::uint64_t doubles = 0;     ///< doubles sent in the exchanges (8 bytes each)
+  double exchange_seconds = 0;   ///< s, planning, packing and exchanging states and migrants
+  double sums_seconds = 0;       ///< s, gathering the step's sums
 };
 
 class DistributedRun final : public fdem::RankShare {
