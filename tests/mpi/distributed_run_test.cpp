@@ -179,5 +179,8 @@ int main(int argc, char** argv) {
   mpi::Session session(argc, argv);
   g_session = &session;
   ::testing::InitGoogleTest(&argc, argv);
+  // An exception on one rank ends the whole job (it leaves main, and mpirun stops the others)
+  // rather than being caught by the test while the other ranks wait for this one in a collective.
+  GTEST_FLAG_SET(catch_exceptions, false);
   return RUN_ALL_TESTS();
 }
