@@ -34,6 +34,8 @@ RankMessage sample_message() {
   m.bodies.push_back({4000000000u, RigidBodyState{}});
   m.history.push_back({3, 9, 77, Eigen::Vector3d(1e-9, -2e-9, 1.0 / 7.0), 2.5e-7});
   m.history.push_back({0, 1, 0, Eigen::Vector3d::Zero(), 0.0});
+  m.rows.keys = {3, (std::uint64_t{1} << 53) - 1};
+  m.rows.values = {1.0 / 3.0, -0.0, 1e-310, 2.0, 0.0, 5.0, 6.0, 7.0, 8.0, 9.0};
   return m;
 }
 
@@ -56,7 +58,7 @@ class WholeShare : public RankShare {
  public:
   explicit WholeShare(std::size_t grains) : roles_(grains, GrainRole::owned) {}
   std::span<const GrainRole> roles() const override { return roles_; }
-  void complete_sums(GrainStepSums&, std::span<const PairStepSum> pairs, ContactStepStats&) override {
+  void finish_step(GrainStepSums&, std::span<const PairStepSum> pairs, ContactStepStats&) override {
     owned_pairs += pairs.size();
   }
   std::size_t owned_pairs = 0;
@@ -71,7 +73,7 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
   const RankMessage m = sample_message();
   std::vector<double> packed{42.0};  // appended after what is there
   pack_message(m, packed);
-  ASSERT_EQ(packed.size(), 1 + 2 + 2 * kBodyDoubles + 2 * kHistoryDoubles);
+  ASSERT_EQ(packed.size(), 1 + 3 + 2 * kBodyDoubles + 2 * kHistoryDoubles + 2 * (1 + kTermColumns));
   const RankMessage back = unpack_message(std::span<const double>(packed).subspan(1));
   ASSERT_EQ(back.bodies.size(), 2u);
   ASSERT_EQ(back.history.size(), 2u);
@@ -87,7 +89,10 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
     expect_same_bits(h.spring, g.spring);
     EXPECT_EQ(bits(h.offset), bits(g.offset));
   }
-  EXPECT_TRUE(unpack_message(std::vector<double>{0.0, 0.0}).bodies.empty());
+  EXPECT_EQ(back.rows.keys, m.rows.keys);
+  ASSERT_EQ(back.rows.values.size(), m.rows.values.size());
+  for (std::size_t i = 0; i < m.rows.values.size(); ++i) EXPECT_EQ(bits(back.rows.values[i]), bits(m.rows.values[i]));
+  EXPECT_TRUE(unpack_message(std::vector<double>{0.0, 0.0, 0.0}).bodies.empty());
 }
 
 TEST(FdemRankState, DamagedMessagesAreRefused) {
@@ -200,22 +205,15 @@ TEST(FdemRankState, StepSumsAreRebuiltInTheOneRankOrder) {
   EXPECT_EQ(rows.values[1], 3.0);
   EXPECT_EQ(rows.values[4], 1.0);
 
-  // What gather_sorted hands every rank: the rows sorted by key.
-  std::vector<std::size_t> order{1, 0, 3, 4, 2};
-  std::vector<std::uint64_t> keys;
-  std::vector<double> values;
-  for (std::size_t i : order) {
-    keys.push_back(rows.keys[i]);
-    values.insert(values.end(), rows.values.begin() + i * kTermColumns, rows.values.begin() + (i + 1) * kTermColumns);
-  }
-  sums.kinetic[1] = 7.0;  // grain 1's row comes below, from its owner
-  keys.insert(keys.begin() + 1, 1);
-  values.insert(values.begin() + kTermColumns, {0.0, 11.0, 0.0, 0.0, 0.0});
+  // Grain 1's row comes from its owner, another rank: the rows of both, sorted by key.
+  const StepRows other{{1}, {0.0, 11.0, 0.0, 0.0, 0.0}};
+  const StepRows all = sorted_rows(std::vector<StepRows>{rows, other});
+  EXPECT_EQ(all.keys, (std::vector<std::uint64_t>{0, 1, 2, 3 + 1, 3 + 5, 3 + 2 * 5 + 4}));
   GrainStepSums whole = sums;
   whole.kinetic.assign(3, 0.0);
   whole.bad.assign(3, 0);
   ContactStepStats stats;
-  set_step_terms(keys, values, whole, stats);
+  set_step_terms(all.keys, all.values, whole, stats);
   EXPECT_EQ(whole.kinetic, (std::vector<double>{1, 11, 3}));
   EXPECT_EQ(whole.bad, (std::vector<char>{0, 0, 1}));
   EXPECT_EQ(bits(stats.elastic_energy), bits((1e16 + 1.0) + -1e16));
@@ -223,9 +221,9 @@ TEST(FdemRankState, StepSumsAreRebuiltInTheOneRankOrder) {
   EXPECT_EQ(stats.max_overlap, 3e-6);
   EXPECT_EQ(stats.node_contacts, 6u);
 
-  keys.erase(keys.begin() + 1);  // grain 1 without an owner
-  values.erase(values.begin() + kTermColumns, values.begin() + 2 * kTermColumns);
-  EXPECT_THROW(set_step_terms(keys, values, whole, stats), DataError);
+  const StepRows without_1 = sorted_rows(std::span(&rows, 1));
+  EXPECT_THROW(set_step_terms(without_1.keys, without_1.values, whole, stats), DataError) << "grain 1 without an owner";
+  EXPECT_THROW(sorted_rows(std::vector<StepRows>{rows, other, other}), DataError) << "grain 1 with two owners";
 }
 
 TEST(FdemRankState, ShareOwningEveryGrainStepsExactlyAsWithout) {

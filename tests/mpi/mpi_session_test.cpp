@@ -134,30 +134,6 @@ TEST(MpiSession, AGrainSummedTwiceIsRefusedOnEveryRank) {
   EXPECT_THROW(mpi::ordered_sum(*g_session, grains, values, 2), UsageError) << "two values for two grains of 2";
 }
 
-TEST(MpiSession, RowsGatheredByKeyArriveSortedOnEveryRank) {
-  // Rank r contributes keys 3 (size - 1 - r) + {0, 1, 2}, in descending order, with values 10 key
-  // and -key: every rank gets all 3 x size rows in increasing key order.
-  const int size = g_session->size(), base = 3 * (size - 1 - g_session->rank());
-  std::vector<std::uint64_t> keys;
-  std::vector<double> values;
-  for (int k = 2; k >= 0; --k) {
-    keys.push_back(base + k);
-    values.insert(values.end(), {10.0 * (base + k), -1.0 * (base + k)});
-  }
-  const mpi::SortedRows rows = mpi::gather_sorted(*g_session, keys, values, 2);
-  ASSERT_EQ(rows.keys.size(), 3u * size);
-  for (std::size_t i = 0; i < rows.keys.size(); ++i) {
-    EXPECT_EQ(rows.keys[i], i);
-    EXPECT_EQ(rows.values[2 * i], 10.0 * i);
-    EXPECT_EQ(rows.values[2 * i + 1], -1.0 * i);
-  }
-  if (size > 1) {  // every rank sends key 7: refused on every rank alike
-    const std::vector<std::uint64_t> seven{7};
-    EXPECT_THROW(mpi::gather_sorted(*g_session, seven, std::vector<double>{1.0}, 1), DataError);
-  }
-  EXPECT_THROW(mpi::gather_sorted(*g_session, keys, values, 3), UsageError);
-}
-
 namespace {
 
 // `--throw-on-last-rank`: the last rank leaves by an exception, caught above its session, while the

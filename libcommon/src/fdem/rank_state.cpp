@@ -22,12 +22,9 @@ class Reader {
   }
   double next() { return *take(1); }
   /// A packed index or count: a whole number in [0, 2^32).
-  std::uint32_t index() {
-    const double d = next();
-    if (!(d >= 0 && d < 4294967296.0) || d != std::floor(d))
-      throw DataError(fmt::format("a rank's message holds {} where an index belongs; the ranks must run the same program", d));
-    return static_cast<std::uint32_t>(d);
-  }
+  std::uint32_t index() { return static_cast<std::uint32_t>(whole(4294967296.0)); }
+  /// A packed row key: a whole number in [0, 2^53), where doubles hold every integer.
+  std::uint64_t key() { return whole(9007199254740992.0); }
   Eigen::Vector3d vector() {
     const double* d = take(3);
     return {d[0], d[1], d[2]};
@@ -42,6 +39,12 @@ class Reader {
   bool done() const { return at_ == data_.size(); }
 
  private:
+  std::uint64_t whole(double below) {
+    const double d = next();
+    if (!(d >= 0 && d < below) || d != std::floor(d))
+      throw DataError(fmt::format("a rank's message holds {} where an index belongs; the ranks must run the same program", d));
+    return static_cast<std::uint64_t>(d);
+  }
   [[noreturn]] void too_short() const {
     throw DataError(fmt::format("a rank's message of {} doubles ends inside an entry; the ranks must run the same program",
                                 data_.size()));
@@ -52,8 +55,7 @@ class Reader {
 
 void append(std::vector<double>& out, const Eigen::Vector3d& v) { out.insert(out.end(), {v[0], v[1], v[2]}); }
 
-}  // namespace
-
+/// Appends a state's kStateDoubles to `out`, bits kept.
 void append_state(const RigidBodyState& s, std::vector<double>& out) {
   append(out, s.position);
   out.insert(out.end(), {s.orientation.w(), s.orientation.x(), s.orientation.y(), s.orientation.z()});
@@ -61,10 +63,13 @@ void append_state(const RigidBodyState& s, std::vector<double>& out) {
   append(out, s.angular_momentum);
 }
 
+/// The state append_state wrote at `d`.
 RigidBodyState state_from(const double* d) {
   return {Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Quaterniond(d[3], d[4], d[5], d[6]), Eigen::Vector3d(d[7], d[8], d[9]),
           Eigen::Vector3d(d[10], d[11], d[12])};
 }
+
+}  // namespace
 
 void pack_message(const RankMessage& message, std::vector<double>& out) {
   out.push_back(static_cast<double>(message.bodies.size()));
@@ -77,6 +82,12 @@ void pack_message(const RankMessage& message, std::vector<double>& out) {
     out.insert(out.end(), {double(h.a), double(h.b), double(h.node)});
     append(out, h.spring);
     out.push_back(h.offset);
+  }
+  out.push_back(static_cast<double>(message.rows.keys.size()));
+  for (std::size_t i = 0; i < message.rows.keys.size(); ++i) {
+    out.push_back(static_cast<double>(message.rows.keys[i]));
+    out.insert(out.end(), message.rows.values.begin() + i * kTermColumns,
+               message.rows.values.begin() + (i + 1) * kTermColumns);
   }
 }
 
@@ -93,6 +104,12 @@ RankMessage unpack_message(std::span<const double> packed) {
     h.a = in.index(), h.b = in.index(), h.node = in.index();
     h.spring = in.vector();
     h.offset = in.next();
+  }
+  const std::size_t rows = in.count(1 + kTermColumns);
+  for (std::size_t i = 0; i < rows; ++i) {
+    m.rows.keys.push_back(in.key());
+    const double* v = in.take(kTermColumns);
+    m.rows.values.insert(m.rows.values.end(), v, v + kTermColumns);
   }
   if (!in.done())
     throw DataError(fmt::format("a rank's message of {} doubles holds more than its counts say; the ranks must run the "
@@ -196,6 +213,23 @@ StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> own
   for (const PairStepSum& p : pairs) {
     rows.keys.push_back(grains + p.a * partners + p.b);
     rows.values.insert(rows.values.end(), {p.elastic_energy, p.dissipated, p.overlap, double(p.node_contacts), 0.0});
+  }
+  return rows;
+}
+
+StepRows sorted_rows(std::span<const StepRows> parts) {
+  std::vector<std::pair<std::uint64_t, const double*>> all;
+  for (const StepRows& part : parts)
+    for (std::size_t i = 0; i < part.keys.size(); ++i) all.emplace_back(part.keys[i], part.values.data() + i * kTermColumns);
+  std::sort(all.begin(), all.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  StepRows rows;
+  for (const auto& [key, values] : all) {
+    if (!rows.keys.empty() && rows.keys.back() == key)
+      throw DataError(fmt::format("two ranks sent the step's terms under key {}: each grain and contact candidate must "
+                                  "have one owner",
+                                  key));
+    rows.keys.push_back(key);
+    rows.values.insert(rows.values.end(), values, values + kTermColumns);
   }
   return rows;
 }

@@ -366,7 +366,7 @@ StepReport Solver::step(double dt) {
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
   rigid_nodes_stale_ = true;  // rigid grains moved; state() places their nodes when read
-  if (share_) share_->complete_sums(step_sums_, contact_->owned_pair_sums(), report.contact);
+  if (share_) share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact);
 
   Energies& e = report.energies;
   for (std::size_t g = 0; g < grains; ++g) {

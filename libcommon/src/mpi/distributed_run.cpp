@@ -38,8 +38,6 @@ std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<
   return incoming;
 }
 
-std::vector<std::uint64_t> as_keys(std::span<const std::uint32_t> grains) { return {grains.begin(), grains.end()}; }
-
 }  // namespace
 
 DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain)
@@ -65,20 +63,17 @@ DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, con
 
 DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
 
-fdem::StepReport DistributedRun::step(double dt) {
-  const fdem::StepReport report = solver_.step(dt);
-  exchange();
-  return report;
-}
-
-void DistributedRun::exchange() {
+void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
+                                 fdem::ContactStepStats& contact) {
   const double start = MPI_Wtime();
   const int rank = session_.rank();
-  const fdem::ExchangePlan plan =
+  fdem::ExchangePlan plan =
       fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
+  const fdem::StepRows rows = fdem::step_rows(grains, owned_, owned_pairs, solver_.model().platens.size());
   std::vector<std::vector<double>> outgoing(plan.to.size());
   for (std::size_t r = 0; r < plan.to.size(); ++r) {
-    if (plan.to[r].bodies.empty() && plan.to[r].history.empty()) continue;  // nothing: an empty buffer
+    if (static_cast<int>(r) == rank) continue;
+    plan.to[r].rows = rows;
     fdem::pack_message(plan.to[r], outgoing[r]);
     traffic_.bodies += plan.to[r].bodies.size();
     traffic_.history += plan.to[r].history.size();
@@ -87,8 +82,14 @@ void DistributedRun::exchange() {
   traffic_.migrations += owned_.size() - plan.kept.size();
   const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
   std::vector<fdem::RankMessage> received;
-  for (const auto& buffer : incoming)
-    if (!buffer.empty()) received.push_back(fdem::unpack_message(buffer));
+  std::vector<fdem::StepRows> parts{rows};
+  for (std::size_t r = 0; r < incoming.size(); ++r)
+    if (static_cast<int>(r) != rank) {
+      received.push_back(fdem::unpack_message(incoming[r]));
+      parts.push_back(std::move(received.back().rows));
+    }
+  const fdem::StepRows all = fdem::sorted_rows(parts);
+  fdem::set_step_terms(all.keys, all.values, grains, contact);
   roles_ = fdem::roles_after_exchange(subdomains_, rank, roles_.size(), plan, received);
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
   for (const fdem::RankMessage& m : received) {
@@ -98,26 +99,24 @@ void DistributedRun::exchange() {
   traffic_.exchange_seconds += MPI_Wtime() - start;
 }
 
-void DistributedRun::complete_sums(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
-                                   fdem::ContactStepStats& contact) {
-  const double start = MPI_Wtime();
-  const fdem::StepRows mine = fdem::step_rows(grains, owned_, owned_pairs, solver_.model().platens.size());
-  const SortedRows all = gather_sorted(session_, mine.keys, mine.values, fdem::kTermColumns);
-  fdem::set_step_terms(all.keys, all.values, grains, contact);
-  traffic_.sums_seconds += MPI_Wtime() - start;
-}
-
 std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {
-  std::vector<double> values;
   const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
-  for (std::uint32_t g : owned_) fdem::append_state(states[g], values);
-  const SortedRows rows = gather_sorted(session_, as_keys(owned_), values, fdem::kStateDoubles);
-  if (rows.keys.size() != states.size())
-    throw DataError(fmt::format("the ranks own {} of {} grains: every grain needs one owner", rows.keys.size(),
-                                states.size()));
+  fdem::RankMessage mine;
+  for (std::uint32_t g : owned_) mine.bodies.push_back({g, states[g]});
+  std::vector<double> packed;
+  fdem::pack_message(mine, packed);
   std::vector<fdem::RigidBodyState> all(states.size());
-  for (std::size_t i = 0; i < rows.keys.size(); ++i)
-    all[rows.keys[i]] = fdem::state_from(rows.values.data() + i * fdem::kStateDoubles);
+  std::vector<char> seen(states.size(), 0);
+  for (const auto& buffer : exchange_buffers(std::vector<std::vector<double>>(session_.size(), packed)))
+    for (const fdem::GrainBody& b : fdem::unpack_message(buffer).bodies) {
+      if (b.grain >= all.size() || seen[b.grain]++)
+        throw DataError(fmt::format("grain {} came twice or from outside a model of {} grains: every grain needs one "
+                                    "owner",
+                                    b.grain, all.size()));
+      all[b.grain] = b.state;
+    }
+  if (const auto missing = std::find(seen.begin(), seen.end(), 0); missing != seen.end())
+    throw DataError(fmt::format("no rank owns grain {}: every grain needs one owner", missing - seen.begin()));
   return all;
 }
 

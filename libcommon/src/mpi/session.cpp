@@ -31,52 +31,6 @@ std::vector<int> offsets_of(const std::vector<int>& counts) {
   return offsets;
 }
 
-/// Rows of keys and `components` values each, in rank order.
-template <class Key>
-struct Gathered {
-  std::vector<Key> keys;
-  std::vector<double> values;
-};
-
-/// Every rank's rows, gathered at rank 0 (the others receive none) or, `everywhere`, on every rank.
-template <class Key>
-Gathered<Key> gather_rows(const Session& session, std::span<const Key> keys, std::span<const double> values,
-                          std::size_t components, MPI_Datatype key_type, bool everywhere) {
-  const int count = checked_count(keys.size(), "keys");
-  checked_count(values.size(), "values");
-  std::vector<int> key_counts(everywhere || session.rank() == kRoot ? session.size() : 0);
-  if (everywhere) MPI_Allgather(&count, 1, MPI_INT, key_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  else MPI_Gather(&count, 1, MPI_INT, key_counts.data(), 1, MPI_INT, kRoot, MPI_COMM_WORLD);
-  std::vector<int> value_counts(key_counts.size());
-  std::transform(key_counts.begin(), key_counts.end(), value_counts.begin(),
-                 [&](int n) { return checked_count(static_cast<std::size_t>(n) * components, "values"); });
-  const std::size_t total = std::accumulate(key_counts.begin(), key_counts.end(), std::size_t{0});
-  Gathered<Key> all{std::vector<Key>(total), std::vector<double>(total * components)};
-  const std::vector<int> key_offsets = offsets_of(key_counts), value_offsets = offsets_of(value_counts);
-  const int value_count = static_cast<int>(values.size());
-  if (everywhere) {
-    MPI_Allgatherv(keys.data(), count, key_type, all.keys.data(), key_counts.data(), key_offsets.data(), key_type,
-                   MPI_COMM_WORLD);
-    MPI_Allgatherv(values.data(), value_count, MPI_DOUBLE, all.values.data(), value_counts.data(), value_offsets.data(),
-                   MPI_DOUBLE, MPI_COMM_WORLD);
-  } else {
-    MPI_Gatherv(keys.data(), count, key_type, all.keys.data(), key_counts.data(), key_offsets.data(), key_type, kRoot,
-                MPI_COMM_WORLD);
-    MPI_Gatherv(values.data(), value_count, MPI_DOUBLE, all.values.data(), value_counts.data(), value_offsets.data(),
-                MPI_DOUBLE, kRoot, MPI_COMM_WORLD);
-  }
-  return all;
-}
-
-/// The row indices of `keys` in increasing key order.
-template <class Key>
-std::vector<std::size_t> key_order(const std::vector<Key>& keys) {
-  std::vector<std::size_t> order(keys.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
-  return order;
-}
-
 }  // namespace
 
 Session::Session(int& argc, char**& argv) : uncaught_at_start_(std::uncaught_exceptions()) {
@@ -103,21 +57,36 @@ std::vector<double> ordered_sum(const Session& session, std::span<const std::uin
   if (components == 0 || values.size() != grains.size() * components)
     throw UsageError(fmt::format("an ordered sum needs {} values per grain: got {} values for {} grains", components,
                                  values.size(), grains.size()));
+  const int count = checked_count(grains.size(), "grains");
+  checked_count(values.size(), "values");
   const bool root = session.rank() == kRoot;
-  const Gathered<std::uint32_t> all = gather_rows(session, grains, values, components, MPI_UINT32_T, false);
-  const std::vector<std::uint32_t>& all_grains = all.keys;
+
+  std::vector<int> grain_counts(root ? session.size() : 0);
+  MPI_Gather(&count, 1, MPI_INT, grain_counts.data(), 1, MPI_INT, kRoot, MPI_COMM_WORLD);
+  std::vector<int> value_counts(grain_counts.size());
+  std::transform(grain_counts.begin(), grain_counts.end(), value_counts.begin(),
+                 [&](int n) { return checked_count(static_cast<std::size_t>(n) * components, "values"); });
+  const std::size_t total = std::accumulate(grain_counts.begin(), grain_counts.end(), std::size_t{0});
+  std::vector<std::uint32_t> all_grains(total);
+  std::vector<double> all_values(total * components);
+  MPI_Gatherv(grains.data(), count, MPI_UINT32_T, all_grains.data(), grain_counts.data(),
+              offsets_of(grain_counts).data(), MPI_UINT32_T, kRoot, MPI_COMM_WORLD);
+  MPI_Gatherv(values.data(), static_cast<int>(values.size()), MPI_DOUBLE, all_values.data(), value_counts.data(),
+              offsets_of(value_counts).data(), MPI_DOUBLE, kRoot, MPI_COMM_WORLD);
 
   // Broadcast as [twice-contributed grain or -1, sums...]: every rank learns of a refusal alike.
   std::vector<double> result(1 + components, 0.0);
   if (root) {
-    const std::vector<std::size_t> order = key_order(all_grains);
+    std::vector<std::size_t> order(total);
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all_grains[a] < all_grains[b]; });
     result[0] = -1;
-    for (std::size_t i = 0; i < order.size(); ++i) {
+    for (std::size_t i = 0; i < total; ++i) {
       if (i > 0 && all_grains[order[i]] == all_grains[order[i - 1]]) {
         result[0] = all_grains[order[i]];  // exact: grain indices are 32-bit
         break;
       }
-      for (std::size_t c = 0; c < components; ++c) result[1 + c] += all.values[order[i] * components + c];
+      for (std::size_t c = 0; c < components; ++c) result[1 + c] += all_values[order[i] * components + c];
     }
   }
   MPI_Bcast(result.data(), static_cast<int>(result.size()), MPI_DOUBLE, kRoot, MPI_COMM_WORLD);
@@ -126,25 +95,6 @@ std::vector<double> ordered_sum(const Session& session, std::span<const std::uin
                                 "alone",
                                 static_cast<std::uint32_t>(result[0])));
   return {result.begin() + 1, result.end()};
-}
-
-SortedRows gather_sorted(const Session& session, std::span<const std::uint64_t> keys, std::span<const double> values,
-                         std::size_t components) {
-  if (components == 0 || values.size() != keys.size() * components)
-    throw UsageError(fmt::format("rows gathered by key need {} values per key: got {} values for {} keys", components,
-                                 values.size(), keys.size()));
-  const Gathered<std::uint64_t> all = gather_rows(session, keys, values, components, MPI_UINT64_T, true);
-  SortedRows rows;
-  rows.keys.reserve(all.keys.size());
-  rows.values.reserve(all.values.size());
-  for (std::size_t i : key_order(all.keys)) {
-    if (!rows.keys.empty() && rows.keys.back() == all.keys[i])
-      throw DataError(fmt::format("key {} was gathered twice from the ranks: each row must come from one rank alone",
-                                  all.keys[i]));
-    rows.keys.push_back(all.keys[i]);
-    rows.values.insert(rows.values.end(), all.values.begin() + i * components, all.values.begin() + (i + 1) * components);
-  }
-  return rows;
 }
 
 std::uint64_t sum_over_ranks(const Session& /*MPI is started*/, std::uint64_t count) {

@@ -23,11 +23,24 @@ struct GrainBody {
   RigidBodyState state;
 };
 
+/// Columns of a row of a step's terms: a grain's strain, kinetic, damped, gravity work and bad (0
+/// or 1), J; a contact candidate's elastic energy and dissipated (J), deepest overlap (m), node
+/// contacts and 0.
+inline constexpr std::size_t kTermColumns = 5;
+
+/// Keyed rows of a step's terms, kTermColumns values each.
+struct StepRows {
+  std::vector<std::uint64_t> keys;
+  std::vector<double> values;
+};
+
 /// What one rank sends another after a step: the states of the grains the receiver owns or ghosts
-/// from now on, and the friction history of the pairs of those among them that change owner.
+/// from now on, the friction history of the pairs of those among them that change owner, and the
+/// sender's terms of the step (the same rows to every rank).
 struct RankMessage {
   std::vector<GrainBody> bodies;
   std::vector<ContactHistoryEntry> history;
+  StepRows rows;
 };
 
 /// Doubles per packed RigidBodyState (position 3, quaternion w x y z, velocity 3, angular
@@ -35,13 +48,9 @@ struct RankMessage {
 /// ContactHistoryEntry (a, b, node, spring 3, offset).
 inline constexpr std::size_t kStateDoubles = 13, kBodyDoubles = 1 + kStateDoubles, kHistoryDoubles = 7;
 
-/// Appends `state`'s kStateDoubles to `out`, bits kept.
-void append_state(const RigidBodyState& state, std::vector<double>& out);
-/// The state append_state wrote at `packed` (kStateDoubles read).
-RigidBodyState state_from(const double* packed);
-
 /// Appends `message` to `out` as doubles: [bodies, kBodyDoubles each..., entries, kHistoryDoubles
-/// each...]; indices are exact (below 2^53), values keep their bits.
+/// each..., rows, (key, kTermColumns values) each...]; indices and keys are exact (below 2^53),
+/// values keep their bits.
 void pack_message(const RankMessage& message, std::vector<double>& out);
 /// The message pack_message wrote into `packed` (all of it). DataError when its counts do not
 /// fit its length or an index is not a whole number in [0, 2^32).
@@ -93,19 +102,8 @@ std::vector<double> grain_bounding_radii(const Model& model, std::span<const Bod
 /// weights replace it (contact cost grows with the surface nodes).
 std::vector<double> surface_node_work(const Model& model);
 
-// The step's sums across ranks: each rank contributes keyed rows for what it owns, the rows of all
-// ranks are gathered sorted by key (one collective for both kinds), and set_step_terms rebuilds the
-// one-rank sums from them.
-
-/// Columns of a row: a grain's strain, kinetic, damped, gravity work and bad (0 or 1), J; a contact
-/// candidate's elastic energy and dissipated (J), deepest overlap (m), node contacts and 0.
-inline constexpr std::size_t kTermColumns = 5;
-
-/// Keyed rows, kTermColumns values each.
-struct StepRows {
-  std::vector<std::uint64_t> keys;
-  std::vector<double> values;
-};
+// The step's sums across ranks: each rank sends every other its rows for what it owns, with the
+// exchange of states, and every rank rebuilds the one-rank sums from all ranks' rows.
 
 /// This rank's rows: each owned grain g's terms under key g, then each owned candidate (a, b)'s
 /// sums under grains + a x (grains + platens) + b (b as in ContactRecord), so that key order is
@@ -113,7 +111,11 @@ struct StepRows {
 StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
                    std::size_t platens);
 
-/// From every rank's rows in increasing key order: every grain's terms into `sums` (whose size is
+/// Every rank's rows as one set in increasing key order. DataError when a key comes twice (two
+/// ranks owning one grain or candidate).
+StepRows sorted_rows(std::span<const StepRows> parts);
+
+/// From every rank's rows in increasing key order (sorted_rows): every grain's terms into `sums` (whose size is
 /// the grain count), and contact's elastic_energy, dissipated, node_contacts and max_overlap added
 /// from zero in candidate order, as the one-rank contact step adds them. DataError unless every
 /// grain has exactly one row.

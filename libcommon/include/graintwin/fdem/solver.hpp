@@ -149,20 +149,22 @@ struct GrainStepSums {
 };
 
 /// A run split over ranks (docs/fdemrun.md, across machines; mpi/distributed_run implements it
-/// over MPI): the solver advances only the grains this rank owns, reads its ghosts' states from
-/// set_rigid_state, and completes each step's sums through this, so that every rank sums every
-/// grain's and every contact's terms in the one-rank order.
+/// over MPI): the solver advances only the grains this rank owns and finishes each step through
+/// this, which completes the step's sums so that every rank adds every grain's and every
+/// contact's terms in the one-rank order, and hands the solver the states of the grains it holds
+/// next (set_rigid_state) with their friction history (ContactModel::merge_history).
 class RankShare {
  public:
   virtual ~RankShare() = default;
-  /// Per grain, its role on this rank in the next step.
+  /// Per grain, its role on this rank in the step about to be taken.
   virtual std::span<const GrainRole> roles() const = 0;
-  /// Completes a step's sums. On entry `grains` holds the terms of this rank's owned grains (the
-  /// others' are zero) and `owned_pairs` the sums of the contact candidates it owns; on return
-  /// `grains` holds every grain's terms, and contact's elastic_energy, dissipated, node_contacts
-  /// and max_overlap are the whole run's, added in candidate order as one rank adds them.
-  virtual void complete_sums(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs,
-                             ContactStepStats& contact) = 0;
+  /// Called by Solver::step once this rank's owned grains have moved, before the energies are
+  /// summed. On entry `grains` holds the terms of the owned grains (the others' are zero) and
+  /// `owned_pairs` the sums of the contact candidates this rank owns; on return `grains` holds
+  /// every grain's terms, and contact's elastic_energy, dissipated, node_contacts and max_overlap
+  /// are the whole run's, added in candidate order as one rank adds them.
+  virtual void finish_step(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs,
+                           ContactStepStats& contact) = 0;
 };
 
 class Solver {
@@ -270,8 +272,8 @@ class Solver {
 
   // A run split over ranks (docs/fdemrun.md, across machines).
 
-  /// Steps only the grains `share` names owned from the next step on, and completes each step's
-  /// sums through it (not owned; nullptr: every grain, one rank). Forces, loads and contacts read
+  /// Steps only the grains `share` names owned from the next step on, and finishes each step
+  /// through it (not owned; nullptr: every grain, one rank). Forces, loads and contacts read
   /// from this solver are then whole for its owned grains only. Rigid grains only, with contact
   /// and without platens or a boundary so far: UsageError otherwise.
   void set_rank_share(RankShare* share);

@@ -4,10 +4,11 @@
 // state) and hands it to a DistributedRun, which splits the grains by bisect_domain boxes of their
 // centroids and then, each step: the solver advances the grains this rank owns, with contact among
 // its owned grains and ghosts (a pair between two ranks' grains is evaluated on both, each keeping
-// the force on its own grain) and the step's sums completed in the one-rank order; then each owner
-// sends its grains' states to the ranks that ghost them, and a grain whose centroid left its
-// owner's box migrates to the new owner with its pairs' friction history. The ghost lists are
-// refreshed every step. The plain-data side is fdem/rank_state.
+// the force on its own grain); then, in one exchange, each owner sends its grains' states to the
+// ranks that ghost them, a grain whose centroid left its owner's box goes to the new owner with
+// its pairs' friction history, and every rank sends every other its terms of the step, which each
+// adds in the one-rank order. The ghost lists are refreshed every step. The plain-data side is
+// fdem/rank_state.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -19,14 +20,13 @@
 namespace graintwin::mpi {
 
 /// What a rank sent since the run started (its own sends; sum_over_ranks for the run's), and the
-/// time its steps spent talking (waiting for slower ranks included).
+/// time its steps spent in the exchange (waiting for slower ranks included).
 struct RankTraffic {
   std::uint64_t bodies = 0;      ///< grain states sent (ghost updates and migrations)
   std::uint64_t history = 0;     ///< friction history entries sent with migrating grains
   std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
-  std::uint64_t doubles = 0;     ///< doubles sent in the exchanges (8 bytes each)
-  double exchange_seconds = 0;   ///< s, planning, packing and exchanging states and migrants
-  double sums_seconds = 0;       ///< s, gathering the step's sums
+  std::uint64_t doubles = 0;     ///< doubles sent in the exchanges (8 bytes each), the step's terms included
+  double exchange_seconds = 0;   ///< s, planning, packing, exchanging and unpacking
 };
 
 class DistributedRun final : public fdem::RankShare {
@@ -43,10 +43,10 @@ class DistributedRun final : public fdem::RankShare {
   DistributedRun(const DistributedRun&) = delete;
   DistributedRun& operator=(const DistributedRun&) = delete;
 
-  /// One step of dt (s) on every rank (collective): the solver's step of the owned grains, whose
-  /// report's energies and contact sums are the whole run's (node_checks, triangle_checks,
-  /// pairs and pair_lists_built are this rank's work), then the exchange of states and migrants.
-  fdem::StepReport step(double dt);
+  /// One step of dt (s) on every rank (collective): the solver's step of the owned grains and the
+  /// exchange; the report's energies and contact sums are the whole run's (node_checks,
+  /// triangle_checks, pairs and pair_lists_built are this rank's work).
+  fdem::StepReport step(double dt) { return solver_.step(dt); }
 
   const fdem::Subdomains& subdomains() const { return subdomains_; }
   /// Per grain, its role on this rank in the next step.
@@ -57,13 +57,15 @@ class DistributedRun final : public fdem::RankShare {
   /// Every grain's state from its owner, on every rank (collective): for output and checks.
   std::vector<fdem::RigidBodyState> gather_states() const;
 
-  void complete_sums(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
-                     fdem::ContactStepStats& contact) override;
+  /// The exchange, from within the solver's step once the owned grains moved: sends the owned
+  /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
+  /// and this rank's terms of the step to every rank, takes the others', completes the step's sums
+  /// and sets the roles for the next step. Two collectives (MPI_Alltoall of the counts,
+  /// MPI_Alltoallv of the doubles).
+  void finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
+                   fdem::ContactStepStats& contact) override;
 
  private:
-  /// Sends the owned grains' states to their ghost ranks and migrants to their new owners, takes
-  /// the others', and sets the roles for the next step.
-  void exchange();
 
   const Session& session_;
   fdem::Solver& solver_;

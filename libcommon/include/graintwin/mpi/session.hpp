@@ -54,27 +54,6 @@ class Session {
 std::vector<double> ordered_sum(const Session& session, std::span<const std::uint32_t> grains,
                                 std::span<const double> values, std::size_t components);
 
-/// Rows gathered from every rank, sorted by key.
-struct SortedRows {
-  std::vector<std::uint64_t> keys;  ///< increasing
-  std::vector<double> values;       ///< keys.size() x components, row-major, row i is keys[i]'s
-};
-
-/// Every rank's keyed rows, on every rank, sorted by key: the input of a sum in a fixed global
-/// order that is not a plain sum from zero (a running total, a maximum), or of per-grain values
-/// every rank needs.
-///
-/// Inputs (each rank its own):
-///   keys        this rank's keys, any order; each key from one rank at most
-///   values      keys.size() x components doubles, row-major
-///   components  >= 1, the same on every rank
-/// How: MPI_Allgatherv of keys and values (two collectives besides the counts'); every rank then
-/// holds 8 + 8 x components bytes per row of the whole run.
-/// Throws DataError on every rank alike when a key comes twice; UsageError on the calling rank
-/// when values' length is not keys' times components.
-SortedRows gather_sorted(const Session& session, std::span<const std::uint64_t> keys, std::span<const double> values,
-                         std::size_t components);
-
 /// The sum of one count per rank, on every rank (integers: exact in any order).
 std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count);
 
