@@ -2,7 +2,7 @@
 // The plain-data side of a run split over ranks (docs/fdemrun.md, across machines): what travels
 // between ranks after each step (rigid grains' states, and the friction history of a grain that
 // changes owner) packed as doubles, who must receive what, each grain's role on a rank after the
-// exchange, and the step's sums rebuilt in the one-rank order from the rows the ranks gathered.
+// exchange, and the step's sums rebuilt in the one-rank order from the rows the ranks exchanged.
 // No MPI here: mpi/distributed_run moves the buffers. Every rank keeps the whole model (grains'
 // shapes never change), so only state and history travel.
 #include <Eigen/Core>
@@ -53,7 +53,7 @@ inline constexpr std::size_t kStateDoubles = 13, kBodyDoubles = 1 + kStateDouble
 /// values keep their bits.
 void pack_message(const RankMessage& message, std::vector<double>& out);
 /// The message pack_message wrote into `packed` (all of it). DataError when its counts do not
-/// fit its length or an index is not a whole number in [0, 2^32).
+/// fit its length or an index is not a whole number in [0, 2^32) (a row key: [0, 2^53)).
 RankMessage unpack_message(std::span<const double> packed);
 
 /// A rank's sends after a step and what stays with it.
