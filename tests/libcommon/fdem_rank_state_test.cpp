@@ -247,6 +247,31 @@ TEST(FdemRankState, ShareOwningEveryGrainStepsExactlyAsWithout) {
   }
 }
 
+TEST(FdemRankState, ContactRolesLeaveOutAbsentGrainsAndPairsWithoutAnOwnedOne) {
+  Model m;  // two rigid cubes overlapping by 1 um
+  const TetMesh cube = box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3);
+  add_grain(m, cube, Eigen::Vector3d::Zero(), GrainKind::rigid, 0, 1);
+  add_grain(m, cube, Eigen::Vector3d(0.999e-3, 0.2e-3, 0), GrainKind::rigid, 0, 2);
+  Solver solver(m, SolverOptions{});
+  ContactModel& contact = *solver.contact_model();
+  const double dt = 0.1 * solver.time_step_limits().stable();
+  const auto step_with = [&](std::vector<GrainRole> roles) {
+    contact.set_grain_roles(roles);
+    solver.step(dt);
+    return solver.contacts().size();
+  };
+  // The overlap's energy is put in by the first step (a later one would count as a runaway).
+  EXPECT_EQ(step_with({GrainRole::owned, GrainRole::ghost}), 1u);
+  ASSERT_EQ(contact.owned_pair_sums().size(), 1u);
+  EXPECT_GT(contact.owned_pair_sums()[0].elastic_energy, 0);
+  EXPECT_EQ(step_with({GrainRole::owned, GrainRole::absent}), 0u);
+  EXPECT_EQ(step_with({GrainRole::ghost, GrainRole::owned}), 1u);
+  EXPECT_TRUE(contact.owned_pair_sums().empty()) << "the pair belongs to the owner of grain 0";
+  EXPECT_EQ(step_with({GrainRole::ghost, GrainRole::ghost}), 0u);
+  EXPECT_EQ(step_with({}), 1u) << "no roles: every grain owned";
+  EXPECT_TRUE(contact.owned_pair_sums().empty());
+}
+
 TEST(FdemRankState, OnlyRigidGrainsInContactAreSharedSoFar) {
   Model m;
   add_grain(m, box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);

@@ -30,9 +30,9 @@ std::vector<BoxPair> ContactModel::State::rank_pairs(std::vector<BoxPair> pairs)
 
 void ContactModel::set_grain_roles(std::span<const GrainRole> roles) {
   State& s = *state_;
-  if (roles.size() != s.grains.size())
-    throw UsageError(fmt::format("fdem contact: {} grain roles for {} grains; pass one per grain.", roles.size(),
-                                 s.grains.size()));
+  if (!roles.empty() && roles.size() != s.grains.size())
+    throw UsageError(fmt::format("fdem contact: {} grain roles for {} grains; pass one per grain, or none for all owned.",
+                                 roles.size(), s.grains.size()));
   if (std::equal(roles.begin(), roles.end(), s.roles.begin(), s.roles.end())) return;
   s.roles.assign(roles.begin(), roles.end());
   s.need_rebuild = true;  // grains came or went: the broad phase's pairs are another set

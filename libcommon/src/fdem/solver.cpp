@@ -645,6 +645,7 @@ void Solver::set_rank_share(RankShare* share) {
   if (share && (!contact_ || !rigid || !m.platens.empty() || boundary_))
     throw UsageError("a run split over ranks steps rigid grains in contact so far: deformable grains, platens, the wall "
                      "and the membrane run on one rank (docs/fdemrun.md, across machines)");
+  if (!share && share_) contact_->set_grain_roles({});  // every grain in contact again
   share_ = share;
 }
 

@@ -247,10 +247,11 @@ class ContactModel {
 
   // A run shared by ranks (docs/fdemrun.md, across machines; contact_ranks.cpp).
 
-  /// One role per grain for the next steps; empty (the default): every grain owned, the one-rank
-  /// run. Absent grains take no part; a grain pair is a candidate only with an owned grain in it
-  /// and a platen only with an owned grain, so the forces on ghosts are partial (their owners
-  /// have them whole). A change of roles rebuilds the broad phase. UsageError unless one per grain.
+  /// One role per grain for the next steps; empty: every grain owned, the one-rank run (as before
+  /// any call). Absent grains take no part; a grain pair is a candidate only with an owned grain
+  /// in it and a platen only with an owned grain, so the forces on ghosts are partial (their
+  /// owners have them whole). A change of roles rebuilds the broad phase. UsageError unless empty
+  /// or one per grain.
   void set_grain_roles(std::span<const GrainRole> roles);
   /// With roles: the last step's sums of the candidates with node contacts whose grain a is
   /// owned, in candidate order, (a, b); each candidate of the run is owned by exactly one rank.
