@@ -24,7 +24,7 @@ DEPENDS = {
     "contacts": {"core", "io", "segment"},
     "track": {"core", "io", "shape"},
     "fdem": {"core", "io"},
-    "mpi": {"core"},
+    "mpi": {"core", "fdem"},
     "mesh": {"core", "io", "fdem", "shape", "synth"},
     "experiment": {"core", "io", "fdem", "mesh", "shape", "synth"},
     "micro": {"core", "io", "contacts", "fdem", "shape"},

@@ -151,6 +151,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
   s.pose.resize(grain_count);
   s.loads.assign(grain_count, RigidLoad{});
   if (s.record_node_forces) s.node_forces.assign(s.node_count, Eigen::Vector3d::Zero());
+  s.owned_pair_sums.clear();
   if (!poses.empty() && poses.size() != grain_count)
     throw DataError(fmt::format("fdem contact: {} rigid poses for {} grains; pass one per grain or none.", poses.size(),
                                 grain_count));
@@ -161,13 +162,15 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
 #pragma omp parallel for schedule(dynamic, 16) reduction(|| : moved) if (grain_count >= kParallelGrains)
   for (std::int64_t g = 0; g < grain_count; ++g) {
     const auto k = static_cast<std::uint32_t>(g);
+    if (!s.present(k)) continue;  // another rank's grain: its pose here is stale
     if (s.update_grain(k, x, poses.empty() ? nullptr : &poses[k], check_moved)) moved = true;
   }
   s.need_rebuild = s.need_rebuild || moved;
   if (s.need_rebuild) {
     std::vector<Aabb> boxes(grain_count);
-    for (std::uint32_t g = 0; g < grain_count; ++g) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
-    s.rebuild_pairs(overlapping_box_pairs(boxes), x);
+    for (std::uint32_t g = 0; g < grain_count; ++g)
+      if (s.present(g)) boxes[g] = s.trees.bounds(g).inflated(0.5 * s.skin);
+    s.rebuild_pairs(s.rank_pairs(overlapping_box_pairs(boxes)), x);
     s.built_at.resize(s.surface_nodes.size());
     for (std::uint32_t g = 0; g < grain_count; ++g)
       for (std::uint32_t k = s.surface_offset[g]; k < s.surface_offset[g + 1]; ++k)
@@ -188,7 +191,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
       if (s.trees.bounds(a).overlaps(s.trees.bounds(s.grain_pairs[k].second)))
         s.candidates.push_back({s.grain_pairs[k].first, s.grain_pairs[k].second, static_cast<std::uint32_t>(k)});
     const Aabb& box = s.trees.bounds(a);
-    if (!(box.lo.array() <= box.hi.array()).all()) continue;
+    if (!(box.lo.array() <= box.hi.array()).all() || !s.owned(a)) continue;
     for (std::uint32_t p = 0; p < platens.size(); ++p) {
       // The box corner deepest along -normal decides whether the plane can touch the grain.
       const Eigen::Vector3d& n = platens[p].normal;
@@ -277,6 +280,8 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.node_contacts += s.hits[i].size();
     stats.max_overlap = std::max(stats.max_overlap, sum.record.overlap);
     s.records.push_back(sum.record);
+    if (!s.roles.empty() && s.roles[c.a] == GrainRole::owned)
+      s.owned_pair_sums.push_back({c.a, c.b, sum.elastic_energy, sum.dissipated, sum.record.overlap, s.hits[i].size()});
   }
   s.adopt_initial_overlaps = false;
   return stats;

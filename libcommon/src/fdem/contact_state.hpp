@@ -133,11 +133,7 @@ struct DeepPair {
   double depth = 0;
 };
 
-struct HistoryEntry {
-  std::uint32_t a = 0, b = 0, node = 0;
-  Eigen::Vector3d spring = Eigen::Vector3d::Zero();
-  double offset = 0;  ///< m, the node contact's force-free overlap (NodeHit::offset)
-};
+using HistoryEntry = ContactHistoryEntry;  ///< offset: NodeHit::offset
 inline bool key_less(const HistoryEntry& h, std::uint32_t a, std::uint32_t b, std::uint32_t node) {
   return std::tie(h.a, h.b, h.node) < std::tie(a, b, node);
 }
@@ -270,6 +266,14 @@ struct ContactModel::State {
   std::vector<CandidateSum> sums;  ///< per candidate with hits
   std::vector<std::vector<WallHit>> wall_hits;  ///< per grain, this step
   std::vector<Checks> checks;
+
+  // A rank's share of the grains (contact_ranks.cpp); empty roles: every grain owned.
+  std::vector<GrainRole> roles;
+  std::vector<PairStepSum> owned_pair_sums;  ///< with roles: this step's, of candidates with an owned a
+  bool present(std::uint32_t g) const { return roles.empty() || roles[g] != GrainRole::absent; }
+  bool owned(std::uint32_t g) const { return roles.empty() || roles[g] == GrainRole::owned; }
+  /// The broad phase's `pairs` a rank evaluates: those with an owned grain (all without roles).
+  std::vector<BoxPair> rank_pairs(std::vector<BoxPair> pairs) const;
 
   const Material& material_of(std::uint32_t grain) const { return materials[grains[grain].material]; }
 

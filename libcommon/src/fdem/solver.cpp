@@ -166,6 +166,7 @@ void Solver::stop_grains() {
 
 void Solver::set_boundary(Boundary* boundary) {
   if (boundary && !contact_) throw UsageError("a sample boundary (wall or membrane) needs contact; enable contact in the scene");
+  if (boundary && share_) throw UsageError("the wall and the membrane run on one rank so far (docs/fdemrun.md, across machines)");
   boundary_ = boundary;
 }
 
@@ -281,6 +282,8 @@ StepReport Solver::step(double dt) {
 
   times_.elements += seconds_since();
   StepReport report;
+  const std::span<const GrainRole> roles = share_ ? share_->roles() : std::span<const GrainRole>{};
+  if (share_) contact_->set_grain_roles(roles);
   if (contact_) {
     // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
     poses_.resize(grains);
@@ -308,6 +311,7 @@ StepReport Solver::step(double dt) {
 
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
+    if (!roles.empty() && roles[g] != GrainRole::owned) continue;  // another rank advances it
     const Grain& grain = m.grains[g];
     if (grain.kind != GrainKind::rigid) {
       for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
@@ -364,6 +368,7 @@ StepReport Solver::step(double dt) {
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
   rigid_nodes_stale_ = true;  // rigid grains moved; state() places their nodes when read
+  if (share_) share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact);
 
   Energies& e = report.energies;
   for (std::size_t g = 0; g < grains; ++g) {
@@ -663,6 +668,25 @@ void Solver::load(const io::H5File& f, const std::string& group) {
   sum_platen_contacts();          // the stiffness, from the restored records
   platen_force_ = platen_force;  // as saved: checkpoints of older runs hold no records
   rigid_loads_ = std::move(rigid_loads);
+  rigid_nodes_stale_ = true;
+}
+
+// A run split over ranks (docs/fdemrun.md, across machines).
+
+void Solver::set_rank_share(RankShare* share) {
+  const Model& m = *model_;
+  const bool rigid = std::all_of(m.grains.begin(), m.grains.end(), [](const Grain& g) { return g.kind == GrainKind::rigid; });
+  if (share && (!contact_ || !rigid || !m.platens.empty() || boundary_))
+    throw UsageError("a run split over ranks steps rigid grains in contact so far: deformable grains, platens, the wall "
+                     "and the membrane run on one rank (docs/fdemrun.md, across machines)");
+  if (!share && share_) contact_->set_grain_roles({});  // every grain in contact again
+  share_ = share;
+}
+
+void Solver::set_rigid_state(std::size_t g, const RigidBodyState& state) {
+  if (model_->grains.at(g).kind != GrainKind::rigid)
+    throw UsageError(fmt::format("grain {} is not rigid: only a rigid grain's state is set whole", g));
+  state_.bodies[g] = state;
   rigid_nodes_stale_ = true;
 }
 

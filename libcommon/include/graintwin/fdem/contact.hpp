@@ -140,6 +140,31 @@ struct ContactStepStats {
   std::size_t pair_lists_built = 0;
 };
 
+/// A grain's part in a run shared by ranks (docs/fdemrun.md, across machines): each rank's
+/// contact model sees only the grains it owns and their ghosts.
+enum class GrainRole : std::uint8_t {
+  absent,  ///< held by other ranks only: takes no part in this rank's contact
+  ghost,   ///< another rank's grain copied here: a partner of this rank's grains
+  owned,   ///< this rank's: the forces on it here are whole
+};
+
+/// One node contact's friction history: the tangential spring and the force-free overlap of node
+/// `node` in grain pair (a < b).
+struct ContactHistoryEntry {
+  std::uint32_t a = 0, b = 0, node = 0;
+  Eigen::Vector3d spring = Eigen::Vector3d::Zero();  ///< N
+  double offset = 0;  ///< m, the node contact's force-free overlap (keep_initial_overlaps)
+};
+
+/// What one candidate (grain pair, or grain and platen) with node contacts added to a step's sums.
+struct PairStepSum {
+  std::uint32_t a = 0, b = 0;  ///< as ContactRecord
+  double elastic_energy = 0;   ///< J
+  double dissipated = 0;       ///< J
+  double overlap = 0;          ///< m, deepest
+  std::uint64_t node_contacts = 0;
+};
+
 class ContactModel {
  public:
   /// `node_mass` has one lumped mass (kg) per model node; the reference node positions of `model`
@@ -227,6 +252,25 @@ class ContactModel {
   /// exactly like the uninterrupted run.
   void save(io::H5File& file, const std::string& group) const;
   void load(const io::H5File& file, const std::string& group);
+
+  // A run shared by ranks (docs/fdemrun.md, across machines; contact_ranks.cpp).
+
+  /// One role per grain for the next steps; empty: every grain owned, the one-rank run (as before
+  /// any call). Absent grains take no part; a grain pair is a candidate only with an owned grain
+  /// in it and a platen only with an owned grain, so the forces on ghosts are partial (their
+  /// owners have them whole). A change of roles rebuilds the broad phase. UsageError unless empty
+  /// or one per grain.
+  void set_grain_roles(std::span<const GrainRole> roles);
+  /// With roles: the last step's sums of the candidates with node contacts whose grain a is
+  /// owned, in candidate order, (a, b); each candidate of the run is owned by exactly one rank.
+  /// Empty without roles.
+  std::span<const PairStepSum> owned_pair_sums() const;
+  /// The friction history of the pairs with one of `grains` in them, sorted by (a, b, node).
+  std::vector<ContactHistoryEntry> history_of(std::span<const std::uint32_t> grains) const;
+  /// Adds the entries of `entries` the history lacks (a grain that migrated here brings its
+  /// pairs'). An entry it already holds must be the same, bit for bit: the ranks evaluating a pair
+  /// keep the same history, else DataError naming the entry.
+  void merge_history(std::span<const ContactHistoryEntry> entries);
 
  private:
   struct State;

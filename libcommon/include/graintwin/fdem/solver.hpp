@@ -145,6 +145,32 @@ class Boundary {
   virtual void load(const io::H5File& file, const std::string& group) = 0;
 };
 
+/// Per grain, a step's energy terms before their ordered sum, J; `bad`: the grain's state became
+/// non-finite in the step.
+struct GrainStepSums {
+  std::vector<double> strain, kinetic, damped, gravity_work;
+  std::vector<char> bad;
+};
+
+/// A run split over ranks (docs/fdemrun.md, across machines; mpi/distributed_run implements it
+/// over MPI): the solver advances only the grains this rank owns and finishes each step through
+/// this, which completes the step's sums so that every rank adds every grain's and every
+/// contact's terms in the one-rank order, and hands the solver the states of the grains it holds
+/// next (set_rigid_state) with their friction history (ContactModel::merge_history).
+class RankShare {
+ public:
+  virtual ~RankShare() = default;
+  /// Per grain, its role on this rank in the step about to be taken.
+  virtual std::span<const GrainRole> roles() const = 0;
+  /// Called by Solver::step once this rank's owned grains have moved, before the energies are
+  /// summed. On entry `grains` holds the terms of the owned grains (the others' are zero) and
+  /// `owned_pairs` the sums of the contact candidates this rank owns; on return `grains` holds
+  /// every grain's terms, and contact's elastic_energy, dissipated, node_contacts and max_overlap
+  /// are the whole run's, added in candidate order as one rank adds them.
+  virtual void finish_step(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs,
+                           ContactStepStats& contact) = 0;
+};
+
 class Solver {
  public:
   /// Precomputes elements, masses and rigid-body properties; builds contact when enabled. Node
@@ -259,6 +285,18 @@ class Solver {
   const StepTimes& step_times() const { return times_; }
   bool has_contact() const { return contact_ != nullptr; }
 
+  // A run split over ranks (docs/fdemrun.md, across machines).
+
+  /// Steps only the grains `share` names owned from the next step on, and finishes each step
+  /// through it (not owned; nullptr: every grain, one rank). Forces, loads and contacts read
+  /// from this solver are then whole for its owned grains only. Rigid grains only, with contact
+  /// and without platens or a boundary so far: UsageError otherwise.
+  void set_rank_share(RankShare* share);
+  /// Replaces rigid grain g's state (a ghost's, or a grain migrating here, from its owner).
+  void set_rigid_state(std::size_t grain, const RigidBodyState& state);
+  /// Every grain's body state, without placing rigid grains' nodes (state() does).
+  std::span<const RigidBodyState> rigid_states() const { return state_.bodies; }
+
   /// Checkpoint: the state, the last step's platen forces, the contact history (membrane balls'
   /// included) and the boundary's state when one is set, under `group`.
   void save(io::H5File& file, const std::string& group) const;
@@ -304,10 +342,8 @@ class Solver {
   std::vector<double> platen_stiffness_;       ///< per platen, last step, N/m
   StepTimes times_;
   /// Per grain, the step's energy terms before their ordered sum (scratch of step()).
-  struct StepSums {
-    std::vector<double> strain, kinetic, damped, gravity_work;
-    std::vector<char> bad;
-  } step_sums_;
+  GrainStepSums step_sums_;
+  RankShare* share_ = nullptr;  ///< set_rank_share: this rank's part of a run split over ranks
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
   mutable SolverState state_;
   mutable bool rigid_nodes_stale_ = false;

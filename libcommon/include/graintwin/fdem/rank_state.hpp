@@ -1,0 +1,125 @@
+#pragma once
+// The plain-data side of a run split over ranks (docs/fdemrun.md, across machines): what travels
+// between ranks after each step (rigid grains' states, and the friction history of a grain that
+// changes owner) packed as doubles, who must receive what, each grain's role on a rank after the
+// exchange, and the step's sums rebuilt in the one-rank order from the rows the ranks exchanged.
+// No MPI here: mpi/distributed_run moves the buffers. Every rank keeps the whole model (grains'
+// shapes never change), so only state and history travel.
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "graintwin/fdem/contact.hpp"
+#include "graintwin/fdem/decomposition.hpp"
+#include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/solver.hpp"
+
+namespace graintwin::fdem {
+
+/// A rigid grain's state as it travels: its global index and its 6-DOF state.
+struct GrainBody {
+  std::uint32_t grain = 0;
+  RigidBodyState state;
+};
+
+/// Columns of a row of a step's terms: a grain's strain, kinetic, damped, gravity work and bad (0
+/// or 1), J; a contact candidate's elastic energy and dissipated (J), deepest overlap (m), node
+/// contacts and 0.
+inline constexpr std::size_t kTermColumns = 5;
+
+/// Keyed rows of a step's terms, kTermColumns values each.
+struct StepRows {
+  std::vector<std::uint64_t> keys;
+  std::vector<double> values;
+};
+
+/// What one rank sends another after a step: the states of the grains the receiver owns or ghosts
+/// from now on, the friction history of the pairs of those among them that change owner, and the
+/// sender's terms of the step (the same rows to every rank).
+struct RankMessage {
+  std::vector<GrainBody> bodies;
+  std::vector<ContactHistoryEntry> history;
+  StepRows rows;
+};
+
+/// Doubles per packed RigidBodyState (position 3, quaternion w x y z, velocity 3, angular
+/// momentum 3), per packed GrainBody (the grain's index, then its state) and per packed
+/// ContactHistoryEntry (a, b, node, spring 3, offset).
+inline constexpr std::size_t kStateDoubles = 13, kBodyDoubles = 1 + kStateDoubles, kHistoryDoubles = 7;
+
+/// Appends `message` to `out` as doubles: [bodies, kBodyDoubles each..., entries, kHistoryDoubles
+/// each..., rows, (key, kTermColumns values) each...]; indices and keys are exact (below 2^53),
+/// values keep their bits.
+void pack_message(const RankMessage& message, std::vector<double>& out);
+/// The message pack_message wrote into `packed` (all of it). DataError when its counts do not
+/// fit its length or an index is not a whole number in [0, 2^32) (a row key: [0, 2^53)).
+RankMessage unpack_message(std::span<const double> packed);
+
+/// A rank's sends after a step and what stays with it.
+struct ExchangePlan {
+  std::vector<RankMessage> to;          ///< per rank (this rank's own entry stays empty)
+  std::vector<std::uint32_t> kept;      ///< owned grains still owned here, sorted
+  std::vector<std::uint32_t> ghosted;   ///< owned grains that left but stay ghosts here, sorted
+};
+
+/// Who must hear of this rank's owned grains after a step.
+///
+/// Inputs:
+///   subdomains  the ranks' boxes (bisect_domain); R = subdomains.ranks()
+///   rank        this rank, in [0, R)
+///   owned       the grains this rank advanced in the step, sorted
+///   bodies      every grain's state, indexed by grain (the owned ones current)
+///   radii       every grain's bounding radius about its centroid, m (grain_bounding_radii)
+///   contact     this rank's contact model: the friction history of leaving grains
+/// Returns, per grain g of `owned` with new owner o = owner_rank(centroid): its state to o and to
+/// every rank of ghost_ranks(centroid, radius, o), this rank excepted; when o is another rank,
+/// also the history of g's pairs to o. A grain that leaves stays here as a ghost when this rank is
+/// one of its ghost ranks.
+ExchangePlan plan_exchange(const Subdomains& subdomains, int rank, std::span<const std::uint32_t> owned,
+                           std::span<const RigidBodyState> bodies, std::span<const double> radii,
+                           const ContactModel& contact);
+
+/// Every grain's role on `rank` after an exchange: owned if it stayed (plan.kept) or arrived with
+/// its centroid in this rank's box, ghost if it left but stays in reach (plan.ghosted) or arrived
+/// for another owner, else absent. `received`: the messages from the other ranks.
+std::vector<GrainRole> roles_after_exchange(const Subdomains& subdomains, int rank, std::size_t grains,
+                                            const ExchangePlan& plan, std::span<const RankMessage> received);
+
+/// Every grain's role on `rank` at the start, when every rank holds every grain's state: owned by
+/// its centroid's box, ghost when `rank` is one of its ghost ranks.
+std::vector<GrainRole> initial_roles(const Subdomains& subdomains, int rank, std::span<const RigidBodyState> bodies,
+                                     std::span<const double> radii);
+
+/// The sorted grains whose role is `role`.
+std::vector<std::uint32_t> grains_with_role(std::span<const GrainRole> roles, GrainRole role);
+
+/// Per grain, the radius of a sphere about its reference centroid (bodies[g].centroid) holding
+/// all its nodes, m: a rigid grain's reach in any pose.
+std::vector<double> grain_bounding_radii(const Model& model, std::span<const BodyProperties> bodies);
+
+/// Per grain, its number of surface nodes: the work weight of bisect_domain until measured
+/// weights replace it (contact cost grows with the surface nodes).
+std::vector<double> surface_node_work(const Model& model);
+
+// The step's sums across ranks: each rank sends every other its rows for what it owns, with the
+// exchange of states, and every rank rebuilds the one-rank sums from all ranks' rows.
+
+/// This rank's rows: each owned grain g's terms under key g, then each owned candidate (a, b)'s
+/// sums under grains + a x (grains + platens) + b (b as in ContactRecord), so that key order is
+/// grain order, then candidate order.
+StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
+                   std::size_t platens);
+
+/// Every rank's rows as one set in increasing key order. DataError when a key comes twice (two
+/// ranks owning one grain or candidate).
+StepRows sorted_rows(std::span<const StepRows> parts);
+
+/// From every rank's rows in increasing key order (sorted_rows): every grain's terms into `sums` (whose size is
+/// the grain count), and contact's elastic_energy, dissipated, node_contacts and max_overlap added
+/// from zero in candidate order, as the one-rank contact step adds them. DataError unless every
+/// grain has exactly one row.
+void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
+                    ContactStepStats& contact);
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,79 @@
+#pragma once
+// The FDEM solver stepping a rigid-grain sample across MPI ranks (docs/fdemrun.md, across
+// machines). Every rank builds the same Solver (the whole model, the same options and initial
+// state) and hands it to a DistributedRun, which splits the grains by bisect_domain boxes of their
+// centroids and then, each step: the solver advances the grains this rank owns, with contact among
+// its owned grains and ghosts (a pair between two ranks' grains is evaluated on both, each keeping
+// the force on its own grain); then, in one exchange, each owner sends its grains' states to the
+// ranks that ghost them, a grain whose centroid left its owner's box goes to the new owner with
+// its pairs' friction history, and every rank sends every other its terms of the step, which each
+// adds in the one-rank order. The ghost lists are refreshed every step. The plain-data side is
+// fdem/rank_state.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "graintwin/fdem/decomposition.hpp"
+#include "graintwin/fdem/solver.hpp"
+#include "graintwin/mpi/session.hpp"
+
+namespace graintwin::mpi {
+
+/// What a rank sent since the run started (its own sends; sum_over_ranks for the run's), and the
+/// time its steps spent in the exchange (waiting for slower ranks included).
+struct RankTraffic {
+  std::uint64_t bodies = 0;      ///< grain states sent (ghost updates and migrations)
+  std::uint64_t history = 0;     ///< friction history entries sent with migrating grains
+  std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
+  std::uint64_t doubles = 0;     ///< doubles sent in the exchanges (8 bytes each), the step's terms included
+  double exchange_seconds = 0;   ///< s, planning, packing, exchanging and unpacking
+};
+
+class DistributedRun final : public fdem::RankShare {
+ public:
+  /// Splits `solver`'s grains over the session's ranks: bisect_domain of the grains' centroids in
+  /// `domain` (m, the sample's box; every centroid inside), weighted by their surface nodes, with
+  /// the contact model's skin. Collective: every rank passes a solver built alike. The solver must
+  /// outlive the run; it steps this rank's share until the run ends. UsageError from
+  /// Solver::set_rank_share (not rigid grains in contact alone) or bisect_domain (too many ranks
+  /// for the sample: subdomains thinner than a grain), on every rank alike.
+  DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain);
+  /// Hands the solver back to stepping every grain (its states of other ranks' grains are stale).
+  ~DistributedRun() override;
+  DistributedRun(const DistributedRun&) = delete;
+  DistributedRun& operator=(const DistributedRun&) = delete;
+
+  /// One step of dt (s) on every rank (collective): the solver's step of the owned grains and the
+  /// exchange; the report's energies and contact sums are the whole run's (node_checks,
+  /// triangle_checks, pairs and pair_lists_built are this rank's work).
+  fdem::StepReport step(double dt) { return solver_.step(dt); }
+
+  const fdem::Subdomains& subdomains() const { return subdomains_; }
+  /// Per grain, its role on this rank in the next step.
+  std::span<const fdem::GrainRole> roles() const override { return roles_; }
+  /// The grains this rank owns now, sorted.
+  std::span<const std::uint32_t> owned() const { return owned_; }
+  const RankTraffic& traffic() const { return traffic_; }
+  /// Every grain's state from its owner, on every rank (collective): for output and checks.
+  std::vector<fdem::RigidBodyState> gather_states() const;
+
+  /// The exchange, from within the solver's step once the owned grains moved: sends the owned
+  /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
+  /// and this rank's terms of the step to every rank, takes the others', completes the step's sums
+  /// and sets the roles for the next step. Two collectives (MPI_Alltoall of the counts,
+  /// MPI_Alltoallv of the doubles).
+  void finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
+                   fdem::ContactStepStats& contact) override;
+
+ private:
+
+  const Session& session_;
+  fdem::Solver& solver_;
+  std::vector<double> radii_;  ///< per grain, m (grain_bounding_radii)
+  fdem::Subdomains subdomains_;
+  std::vector<fdem::GrainRole> roles_;
+  std::vector<std::uint32_t> owned_;
+  RankTraffic traffic_;
+};
+
+}  // namespace graintwin::mpi

@@ -1,0 +1,262 @@
+#include "graintwin/fdem/rank_state.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "graintwin/core/error.hpp"
+
+namespace graintwin::fdem {
+namespace {
+
+/// Reads packed doubles in order, refusing to read past the end.
+class Reader {
+ public:
+  explicit Reader(std::span<const double> data) : data_(data) {}
+  /// The next n doubles, in place.
+  const double* take(std::size_t n) {
+    if (data_.size() - at_ < n) too_short();
+    at_ += n;
+    return data_.data() + at_ - n;
+  }
+  double next() { return *take(1); }
+  /// A packed index or count: a whole number in [0, 2^32).
+  std::uint32_t index() { return static_cast<std::uint32_t>(whole(4294967296.0)); }
+  /// A packed row key: a whole number in [0, 2^53), where doubles hold every integer.
+  std::uint64_t key() { return whole(9007199254740992.0); }
+  Eigen::Vector3d vector() {
+    const double* d = take(3);
+    return {d[0], d[1], d[2]};
+  }
+  /// A packed count of entries of `size` doubles each, checked against what is left before it
+  /// sizes anything (a damaged count must not allocate).
+  std::size_t count(std::size_t size) {
+    const std::uint32_t n = index();
+    if (n > (data_.size() - at_) / size) too_short();
+    return n;
+  }
+  bool done() const { return at_ == data_.size(); }
+
+ private:
+  std::uint64_t whole(double below) {
+    const double d = next();
+    if (!(d >= 0 && d < below) || d != std::floor(d))
+      throw DataError(fmt::format("a rank's message holds {} where an index belongs; the ranks must run the same program", d));
+    return static_cast<std::uint64_t>(d);
+  }
+  [[noreturn]] void too_short() const {
+    throw DataError(fmt::format("a rank's message of {} doubles ends inside an entry; the ranks must run the same program",
+                                data_.size()));
+  }
+  std::span<const double> data_;
+  std::size_t at_ = 0;
+};
+
+void append(std::vector<double>& out, const Eigen::Vector3d& v) { out.insert(out.end(), {v[0], v[1], v[2]}); }
+
+/// Appends a state's kStateDoubles to `out`, bits kept.
+void append_state(const RigidBodyState& s, std::vector<double>& out) {
+  append(out, s.position);
+  out.insert(out.end(), {s.orientation.w(), s.orientation.x(), s.orientation.y(), s.orientation.z()});
+  append(out, s.velocity);
+  append(out, s.angular_momentum);
+}
+
+/// The state append_state wrote at `d`.
+RigidBodyState state_from(const double* d) {
+  return {Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Quaterniond(d[3], d[4], d[5], d[6]), Eigen::Vector3d(d[7], d[8], d[9]),
+          Eigen::Vector3d(d[10], d[11], d[12])};
+}
+
+}  // namespace
+
+void pack_message(const RankMessage& message, std::vector<double>& out) {
+  out.push_back(static_cast<double>(message.bodies.size()));
+  for (const GrainBody& b : message.bodies) {
+    out.push_back(b.grain);
+    append_state(b.state, out);
+  }
+  out.push_back(static_cast<double>(message.history.size()));
+  for (const ContactHistoryEntry& h : message.history) {
+    out.insert(out.end(), {double(h.a), double(h.b), double(h.node)});
+    append(out, h.spring);
+    out.push_back(h.offset);
+  }
+  out.push_back(static_cast<double>(message.rows.keys.size()));
+  for (std::size_t i = 0; i < message.rows.keys.size(); ++i) {
+    out.push_back(static_cast<double>(message.rows.keys[i]));
+    out.insert(out.end(), message.rows.values.begin() + i * kTermColumns,
+               message.rows.values.begin() + (i + 1) * kTermColumns);
+  }
+}
+
+RankMessage unpack_message(std::span<const double> packed) {
+  Reader in(packed);
+  RankMessage m;
+  m.bodies.resize(in.count(kBodyDoubles));
+  for (GrainBody& b : m.bodies) {
+    b.grain = in.index();
+    b.state = state_from(in.take(kStateDoubles));
+  }
+  m.history.resize(in.count(kHistoryDoubles));
+  for (ContactHistoryEntry& h : m.history) {
+    h.a = in.index(), h.b = in.index(), h.node = in.index();
+    h.spring = in.vector();
+    h.offset = in.next();
+  }
+  const std::size_t rows = in.count(1 + kTermColumns);
+  for (std::size_t i = 0; i < rows; ++i) {
+    m.rows.keys.push_back(in.key());
+    const double* v = in.take(kTermColumns);
+    m.rows.values.insert(m.rows.values.end(), v, v + kTermColumns);
+  }
+  if (!in.done())
+    throw DataError(fmt::format("a rank's message of {} doubles holds more than its counts say; the ranks must run the "
+                                "same program",
+                                packed.size()));
+  return m;
+}
+
+ExchangePlan plan_exchange(const Subdomains& subdomains, int rank, std::span<const std::uint32_t> owned,
+                           std::span<const RigidBodyState> bodies, std::span<const double> radii,
+                           const ContactModel& contact) {
+  ExchangePlan plan;
+  plan.to.resize(subdomains.ranks());
+  std::vector<std::vector<std::uint32_t>> leaving(subdomains.ranks());  // per new owner
+  for (std::uint32_t g : owned) {
+    const Eigen::Vector3d& centre = bodies[g].position;
+    const int owner = owner_rank(subdomains, centre);
+    std::vector<int> receivers = ghost_ranks(subdomains, centre, radii[g], owner);
+    if (owner == rank) {
+      plan.kept.push_back(g);
+    } else {
+      leaving[owner].push_back(g);
+      if (std::binary_search(receivers.begin(), receivers.end(), rank)) plan.ghosted.push_back(g);
+      receivers.push_back(owner);
+    }
+    for (int r : receivers)
+      if (r != rank) plan.to[r].bodies.push_back({g, bodies[g]});
+  }
+  for (int r = 0; r < subdomains.ranks(); ++r)
+    if (!leaving[r].empty()) plan.to[r].history = contact.history_of(leaving[r]);
+  return plan;
+}
+
+std::vector<GrainRole> roles_after_exchange(const Subdomains& subdomains, int rank, std::size_t grains,
+                                            const ExchangePlan& plan, std::span<const RankMessage> received) {
+  std::vector<GrainRole> roles(grains, GrainRole::absent);
+  const auto role_of = [&](std::uint32_t g) -> GrainRole& {
+    if (g >= grains)
+      throw DataError(fmt::format("a rank sent the state of grain {} of a model of {} grains; the ranks must run the "
+                                  "same model",
+                                  g, grains));
+    return roles[g];
+  };
+  for (std::uint32_t g : plan.kept) role_of(g) = GrainRole::owned;
+  for (std::uint32_t g : plan.ghosted) role_of(g) = GrainRole::ghost;
+  for (const RankMessage& m : received)
+    for (const GrainBody& b : m.bodies)
+      role_of(b.grain) = owner_rank(subdomains, b.state.position) == rank ? GrainRole::owned : GrainRole::ghost;
+  return roles;
+}
+
+std::vector<GrainRole> initial_roles(const Subdomains& subdomains, int rank, std::span<const RigidBodyState> bodies,
+                                     std::span<const double> radii) {
+  std::vector<GrainRole> roles(bodies.size(), GrainRole::absent);
+  for (std::size_t g = 0; g < bodies.size(); ++g) {
+    const int owner = owner_rank(subdomains, bodies[g].position);
+    const std::vector<int> ghosts = ghost_ranks(subdomains, bodies[g].position, radii[g], owner);
+    if (owner == rank) roles[g] = GrainRole::owned;
+    else if (std::binary_search(ghosts.begin(), ghosts.end(), rank)) roles[g] = GrainRole::ghost;
+  }
+  return roles;
+}
+
+std::vector<std::uint32_t> grains_with_role(std::span<const GrainRole> roles, GrainRole role) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t g = 0; g < roles.size(); ++g)
+    if (roles[g] == role) out.push_back(g);
+  return out;
+}
+
+std::vector<double> grain_bounding_radii(const Model& model, std::span<const BodyProperties> bodies) {
+  std::vector<double> radii(model.grains.size(), 0.0);
+  for (std::size_t g = 0; g < model.grains.size(); ++g)
+    for (std::uint32_t i = model.grains[g].node_begin; i < model.grains[g].node_end; ++i)
+      radii[g] = std::max(radii[g], (model.nodes[i] - bodies[g].centroid).norm());
+  return radii;
+}
+
+std::vector<double> surface_node_work(const Model& model) {
+  std::vector<double> work(model.grains.size(), 0.0);
+  std::vector<std::uint32_t> nodes;
+  for (std::size_t g = 0; g < model.grains.size(); ++g) {
+    nodes.clear();
+    for (std::uint32_t t = model.grains[g].triangle_begin; t < model.grains[g].triangle_end; ++t)
+      nodes.insert(nodes.end(), model.triangles[t].begin(), model.triangles[t].end());
+    std::sort(nodes.begin(), nodes.end());
+    work[g] = static_cast<double>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
+  }
+  return work;
+}
+
+StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
+                   std::size_t platens) {
+  const std::uint64_t grains = sums.kinetic.size(), partners = grains + platens;
+  StepRows rows;
+  for (std::uint32_t g : owned) {
+    rows.keys.push_back(g);
+    rows.values.insert(rows.values.end(),
+                       {sums.strain[g], sums.kinetic[g], sums.damped[g], sums.gravity_work[g], double(sums.bad[g])});
+  }
+  for (const PairStepSum& p : pairs) {
+    rows.keys.push_back(grains + p.a * partners + p.b);
+    rows.values.insert(rows.values.end(), {p.elastic_energy, p.dissipated, p.overlap, double(p.node_contacts), 0.0});
+  }
+  return rows;
+}
+
+StepRows sorted_rows(std::span<const StepRows> parts) {
+  std::vector<std::pair<std::uint64_t, const double*>> all;
+  for (const StepRows& part : parts)
+    for (std::size_t i = 0; i < part.keys.size(); ++i) all.emplace_back(part.keys[i], part.values.data() + i * kTermColumns);
+  std::sort(all.begin(), all.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+  StepRows rows;
+  for (const auto& [key, values] : all) {
+    if (!rows.keys.empty() && rows.keys.back() == key)
+      throw DataError(fmt::format("two ranks sent the step's terms under key {}: each grain and contact candidate must "
+                                  "have one owner",
+                                  key));
+    rows.keys.push_back(key);
+    rows.values.insert(rows.values.end(), values, values + kTermColumns);
+  }
+  return rows;
+}
+
+void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
+                    ContactStepStats& contact) {
+  const std::size_t grains = sums.kinetic.size();
+  const auto unowned = [](std::size_t g) {
+    return DataError(fmt::format("no rank advanced grain {} in this step: every grain needs one owner", g));
+  };
+  std::size_t i = 0;
+  for (; i < keys.size() && keys[i] < grains; ++i) {
+    if (keys[i] != i) throw unowned(i);  // the keys are sorted and distinct: grain i has none
+    const double* r = values.data() + i * kTermColumns;
+    sums.strain[i] = r[0], sums.kinetic[i] = r[1], sums.damped[i] = r[2], sums.gravity_work[i] = r[3];
+    sums.bad[i] = r[4] != 0;
+  }
+  if (i != grains) throw unowned(i);
+  contact.elastic_energy = contact.dissipated = contact.max_overlap = 0;
+  contact.node_contacts = 0;
+  for (; i < keys.size(); ++i) {
+    const double* r = values.data() + i * kTermColumns;
+    contact.elastic_energy += r[0];
+    contact.dissipated += r[1];
+    contact.max_overlap = std::max(contact.max_overlap, r[2]);
+    contact.node_contacts += static_cast<std::size_t>(r[3]);
+  }
+}
+
+}  // namespace graintwin::fdem

@@ -1,0 +1,123 @@
+#include "graintwin/mpi/distributed_run.hpp"
+
+#include <fmt/format.h>
+#include <mpi.h>
+
+#include <limits>
+#include <numeric>
+
+#include "graintwin/core/error.hpp"
+#include "graintwin/fdem/rank_state.hpp"
+
+namespace graintwin::mpi {
+namespace {
+
+int int_count(std::size_t n) {
+  if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw UsageError(fmt::format("{} doubles for one rank exceed MPI's int counts: use more ranks", n));
+  return static_cast<int>(n);
+}
+
+/// Every rank's buffer for every other (outgoing[r]: to rank r), exchanged: returns, per rank r,
+/// what r sent this one. Two collectives: the counts (MPI_Alltoall), then the doubles (MPI_Alltoallv).
+std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<double>>& outgoing) {
+  const std::size_t ranks = outgoing.size();
+  std::vector<int> send_counts(ranks), receive_counts(ranks);
+  for (std::size_t r = 0; r < ranks; ++r) send_counts[r] = int_count(outgoing[r].size());
+  MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  std::vector<int> send_offsets(ranks, 0), receive_offsets(ranks, 0);
+  std::exclusive_scan(send_counts.begin(), send_counts.end(), send_offsets.begin(), 0);
+  std::exclusive_scan(receive_counts.begin(), receive_counts.end(), receive_offsets.begin(), 0);
+  std::vector<double> sent, received(static_cast<std::size_t>(receive_offsets.back()) + receive_counts.back());
+  for (const auto& buffer : outgoing) sent.insert(sent.end(), buffer.begin(), buffer.end());
+  MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_DOUBLE, received.data(), receive_counts.data(),
+                receive_offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  std::vector<std::vector<double>> incoming(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    incoming[r].assign(received.begin() + receive_offsets[r], received.begin() + receive_offsets[r] + receive_counts[r]);
+  return incoming;
+}
+
+}  // namespace
+
+DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain)
+    : session_(session), solver_(solver) {
+  solver.set_rank_share(this);  // refuses what does not run across ranks yet
+  try {
+    const fdem::Model& m = solver.model();
+    std::vector<fdem::BodyProperties> bodies(m.grains.size());
+    for (std::size_t g = 0; g < bodies.size(); ++g) bodies[g] = solver.body(g);
+    radii_ = fdem::grain_bounding_radii(m, bodies);
+    const std::span<const fdem::RigidBodyState> states = solver.rigid_states();
+    std::vector<Eigen::Vector3d> centroids;
+    for (const fdem::RigidBodyState& s : states) centroids.push_back(s.position);
+    subdomains_ = fdem::bisect_domain(centroids, radii_, fdem::surface_node_work(m), domain, session.size(),
+                                      solver.contact_model()->skin());
+    roles_ = fdem::initial_roles(subdomains_, session.rank(), states, radii_);
+    owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
+  } catch (...) {
+    solver.set_rank_share(nullptr);
+    throw;
+  }
+}
+
+DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
+
+void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
+                                 fdem::ContactStepStats& contact) {
+  const double start = MPI_Wtime();
+  const int rank = session_.rank();
+  fdem::ExchangePlan plan =
+      fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
+  const fdem::StepRows rows = fdem::step_rows(grains, owned_, owned_pairs, solver_.model().platens.size());
+  std::vector<std::vector<double>> outgoing(plan.to.size());
+  for (std::size_t r = 0; r < plan.to.size(); ++r) {
+    if (static_cast<int>(r) == rank) continue;
+    plan.to[r].rows = rows;
+    fdem::pack_message(plan.to[r], outgoing[r]);
+    traffic_.bodies += plan.to[r].bodies.size();
+    traffic_.history += plan.to[r].history.size();
+    traffic_.doubles += outgoing[r].size();
+  }
+  traffic_.migrations += owned_.size() - plan.kept.size();
+  const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
+  std::vector<fdem::RankMessage> received;
+  std::vector<fdem::StepRows> parts{rows};
+  for (std::size_t r = 0; r < incoming.size(); ++r)
+    if (static_cast<int>(r) != rank) {
+      received.push_back(fdem::unpack_message(incoming[r]));
+      parts.push_back(std::move(received.back().rows));
+    }
+  const fdem::StepRows all = fdem::sorted_rows(parts);
+  fdem::set_step_terms(all.keys, all.values, grains, contact);
+  roles_ = fdem::roles_after_exchange(subdomains_, rank, roles_.size(), plan, received);
+  owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
+  for (const fdem::RankMessage& m : received) {
+    for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
+    solver_.contact_model()->merge_history(m.history);
+  }
+  traffic_.exchange_seconds += MPI_Wtime() - start;
+}
+
+std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {
+  const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
+  fdem::RankMessage mine;
+  for (std::uint32_t g : owned_) mine.bodies.push_back({g, states[g]});
+  std::vector<double> packed;
+  fdem::pack_message(mine, packed);
+  std::vector<fdem::RigidBodyState> all(states.size());
+  std::vector<char> seen(states.size(), 0);
+  for (const auto& buffer : exchange_buffers(std::vector<std::vector<double>>(session_.size(), packed)))
+    for (const fdem::GrainBody& b : fdem::unpack_message(buffer).bodies) {
+      if (b.grain >= all.size() || seen[b.grain]++)
+        throw DataError(fmt::format("grain {} came twice or from outside a model of {} grains: every grain needs one "
+                                    "owner",
+                                    b.grain, all.size()));
+      all[b.grain] = b.state;
+    }
+  if (const auto missing = std::find(seen.begin(), seen.end(), 0); missing != seen.end())
+    throw DataError(fmt::format("no rank owns grain {}: every grain needs one owner", missing - seen.begin()));
+  return all;
+}
+
+}  // namespace graintwin::mpi
