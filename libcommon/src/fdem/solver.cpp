@@ -543,7 +543,14 @@ Eigen::Matrix3d Solver::element_stress(std::size_t e) const {
     if (contact_->node_forces().empty()) return Eigen::Matrix3d::Zero();  // no step yet
     elastostatic_.assign(model_->grains.size(), {});
     parallel_for_each_index(model_->grains.size(), [&](std::size_t k) {
-      if (model_->grains[k].kind == GrainKind::rigid) elastostatic_[k] = elastostatic_stresses(k);
+      const Grain& grain = model_->grains[k];
+      if (grain.kind != GrainKind::rigid) return;
+      try {
+        elastostatic_[k] = elastostatic_stresses(k);
+      } catch (const DataError&) {  // a mesh in pieces has no static state: NaN, not the end of the run
+        elastostatic_[k].assign(grain.element_end - grain.element_begin,
+                                Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+      }
     });
     elastostatic_step_ = static_cast<std::int64_t>(state_.step);
   }

@@ -263,7 +263,8 @@ class Solver {
   std::vector<Eigen::Matrix3d> elastostatic_stresses(std::size_t grain) const;
   /// Volume-averaged Cauchy stress of element e, tension positive, Pa: of a rigid grain's elements
   /// their elastostatic stress with SolverOptions::elastostatic_stress (every rigid grain's is
-  /// computed, in parallel, on the first call after a step), else zero. Not for concurrent calls.
+  /// computed, in parallel, on the first call after a step; NaN for a grain whose mesh has no static
+  /// state, e.g. one in several pieces), else zero. Not for concurrent calls.
   Eigen::Matrix3d element_stress(std::size_t element) const;
   /// Whether grain g's elements carry stress: deformable, or rigid with elastostatic_stress.
   bool carries_element_stress(std::size_t grain) const;
