@@ -136,6 +136,31 @@ velocity = [0, 0, -2]
   EXPECT_NEAR(volumes[1] / (4.0 / 3.0 * std::numbers::pi * 0.125e-9), 1.0, 0.01);
 }
 
+namespace {
+
+/// Three 1 mm tet10 cubes stacked along z (labels 7, 8, 9), written to dir/stack.h5.
+fdem::Model write_cube_stack(const std::filesystem::path& dir) {
+  fdem::Model stack;
+  for (int k = 0; k < 3; ++k)
+    fdem::add_grain(stack, fdem::box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d(0, 0, 1e-3 * (k - 1)),
+                    fdem::GrainKind::tet10, 0, static_cast<std::uint32_t>(7 + k));
+  fdem::write_model_file(dir / "stack.h5", stack, {"test"});
+  return stack;
+}
+
+/// Scene text: the platens that hold the stack 1 um into its end faces.
+constexpr const char* kStackPlatens = R"([[platens]]
+name = "bottom"
+point = [0, 0, -1.499e-3]
+normal = [0, 0, 1]
+[[platens]]
+name = "top"
+point = [0, 0, 1.499e-3]
+normal = [0, 0, -1]
+)";
+
+}  // namespace
+
 // A mixed twin: three cubes of a model file stacked between the platens, the middle one (tet10 in
 // the file) picked deformable by label, the others rigid; the log and the run's parameters say how
 // many of each kind and which rule picked them, the frames hold the middle cube's element stresses,
@@ -143,11 +168,7 @@ velocity = [0, 0, -2]
 // energy books close over the run.
 TEST(Fdemrun, AMixedTwinRecordsItsKindsAndComparesItsStresses) {
   test::TempDir dir;
-  fdem::Model stack;
-  for (int k = 0; k < 3; ++k)
-    fdem::add_grain(stack, fdem::box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d(0, 0, 1e-3 * (k - 1)),
-                    fdem::GrainKind::tet10, 0, static_cast<std::uint32_t>(7 + k));
-  fdem::write_model_file(dir / "stack.h5", stack, {"test"});
+  const fdem::Model stack = write_cube_stack(dir.path());
   const std::string stack_scene = R"(
 [run]
 duration = 2e-5
@@ -158,15 +179,7 @@ file = "stack.h5"
 [model.deformable]
 rule = "labels"
 labels = [8]
-[[platens]]
-name = "bottom"
-point = [0, 0, -1.499e-3]
-normal = [0, 0, 1]
-[[platens]]
-name = "top"
-point = [0, 0, 1.499e-3]
-normal = [0, 0, -1]
-)";
+)" + std::string(kStackPlatens);
   const auto scene = write_text(dir, "scene.toml", stack_scene);
   const auto out = dir / "results.h5";
   const auto r = run_tool("fdemrun", {scene.string(), out.string()});
@@ -223,26 +236,14 @@ normal = [0, 0, -1]
 // settled deformable ones'.
 TEST(Fdemrun, ElastostaticStressesOfRigidCubesAreTheSettledTet10Ones) {
   test::TempDir dir;
-  fdem::Model stack;
-  for (int k = 0; k < 3; ++k)
-    fdem::add_grain(stack, fdem::box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d(0, 0, 1e-3 * (k - 1)),
-                    fdem::GrainKind::tet10, 0, static_cast<std::uint32_t>(7 + k));
-  fdem::write_model_file(dir / "stack.h5", stack, {"test"});
+  const fdem::Model stack = write_cube_stack(dir.path());
   const std::string deformable = R"(
 [run]
 duration = 4e-5
 damping = 5e6
 [model]
 file = "stack.h5"
-[[platens]]
-name = "bottom"
-point = [0, 0, -1.499e-3]
-normal = [0, 0, 1]
-[[platens]]
-name = "top"
-point = [0, 0, 1.499e-3]
-normal = [0, 0, -1]
-)";
+)" + std::string(kStackPlatens);
   const auto settled = dir / "settled.h5", rigid = dir / "rigid.h5";
   ASSERT_EQ(run_tool("fdemrun", {write_text(dir, "settled.toml", deformable).string(), settled.string()}).exit_code, 0);
   const std::string elastostatic =
