@@ -32,11 +32,9 @@ ElastostaticGrain::ElastostaticGrain(const Model& model, std::size_t grain, std:
     throw DataError(fmt::format("elastostatic: {} has no elements; it needs a tetrahedral mesh.", name()));
   node_begin_ = g.node_begin;
   node_count_ = g.node_end - g.node_begin;
-  const Lame lame = lame_constants(model.materials.at(g.material));
-  lambda_ = lame.lambda, mu_ = lame.mu;
+  lame_ = lame_constants(model.materials.at(g.material));
 
   // Reference gradients at the element forces' quadrature points.
-  Eigen::Matrix<double, 10, 3> dN;
   for (std::size_t e = g.element_begin; e < g.element_end; ++e) {
     Element element;
     element.node_count = static_cast<int>(model.nodes_of(e));
@@ -52,18 +50,10 @@ ElastostaticGrain::ElastostaticGrain(const Model& model, std::size_t grain, std:
     }
     const TetRule& rule = stiffness_rule(element.node_count);
     for (std::size_t q = 0; q < rule.points.size(); ++q) {
-      tet_shape_derivatives(element.node_count, rule.points[q], dN);
-      Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
-      for (int a = 0; a < element.node_count; ++a) J += model.nodes[nodes[a]] * dN.row(a);
-      const double det = J.determinant();
-      if (!(det > 0))
-        throw DataError(fmt::format("elastostatic: element {} of {} is inverted or degenerate in the reference "
-                                    "(det J = {:.3g}); mesh the grain again.", e, name(), det));
-      const Eigen::Matrix3d inverse = J.inverse();
+      const ReferenceGradients r = reference_gradients(model, e, rule.points[q]);
       Point p;
-      p.weight = rule.weights[q] * det;
-      for (int a = 0; a < element.node_count; ++a)
-        p.gradient[static_cast<std::size_t>(a)] = (dN.row(a) * inverse).transpose();
+      p.weight = rule.weights[q] * r.det;
+      for (int a = 0; a < element.node_count; ++a) p.gradient[static_cast<std::size_t>(a)] = r.gradient.row(a).transpose();
       element.points.push_back(p);
     }
     elements_.push_back(std::move(element));
@@ -117,7 +107,7 @@ ElastostaticGrain::ElastostaticGrain(const Model& model, std::size_t grain, std:
           const Eigen::Vector3d& ga = p.gradient[static_cast<std::size_t>(a)];
           const Eigen::Vector3d& gb = p.gradient[static_cast<std::size_t>(b)];
           Ke.block<3, 3>(3 * a, 3 * b) +=
-              p.weight * (lambda_ * ga * gb.transpose() + mu_ * gb * ga.transpose() + mu_ * ga.dot(gb) * Eigen::Matrix3d::Identity());
+              p.weight * (lame_.lambda * ga * gb.transpose() + lame_.mu * gb * ga.transpose() + lame_.mu * ga.dot(gb) * Eigen::Matrix3d::Identity());
         }
     for (int a = 0; a < n; ++a)
       for (int b = 0; b <= a; ++b)
@@ -172,8 +162,7 @@ ElastostaticState ElastostaticGrain::solve(std::span<const Eigen::Vector3d> load
       Eigen::Matrix3d grad = Eigen::Matrix3d::Zero();  // du/dX
       for (int a = 0; a < element.node_count; ++a)
         grad += s.displacement[element.nodes[static_cast<std::size_t>(a)]] * p.gradient[static_cast<std::size_t>(a)].transpose();
-      const Eigen::Matrix3d strain = 0.5 * (grad + grad.transpose());
-      sum += p.weight * (lambda_ * strain.trace() * Eigen::Matrix3d::Identity() + 2 * mu_ * strain);
+      sum += p.weight * isotropic_stress(0.5 * (grad + grad.transpose()), lame_);
       volume += p.weight;
     }
     s.stress.push_back(sum / volume);

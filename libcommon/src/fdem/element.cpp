@@ -147,11 +147,26 @@ double element_min_altitude(const Model& model, std::size_t e) {
   return area > 0 ? 3 * volume / area : 0.0;
 }
 
+ReferenceGradients reference_gradients(const Model& model, std::size_t e, const Eigen::Vector3d& xi) {
+  const int n = checked_node_count(model, e);
+  Gradients dN;
+  tet_shape_derivatives(n, xi, dN);
+  const Eigen::Matrix3d J = reference_jacobian(model, e, dN, n);
+  ReferenceGradients r;
+  r.det = J.determinant();
+  if (!(r.det > 0))
+    throw DataError(element_name(model, e) + " is inverted or flat in the reference mesh (det J = " + std::to_string(r.det) +
+                    "); remesh the grain");
+  r.inverse_jacobian = J.inverse();
+  r.gradient.setZero();
+  for (int a = 0; a < n; ++a) r.gradient.row(a) = dN.row(a) * r.inverse_jacobian;
+  return r;
+}
+
 ElasticElements::ElasticElements(const Model& model) : model_(&model) {
   for (const Material& m : model.materials) lame_.push_back(lame_constants(m));
   const std::size_t elements = model.element_count();
   slot_.assign(elements, kNoSlot);
-  Gradients dN;
   for (std::size_t e = 0; e < elements; ++e) {
     const Grain& grain = model.grains[model.element_grain[e]];
     if (grain.kind == GrainKind::rigid) continue;
@@ -162,39 +177,29 @@ ElasticElements::ElasticElements(const Model& model) : model_(&model) {
     const TetRule& rule = stiffness_rule(n);
     slot_[e] = static_cast<std::uint32_t>(n == 4 ? linear_.size() : weight_.size());
     for (std::size_t q = 0; q < rule.points.size(); ++q) {
-      tet_shape_derivatives(n, rule.points[q], dN);
-      const Eigen::Matrix3d J = reference_jacobian(model, e, dN, n);
-      const double det = J.determinant();
-      if (!(det > 0))
-        throw DataError(element_name(model, e) + " is inverted or flat in the reference mesh (det J = " + std::to_string(det) +
-                        "); remesh the grain");
-      const Eigen::Matrix3d Jinv = J.inverse();
+      const ReferenceGradients r = reference_gradients(model, e, rule.points[q]);
       if (n == 4) {
         const std::uint32_t* c = element_nodes(model, e);
         // dN_a/dxi of corners 1..3 are the unit rows, so their dN/dX rows are exactly J^-1's.
-        linear_.push_back({{c[0], c[1], c[2], c[3]}, grain.material, rule.weights[q] * det, Jinv});
+        linear_.push_back({{c[0], c[1], c[2], c[3]}, grain.material, rule.weights[q] * r.det, r.inverse_jacobian});
         continue;
       }
-      weight_.push_back(rule.weights[q] * det);
-      for (int a = 0; a < n; ++a) {
-        const Eigen::RowVector3d g = dN.row(a) * Jinv;
-        gradient_.insert(gradient_.end(), {g[0], g[1], g[2]});
-      }
+      weight_.push_back(rule.weights[q] * r.det);
+      for (int a = 0; a < n; ++a) gradient_.insert(gradient_.end(), {r.gradient(a, 0), r.gradient(a, 1), r.gradient(a, 2)});
     }
   }
 }
 
-namespace {
-
-/// Green-Lagrange strain E = (F^T F - I) / 2, St Venant-Kirchhoff stress S = lambda tr(E) I + 2 mu E
-/// and the energy density lambda tr(E)^2 / 2 + mu E:E, J/m^3.
-/// The isotropic elasticity tensor applied to a strain (or strain rate): lambda tr(E) I + 2 mu E.
 Eigen::Matrix3d isotropic_stress(const Eigen::Matrix3d& E, const Lame& L) {
   Eigen::Matrix3d S = 2 * L.mu * E;
   S.diagonal().array() += L.lambda * E.trace();
   return S;
 }
 
+namespace {
+
+/// Green-Lagrange strain E = (F^T F - I) / 2, St Venant-Kirchhoff stress S = lambda tr(E) I + 2 mu E
+/// and the energy density lambda tr(E)^2 / 2 + mu E:E, J/m^3.
 double saint_venant_kirchhoff(const Eigen::Matrix3d& F, const Lame& L, Eigen::Matrix3d& S) {
   const Eigen::Matrix3d E = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
   const double trE = E.trace();

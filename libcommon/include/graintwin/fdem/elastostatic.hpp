@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/model.hpp"
 
 namespace graintwin::fdem {
@@ -61,7 +62,7 @@ class ElastostaticGrain {
   };
 
   std::size_t node_begin_ = 0, node_count_ = 0;
-  double lambda_ = 0, mu_ = 0;  ///< Lame constants, Pa
+  Lame lame_;  ///< of the grain's material, Pa
   std::vector<Element> elements_;
   std::vector<double> mass_;               ///< per local node, kg
   std::vector<Eigen::Vector3d> arm_;       ///< per local node, from the mass centre, m

@@ -44,6 +44,19 @@ const TetRule& stiffness_rule(int nodes);
 /// 7: consistent-mass diagonals and inertia tensors of curved 10-node tetrahedra.
 const TetRule& exact_rule();
 
+/// Element e's reference map at natural point xi: J = dX/dxi, its inverse and determinant, and the
+/// reference gradients dN_a/dX of its n nodes (rows 0..n-1). Throws DataError naming the element
+/// when det J <= 0 (inverted or flat in the reference mesh).
+struct ReferenceGradients {
+  Eigen::Matrix3d inverse_jacobian;
+  double det = 0;
+  Eigen::Matrix<double, 10, 3> gradient;
+};
+ReferenceGradients reference_gradients(const Model& model, std::size_t element, const Eigen::Vector3d& xi);
+
+/// The isotropic elasticity tensor applied to a strain (or strain rate): lambda tr(E) I + 2 mu E, Pa.
+Eigen::Matrix3d isotropic_stress(const Eigen::Matrix3d& strain, const Lame& lame);
+
 /// Physical points and weights (w |det J|) of `rule` mapped through element e's reference shape.
 void map_rule(const Model& model, std::size_t element, const TetRule& rule, std::vector<Eigen::Vector3d>& points,
               std::vector<double>& weights);
