@@ -93,22 +93,13 @@ ElastostaticGrain::ElastostaticGrain(const Model& model, std::size_t grain, std:
   std::vector<char> held(3 * node_count_, 0);
   for (const std::size_t k : held_) held[k] = 1;
 
-  // K_ab,ij = sum_q w [lambda g_a,i g_b,j + mu g_a,j g_b,i + mu (g_a . g_b) delta_ij], summed per
-  // element first; only the lower triangle, which the factorisation reads. Held components become
-  // identity rows and columns.
+  // The element stiffnesses assembled; only the lower triangle, which the factorisation reads. Held
+  // components become identity rows and columns.
   std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::Matrix<double, 30, 30> Ke;
-  for (const Element& element : elements_) {
-    const int n = element.node_count;
-    Ke.topLeftCorner(3 * n, 3 * n).setZero();
-    for (const Point& p : element.points)
-      for (int a = 0; a < n; ++a)
-        for (int b = 0; b <= a; ++b) {
-          const Eigen::Vector3d& ga = p.gradient[static_cast<std::size_t>(a)];
-          const Eigen::Vector3d& gb = p.gradient[static_cast<std::size_t>(b)];
-          Ke.block<3, 3>(3 * a, 3 * b) +=
-              p.weight * (lame_.lambda * ga * gb.transpose() + lame_.mu * gb * ga.transpose() + lame_.mu * ga.dot(gb) * Eigen::Matrix3d::Identity());
-        }
+  ElementStiffness Ke;
+  for (std::size_t k = 0; k < elements_.size(); ++k) {
+    const Element& element = elements_[k];
+    const int n = element_stiffness(model, g.element_begin + k, lame_, Ke);
     for (int a = 0; a < n; ++a)
       for (int b = 0; b <= a; ++b)
         for (int i = 0; i < 3; ++i)

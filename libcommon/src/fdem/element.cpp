@@ -196,6 +196,25 @@ Eigen::Matrix3d isotropic_stress(const Eigen::Matrix3d& E, const Lame& L) {
   return S;
 }
 
+int element_stiffness(const Model& model, std::size_t e, const Lame& L, ElementStiffness& K) {
+  const int n = checked_node_count(model, e);
+  const TetRule& rule = stiffness_rule(n);
+  K.topLeftCorner(3 * n, 3 * n).setZero();
+  for (std::size_t q = 0; q < rule.points.size(); ++q) {
+    const ReferenceGradients r = reference_gradients(model, e, rule.points[q]);
+    const double w = rule.weights[q] * r.det;
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b <= a; ++b) {
+        const Eigen::Vector3d ga = r.gradient.row(a).transpose(), gb = r.gradient.row(b).transpose();
+        K.block<3, 3>(3 * a, 3 * b) +=
+            w * (L.lambda * ga * gb.transpose() + L.mu * gb * ga.transpose() + L.mu * ga.dot(gb) * Eigen::Matrix3d::Identity());
+      }
+  }
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < a; ++b) K.block<3, 3>(3 * b, 3 * a) = K.block<3, 3>(3 * a, 3 * b).transpose();
+  return n;
+}
+
 namespace {
 
 /// Green-Lagrange strain E = (F^T F - I) / 2, St Venant-Kirchhoff stress S = lambda tr(E) I + 2 mu E
@@ -383,15 +402,13 @@ std::vector<double> lumped_masses(const Model& model) {
   return mass;
 }
 
-void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass,
-                       std::span<const double> density_factor) {
+void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass) {
   std::vector<Eigen::Vector3d> points;
   std::vector<double> weights;
   double N[10];
   for (std::size_t e = element_begin; e < element_end; ++e) {
     const int n = checked_node_count(model, e);
-    const double rho = model.materials[model.grains[model.element_grain[e]].material].density *
-                       (density_factor.empty() ? 1.0 : density_factor[e]);
+    const double rho = model.materials[model.grains[model.element_grain[e]].material].density;
     const std::uint32_t* nodes = element_nodes(model, e);
     if (n == 4) {
       const double share = rho * std::abs(element_volume(model, e)) / 4;

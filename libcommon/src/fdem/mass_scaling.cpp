@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/parallel.hpp"
 #include "graintwin/fdem/contact.hpp"
 #include "graintwin/fdem/element.hpp"
 
@@ -55,36 +57,68 @@ double grains_mass(const Solver& solver) {
   return mass;
 }
 
-ElementMassScaling scale_limiting_elements(Solver& solver, double target_step, double stiffness_damping,
-                                           double max_added_share, const std::string& where) {
-  const Model& model = solver.model();
-  ElementMassScaling out;
+std::vector<double> node_stiffness_bounds(const Model& model) {
+  std::vector<double> rows(3 * model.nodes.size(), 0.0);
+  // A grain's elements touch only its own nodes, so grains go in parallel.
+  parallel_for_each_index(model.grains.size(), [&](std::size_t g) {
+    const Grain& grain = model.grains[g];
+    if (grain.kind == GrainKind::rigid) return;
+    const Lame lame = lame_constants(model.materials[grain.material]);
+    ElementStiffness K;
+    for (std::size_t e = grain.element_begin; e < grain.element_end; ++e) {
+      const int n = element_stiffness(model, e, lame, K);
+      const std::uint32_t* nodes = model.element_nodes.data() + model.element_offset[e];
+      for (int a = 0; a < n; ++a)
+        for (int i = 0; i < 3; ++i) rows[3 * nodes[a] + i] += K.row(3 * a + i).head(3 * n).cwiseAbs().sum();
+    }
+  });
+  std::vector<double> bounds(model.nodes.size());
+  for (std::size_t v = 0; v < bounds.size(); ++v) bounds[v] = std::max({rows[3 * v], rows[3 * v + 1], rows[3 * v + 2]});
+  return bounds;
+}
+
+double guaranteed_critical_step(std::span<const double> bounds, std::span<const double> node_mass) {
+  double omega2 = 0;
+  for (std::size_t v = 0; v < bounds.size(); ++v)
+    if (bounds[v] > 0) omega2 = std::max(omega2, bounds[v] / node_mass[v]);
+  return omega2 > 0 ? 2 / std::sqrt(omega2) : std::numeric_limits<double>::infinity();
+}
+
+SelectiveMassScaling scale_limiting_nodes(Solver& solver, double target_step, double stiffness_damping,
+                                          double max_added_share, const std::string& where) {
+  SelectiveMassScaling out;
   out.target_step = target_step;
   out.max_added_share = max_added_share;
   out.grains_mass = grains_mass(solver);
   out.step_before = solver.time_step_limits(stiffness_damping).element_stable;
   out.step_after = out.step_before;
   if (!(target_step > out.step_before)) return out;
-  // The undamped critical step whose damped stable step is the target.
-  const double needed = undamped_critical_step(target_step / solver.options().element_safety, stiffness_damping);
-  const std::vector<double> critical = solver.element_critical_steps();
-  std::vector<double> factor(critical.size(), 1.0);
-  for (std::size_t e = 0; e < critical.size(); ++e) {
-    if (!(critical[e] < needed)) continue;
-    factor[e] = (needed / critical[e]) * (needed / critical[e]);
-    const double density = model.materials[model.grains[model.element_grain[e]].material].density;
-    out.added_mass += (factor[e] - 1) * density * std::abs(element_volume(model, e));
-    out.largest_factor = std::max(out.largest_factor, factor[e]);
-    ++out.elements;
+  const std::vector<double> bounds = node_stiffness_bounds(solver.model());
+  const std::span<const double> mass = solver.node_mass();
+  const double safety = solver.options().element_safety;
+  out.guaranteed_before = damped_critical_step(guaranteed_critical_step(bounds, mass), stiffness_damping) * safety;
+  // The undamped critical step whose damped stable step is the target; a node certifies it with
+  // bound dt^2 / 4 of mass (a hair more, so that the sum's rounding cannot fall short of it).
+  const double needed = undamped_critical_step(target_step / safety, stiffness_damping) * (1 + 1e-12);
+  std::vector<double> added(mass.size(), 0.0);
+  for (std::size_t v = 0; v < mass.size(); ++v) {
+    const double wanted = bounds[v] * needed * needed / 4;
+    if (!(wanted > mass[v])) continue;
+    added[v] = wanted - mass[v];
+    out.added_mass += added[v];
+    out.largest_factor = std::max(out.largest_factor, wanted / mass[v]);
+    ++out.nodes;
   }
   if (out.added_share() > max_added_share)
     throw UsageError(fmt::format(
         "{}: selective mass scaling to an element step of {:.4g} s (from {:.4g} s) would add {:.3g} % of the grains' mass "
-        "({:.4g} kg on {} elements, up to {:.3g} times denser), above the bound of {:.3g} %; ask for a smaller [run] "
+        "({:.4g} kg on {} nodes, up to {:.3g} times heavier), above the bound of {:.3g} %; ask for a smaller [run] "
         "element_step_target or raise [run] max_added_mass_share",
-        where, target_step, out.step_before, 100 * out.added_share(), out.added_mass, out.elements, out.largest_factor,
+        where, target_step, out.step_before, 100 * out.added_share(), out.added_mass, out.nodes, out.largest_factor,
         100 * max_added_share));
-  solver.scale_element_densities(std::move(factor));
+  std::vector<double> scaled(mass.begin(), mass.end());
+  for (std::size_t v = 0; v < scaled.size(); ++v) scaled[v] += added[v];
+  solver.add_node_masses(std::move(added), guaranteed_critical_step(bounds, scaled));
   out.step_after = solver.time_step_limits(stiffness_damping).element_stable;
   return out;
 }

@@ -552,7 +552,7 @@ void finish_stages(const std::string& file, double duration, Scene& s) {
 /// Selective mass scaling changes the grains' inertia, so it is for quasi-static runs only: a
 /// triaxial test (servo-controlled consolidation, shearing at a small inertial number) or stages
 /// that all damp the grains.
-void check_element_mass_scaling(const std::string& file, const Scene& s) {
+void check_selective_mass_scaling(const std::string& file, const Scene& s) {
   if (!(s.element_step_target > 0) || s.triaxial) return;
   for (const StageSpec& st : s.stages)
     if (!(st.damping.value_or(s.damping) > 0 || st.stiffness_damping.value_or(s.stiffness_damping) > 0 ||
@@ -598,7 +598,7 @@ Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path
   const std::vector<std::string> platen_names = parse_platens(root, file, s);
   parse_stages(root, file, platen_names, s);
   if (!parse_triaxial_table(root, top, file, duration, s)) finish_stages(file, duration, s);
-  check_element_mass_scaling(file, s);
+  check_selective_mass_scaling(file, s);
   return s;
 }
 }  // namespace

@@ -131,7 +131,9 @@ void Solver::refresh_masses(std::span<const std::uint32_t> grains) {
   for (std::uint32_t g : grains) {
     const Grain& grain = m.grains.at(g);
     std::fill(mass_.begin() + grain.node_begin, mass_.begin() + grain.node_end, 0.0);
-    add_lumped_masses(m, grain.element_begin, grain.element_end, mass_, element_density_factor_);
+    add_lumped_masses(m, grain.element_begin, grain.element_end, mass_);
+    if (!added_mass_.empty())
+      for (std::uint32_t v = grain.node_begin; v < grain.node_end; ++v) mass_[v] += added_mass_[v];
     bodies_[g] = body_properties(m, g);
     if (grain.kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
   }
@@ -139,19 +141,20 @@ void Solver::refresh_masses(std::span<const std::uint32_t> grains) {
   if (contact_) contact_->set_node_masses(contact_mass_);
 }
 
-void Solver::scale_element_densities(std::vector<double> factor) {
-  if (state_.step != 0) throw UsageError("element densities can only be scaled before the first step");
+void Solver::add_node_masses(std::vector<double> added, double guaranteed_critical) {
+  if (state_.step != 0) throw UsageError("node masses can only be added before the first step");
   const Model& m = *model_;
-  if (factor.size() != m.element_count() || !std::all_of(factor.begin(), factor.end(), [](double f) { return f >= 1; }))
-    throw UsageError("scale_element_densities takes one factor of at least 1 per element");
+  if (added.size() != m.nodes.size() || !std::all_of(added.begin(), added.end(), [](double a) { return a >= 0; }))
+    throw UsageError("add_node_masses takes one added mass of at least 0 per model node");
   std::vector<std::uint32_t> grains;
   for (std::size_t g = 0; g < m.grains.size(); ++g)
-    for (std::uint32_t e = m.grains[g].element_begin; e < m.grains[g].element_end; ++e)
-      if (factor[e] != element_density_factor(e)) {
+    for (std::uint32_t v = m.grains[g].node_begin; v < m.grains[g].node_end; ++v)
+      if (added[v] != (added_mass_.empty() ? 0.0 : added_mass_[v])) {
         grains.push_back(static_cast<std::uint32_t>(g));
         break;
       }
-  element_density_factor_ = std::move(factor);
+  added_mass_ = std::move(added);
+  guaranteed_critical_ = guaranteed_critical;
   refresh_masses(grains);
 }
 
@@ -178,8 +181,7 @@ std::vector<double> Solver::element_critical_steps() const {
     if (!elements_.is_elastic(e)) continue;
     const Material& m = model_->materials[model_->grains[model_->element_grain[e]].material];
     const double k = model_->nodes_of(e) == 10 ? kCriticalTet10 : kCriticalTet4;
-    // The wave speed goes with 1 / sqrt(density).
-    steps[e] = k * element_min_altitude(*model_, e) / dilatational_wave_speed(m) * std::sqrt(element_density_factor(e));
+    steps[e] = k * element_min_altitude(*model_, e) / dilatational_wave_speed(m);
   }
   return steps;
 }
@@ -190,6 +192,8 @@ StepLimits Solver::time_step_limits(double stiffness_damping) const {
   s.element_critical = kInfinity;
   for (std::size_t e = 0; e < steps.size(); ++e)
     if (steps[e] < s.element_critical) s.element_critical = steps[e], s.element = e;
+  // Added mass lowers every frequency, so the estimate still holds beside the guarantee.
+  if (guaranteed_critical_ > s.element_critical) s.element_critical = guaranteed_critical_, s.guaranteed = true;
   // The damped step grows with the undamped one, so the element with the shortest sets both.
   s.stiffness_damping = stiffness_damping;
   s.element_stable = damped_critical_step(s.element_critical, stiffness_damping) * options_.element_safety;
@@ -203,9 +207,10 @@ void Solver::check_time_step(double dt, double stiffness_damping) const {
   if (!(dt > 0) || !std::isfinite(dt)) throw UsageError(fmt::format("the time step {:.4g} s must be positive", dt));
   if (dt > s.stable())
     throw UsageError(fmt::format(
-        "the time step {:.4g} s is above the stable limit {:.4g} s (elements: {:.4g} s = {} x the critical {:.4g} s of "
-        "element {}{}; contact: {:.4g} s; boundary: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
-        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical, s.element,
+        "the time step {:.4g} s is above the stable limit {:.4g} s (elements: {:.4g} s = {} x the critical {:.4g} s {}{}; "
+        "contact: {:.4g} s; boundary: {:.4g} s); use at most {:.4g} s, or 0 for automatic",
+        dt, s.stable(), s.element_stable, options_.element_safety, s.element_critical,
+        s.guaranteed ? std::string("the scaled node masses guarantee") : fmt::format("of element {}", s.element),
         stiffness_damping > 0 ? fmt::format(" damped by stiffness_damping {:.4g} s", stiffness_damping) : "",
         s.contact_stable, s.boundary_stable, s.stable()));
 }

@@ -46,8 +46,8 @@ RunStart start_run(const Scene& scene, Model& model, const std::string& where) {
   if (start.scaling.grains > 0) start.solver->refresh_masses(start.scaling.scaled);
   // Then the elements that set the element step, before any step and after the grains' densities.
   if (scene.element_step_target > 0)
-    start.element_scaling = scale_limiting_elements(*start.solver, scene.element_step_target, scene.largest_stiffness_damping(),
-                                                    scene.max_added_mass_share, where);
+    start.selective_scaling = scale_limiting_nodes(*start.solver, scene.element_step_target, scene.largest_stiffness_damping(),
+                                                   scene.max_added_mass_share, where);
   if (scene.overlaps.keep && start.solver->contact_model())
     start.solver->contact_model()->keep_initial_overlaps(start.overlaps.remaining);
   return start;
@@ -86,7 +86,7 @@ nlohmann::json run_parameters(const Scene& scene, const std::string& scene_path,
                               const RunStart& start, const RunSchedule& schedule, int threads, const std::string& restart) {
   const OverlapSettlement& o = start.overlaps;
   const MassScaling& m = start.scaling;
-  const ElementMassScaling& em = start.element_scaling;
+  const SelectiveMassScaling& em = start.selective_scaling;
   return {{"scene", scene_path},
           {"scene_text", scene_text},
           {"time_step", schedule.dt},
@@ -111,11 +111,12 @@ nlohmann::json run_parameters(const Scene& scene, const std::string& scene_path,
            {{"mass_proportional", scene.damping},
             {"stiffness_proportional", scene.stiffness_damping},
             {"local", scene.local_damping}}},
-          {"element_mass_scaling",
+          {"selective_mass_scaling",
            {{"target_step", em.target_step},
             {"step_before", em.step_before},
             {"step_after", em.step_after},
-            {"elements", em.elements},
+            {"guaranteed_before", em.guaranteed_before},
+            {"nodes", em.nodes},
             {"largest_factor", em.largest_factor},
             {"added_mass", em.added_mass},
             {"added_mass_share", em.added_share()},

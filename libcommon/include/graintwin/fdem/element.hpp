@@ -57,6 +57,14 @@ ReferenceGradients reference_gradients(const Model& model, std::size_t element, 
 /// The isotropic elasticity tensor applied to a strain (or strain rate): lambda tr(E) I + 2 mu E, Pa.
 Eigen::Matrix3d isotropic_stress(const Eigen::Matrix3d& strain, const Lame& lame);
 
+/// An element's small-strain stiffness, N/m: its top-left 3n x 3n corner (n = 4 or 10 nodes), row
+/// and column 3 a + i for node a's component i.
+using ElementStiffness = Eigen::Matrix<double, 30, 30>;
+/// Element e's stiffness at `lame`, the tangent of the element forces in the reference state:
+/// K_ab,ij = sum_q w_q [lambda g_a,i g_b,j + mu g_a,j g_b,i + mu (g_a . g_b) delta_ij] over
+/// stiffness_rule's points, g the reference gradients. Writes the top-left corner of `K`; returns n.
+int element_stiffness(const Model& model, std::size_t element, const Lame& lame, ElementStiffness& K);
+
 /// Physical points and weights (w |det J|) of `rule` mapped through element e's reference shape.
 void map_rule(const Model& model, std::size_t element, const TetRule& rule, std::vector<Eigen::Vector3d>& points,
               std::vector<double>& weights);
@@ -134,11 +142,8 @@ class ElasticElements {
 /// every node gets a positive mass and the total is exact: straight-edged, corners m/36 and
 /// mid-edge nodes 4m/27). Rigid grains' nodes get the lumping of their mesh kind.
 std::vector<double> lumped_masses(const Model& model);
-/// Adds the lumped masses of elements [element_begin, element_end) to `mass` (one per model node);
-/// with `density_factor` (one per model element) each element's density is multiplied by its factor
-/// (selective mass scaling, mass_scaling.hpp).
-void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass,
-                       std::span<const double> density_factor = {});
+/// Adds the lumped masses of elements [element_begin, element_end) to `mass` (one per model node).
+void add_lumped_masses(const Model& model, std::size_t element_begin, std::size_t element_end, std::span<double> mass);
 
 /// Mass properties of one grain's mesh, exact for straight and curved elements.
 struct BodyProperties {

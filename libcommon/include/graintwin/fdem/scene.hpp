@@ -143,7 +143,7 @@ struct Scene {
   /// whose density is scaled so the step is the rest's (scale_fastest_grains); 0 = none.
   double mass_scaled_share = 0;
   /// [run] element_step_target: the element stable step (s) selective mass scaling lifts the
-  /// deformable grains' elements to (scale_limiting_elements); 0 = none. Quasi-static runs only: a
+  /// deformable grains to, with a proof (scale_limiting_nodes); 0 = none. Quasi-static runs only: a
   /// [triaxial] test, or [[stages]] that all damp.
   double element_step_target = 0;
   /// [run] max_added_mass_share: the most mass selective mass scaling may add, a share of the grains' mass.

@@ -101,8 +101,11 @@ double undamped_critical_step(double step, double beta);
 
 /// The time-step limits, s; infinity where a limit does not apply.
 struct StepLimits {
-  double element_critical = 0;   ///< min over deformable elements of k h_min / c (k = 0.671 tet4, 0.327 tet10)
-  std::size_t element = 0;       ///< the element that sets it
+  /// min over deformable elements of k h_min / c (k = 0.671 tet4, 0.327 tet10), or after selective
+  /// mass scaling the larger step the node masses guarantee
+  double element_critical = 0;
+  std::size_t element = 0;       ///< the element that sets the estimate
+  bool guaranteed = false;       ///< element_critical is the node masses' guaranteed step
   double stiffness_damping = 0;  ///< beta (s) the element limit allows for
   /// damped_critical_step(element_critical, stiffness_damping) x element_safety
   double element_stable = 0;
@@ -208,17 +211,16 @@ class Solver {
   void stop_grains();
   /// The model's density of `grains` changed (mass scaling): their node masses, rigid-body
   /// properties and contact masses are computed again, as a new Solver of the model would have them
-  /// with the element density factors kept (before the first step; building one again would redo
-  /// every grain's elements and the contact trees).
+  /// with the node masses added by selective mass scaling kept (before the first step; building
+  /// one again would redo every grain's elements and the contact trees).
   void refresh_masses(std::span<const std::uint32_t> grains);
-  /// Selective mass scaling (mass_scaling.hpp): element e's density is taken `factor[e]` times
-  /// (one per model element, at least 1) in its node masses and its critical step; the masses of
-  /// the grains it touches are computed again (refresh_masses). Only before the first step.
-  void scale_element_densities(std::vector<double> factor);
-  /// Per element, its density factor (all 1 without selective mass scaling).
-  double element_density_factor(std::size_t element) const {
-    return element_density_factor_.empty() ? 1.0 : element_density_factor_[element];
-  }
+  /// Selective mass scaling (mass_scaling.hpp): adds `added[v]` kg to node v's lumped mass (one
+  /// per model node, none negative; kept through refresh_masses), and the element critical step
+  /// becomes at least `guaranteed_critical` (s, undamped): the step these masses were proven to
+  /// allow. Only before the first step.
+  void add_node_masses(std::vector<double> added, double guaranteed_critical);
+  /// Per node, the mass selective mass scaling added, kg (empty without it).
+  std::span<const double> added_node_mass() const { return added_mass_; }
   /// Steps `boundary` with the grains from the next step on (not owned; nullptr removes it).
   /// UsageError without contact (a boundary acts through it).
   void set_boundary(Boundary* boundary);
@@ -226,8 +228,9 @@ class Solver {
   ContactModel* contact_model() { return contact_.get(); }
   const ContactModel* contact_model() const { return contact_.get(); }
 
-  /// Per element, its undamped critical step k h_min / c at its density (times its density factor),
-  /// s; infinity for elements of rigid grains.
+  /// Per element, its undamped critical step k h_min / c at its density, s; infinity for elements of
+  /// rigid grains. An estimate that holds for meshes as built; selective mass scaling stands on the
+  /// proven bound instead (node_stiffness_bounds, mass_scaling.hpp).
   std::vector<double> element_critical_steps() const;
   /// The limits with the solver's stiffness damping, or with `stiffness_damping` (s; a run whose
   /// stages change it takes the largest).
@@ -331,8 +334,10 @@ class Solver {
   std::vector<Eigen::Vector3d> force_;
   /// Per node, the last step's stiffness-proportional damping forces (with stiffness damping only).
   std::vector<Eigen::Vector3d> viscous_force_;
-  /// Per element, its density factor of selective mass scaling; empty without it.
-  std::vector<double> element_density_factor_;
+  /// Per node, the mass selective mass scaling added, kg; empty without it.
+  std::vector<double> added_mass_;
+  /// s: the undamped critical step the node masses guarantee after selective mass scaling (0 without).
+  double guaranteed_critical_ = 0;
   /// Per grain, the contact and boundary forces on the rigid ones in the last step (ContactModel::rigid_loads).
   std::vector<RigidLoad> rigid_loads_;
   /// The last step's time step (0 before the first): with the half-step velocities it gives the

@@ -31,13 +31,13 @@ struct RunStart {
   std::unique_ptr<Solver> solver;  ///< built on the model given to start_run, which must outlive it
   OverlapSettlement overlaps;
   MassScaling scaling;
-  ElementMassScaling element_scaling;  ///< selective mass scaling ([run] element_step_target)
+  SelectiveMassScaling selective_scaling;  ///< selective mass scaling ([run] element_step_target)
 };
 
 /// Builds the solver of `scene` (gravity, damping, element safety, contact) on `model` (the scene's
 /// built model), checks or relaxes the initial overlaps (settle_initial_overlaps; `where` names the
 /// scene file in its errors), scales the fastest grains' density ([run] mass_scaled_share), scales
-/// the elements that limit the step ([run] element_step_target; UsageError beyond [run]
+/// mass onto the nodes that limit the element step ([run] element_step_target; UsageError beyond [run]
 /// max_added_mass_share) and, with [run] keep_initial_overlaps, makes the overlaps left force-free. Relaxation and scaling
 /// change `model`, so the solver is built anew after each.
 RunStart start_run(const Scene& scene, Model& model, const std::string& where);
