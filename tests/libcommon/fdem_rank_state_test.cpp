@@ -36,6 +36,17 @@ RankMessage sample_message() {
   m.history.push_back({0, 1, 0, Eigen::Vector3d::Zero(), 0.0});
   m.rows.keys = {3, (std::uint64_t{1} << 53) - 1};
   m.rows.values = {1.0 / 3.0, -0.0, 1e-310, 2.0, 0.0, 5.0, 6.0, 7.0, 8.0, 9.0};
+  GrainLoad load{7, {}};
+  load.load.force = {1.0 / 3.0, -0.0, 1e-310};
+  load.load.moment << 1, 2, 3, 4, 5, 6, 7, 8, 1.0 / 9.0;
+  m.loads.push_back(load);
+  ContactRecord record;
+  record.a = 2, record.b = 4000000000u;
+  record.point = {1e-3, -2e-3, 1.0 / 3.0};
+  record.normal = {0.0, -0.0, 1.0};
+  record.force = {-1e300, 5e-324, 2.0};
+  record.overlap = 1.0 / 7.0, record.stiffness = 3e9;
+  m.records.push_back(record);
   return m;
 }
 
@@ -58,7 +69,8 @@ class WholeShare : public RankShare {
  public:
   explicit WholeShare(std::size_t grains) : roles_(grains, GrainRole::owned) {}
   std::span<const GrainRole> roles() const override { return roles_; }
-  void finish_step(GrainStepSums&, std::span<const PairStepSum> pairs, ContactStepStats&) override {
+  void finish_step(GrainStepSums&, std::span<const PairStepSum> pairs, ContactStepStats&, std::span<Eigen::Vector3d>,
+                   std::span<double>) override {
     owned_pairs += pairs.size();
   }
   std::size_t owned_pairs = 0;
@@ -73,7 +85,7 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
   const RankMessage m = sample_message();
   std::vector<double> packed{42.0};  // appended after what is there
   pack_message(m, packed);
-  ASSERT_EQ(packed.size(), 1 + 3 + 2 * kBodyDoubles + 2 * kHistoryDoubles + 2 * (1 + kTermColumns));
+  ASSERT_EQ(packed.size(), 1 + 5 + 2 * kBodyDoubles + 2 * kHistoryDoubles + 2 * (1 + kTermColumns) + kLoadDoubles + kRecordDoubles);
   const RankMessage back = unpack_message(std::span<const double>(packed).subspan(1));
   ASSERT_EQ(back.bodies.size(), 2u);
   ASSERT_EQ(back.history.size(), 2u);
@@ -92,7 +104,19 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
   EXPECT_EQ(back.rows.keys, m.rows.keys);
   ASSERT_EQ(back.rows.values.size(), m.rows.values.size());
   for (std::size_t i = 0; i < m.rows.values.size(); ++i) EXPECT_EQ(bits(back.rows.values[i]), bits(m.rows.values[i]));
-  EXPECT_TRUE(unpack_message(std::vector<double>{0.0, 0.0, 0.0}).bodies.empty());
+  ASSERT_EQ(back.loads.size(), 1u);
+  EXPECT_EQ(back.loads[0].grain, 7u);
+  expect_same_bits(back.loads[0].load.force, m.loads[0].load.force);
+  for (int r = 0; r < 3; ++r) expect_same_bits(back.loads[0].load.moment.row(r).transpose(), m.loads[0].load.moment.row(r).transpose());
+  ASSERT_EQ(back.records.size(), 1u);
+  const ContactRecord &c = m.records[0], &d = back.records[0];
+  EXPECT_EQ(std::tie(c.a, c.b), std::tie(d.a, d.b));
+  expect_same_bits(c.point, d.point);
+  expect_same_bits(c.normal, d.normal);
+  expect_same_bits(c.force, d.force);
+  EXPECT_EQ(bits(c.overlap), bits(d.overlap));
+  EXPECT_EQ(bits(c.stiffness), bits(d.stiffness));
+  EXPECT_TRUE(unpack_message(std::vector<double>{0.0, 0.0, 0.0, 0.0, 0.0}).bodies.empty());
 }
 
 TEST(FdemRankState, DamagedMessagesAreRefused) {
@@ -195,35 +219,60 @@ TEST(FdemRankState, StepSumsAreRebuiltInTheOneRankOrder) {
   sums.bad.assign(3, 0);
   sums.kinetic = {1.0, 2.0, 3.0};
   sums.bad[2] = 1;
-  // Order-sensitive energies: added from zero in key order, as the contact step adds them. With 3
-  // grains and 2 platens, candidate (0, 5) is grain 0 against platen 0: before (1, 2).
-  const std::vector<PairStepSum> pairs{{2, 4, -1e16, 1e16, 2e-6, 2}, {0, 1, 1e16, 1.0, 1e-6, 3}, {0, 5, 1.0, -1e16, 3e-6, 1}};
+  // Order-sensitive energies and platen forces: added from zero in key order, as the contact step
+  // adds them. With 3 grains and 2 platens, b = 3 is platen 0 and b = 4 platen 1; candidate (0, 3)
+  // comes after (0, 1) and before (2, 4). Platen 1 meets grains 0 and 2 here and grain 1 on
+  // another rank: 1e16, then 1, then -1e16 in grain order sum to 0 (in any other order, to 1).
+  const auto pair = [](std::uint32_t a, std::uint32_t b, double elastic, double dissipated, double overlap,
+                       std::uint64_t nodes, double force_x) {
+    return PairStepSum{a, b, elastic, dissipated, overlap, nodes, Eigen::Vector3d(force_x, 2.0, 0.0), 0.5};
+  };
+  const std::vector<PairStepSum> pairs{pair(2, 4, -1e16, 1e16, 2e-6, 2, -1e16), pair(0, 1, 1e16, 1.0, 1e-6, 3, 7.0),
+                                       pair(0, 3, 1.0, -1e16, 3e-6, 1, 5.0), pair(0, 4, 0.0, 0.0, 0.0, 1, 1e16)};
   const std::vector<std::uint32_t> owned{2, 0};
   const StepRows rows = step_rows(sums, owned, pairs, 2);
-  ASSERT_EQ(rows.keys, (std::vector<std::uint64_t>{2, 0, 3 + 2 * 5 + 4, 3 + 1, 3 + 5}));
-  ASSERT_EQ(rows.values.size(), 5 * kTermColumns);
+  const std::uint64_t platen_rows = 3 + 3 * 5;
+  ASSERT_EQ(rows.keys, (std::vector<std::uint64_t>{2, 0, 3 + 2 * 5 + 4, 3 + 1, 3 + 3, 3 + 4, platen_rows + 2 * 2 + 1,
+                                                   platen_rows + 0, platen_rows + 1}));
+  ASSERT_EQ(rows.values.size(), 9 * kTermColumns);
   EXPECT_EQ(rows.values[1], 3.0);
   EXPECT_EQ(rows.values[4], 1.0);
 
-  // Grain 1's row comes from its owner, another rank: the rows of both, sorted by key.
-  const StepRows other{{1}, {0.0, 11.0, 0.0, 0.0, 0.0}};
+  // Grain 1 and its candidate with platen 1 come from their owner, another rank: the rows of
+  // both, sorted by key.
+  GrainStepSums other_sums = sums;
+  other_sums.kinetic = {0.0, 11.0, 0.0};
+  other_sums.bad.assign(3, 0);
+  const std::vector<std::uint32_t> other_owned{1};
+  const StepRows other = step_rows(other_sums, other_owned, std::vector<PairStepSum>{pair(1, 4, 0.0, 0.0, 0.0, 1, 1.0)}, 2);
   const StepRows all = sorted_rows(std::vector<StepRows>{rows, other});
-  EXPECT_EQ(all.keys, (std::vector<std::uint64_t>{0, 1, 2, 3 + 1, 3 + 5, 3 + 2 * 5 + 4}));
+  EXPECT_EQ(all.keys, (std::vector<std::uint64_t>{0, 1, 2, 3 + 1, 3 + 3, 3 + 4, 3 + 5 + 4, 3 + 2 * 5 + 4, platen_rows,
+                                                  platen_rows + 1, platen_rows + 2 + 1, platen_rows + 4 + 1}));
   GrainStepSums whole = sums;
   whole.kinetic.assign(3, 0.0);
   whole.bad.assign(3, 0);
   ContactStepStats stats;
-  set_step_terms(all.keys, all.values, whole, stats);
+  std::vector<Eigen::Vector3d> platen_force(2, Eigen::Vector3d::Constant(99.0));
+  std::vector<double> platen_stiffness(2, 99.0);
+  set_step_terms(all.keys, all.values, whole, stats, platen_force, platen_stiffness);
   EXPECT_EQ(whole.kinetic, (std::vector<double>{1, 11, 3}));
   EXPECT_EQ(whole.bad, (std::vector<char>{0, 0, 1}));
   EXPECT_EQ(bits(stats.elastic_energy), bits((1e16 + 1.0) + -1e16));
   EXPECT_EQ(bits(stats.dissipated), bits((1.0 + -1e16) + 1e16));
   EXPECT_EQ(stats.max_overlap, 3e-6);
-  EXPECT_EQ(stats.node_contacts, 6u);
+  EXPECT_EQ(stats.node_contacts, 8u);
+  EXPECT_EQ(platen_force[0], Eigen::Vector3d(5.0, 2.0, 0.0));
+  EXPECT_EQ(platen_force[1], Eigen::Vector3d((1e16 + 1.0) + -1e16, 6.0, 0.0));
+  EXPECT_EQ(platen_stiffness, (std::vector<double>{0.5, 1.5}));
 
   const StepRows without_1 = sorted_rows(std::span(&rows, 1));
-  EXPECT_THROW(set_step_terms(without_1.keys, without_1.values, whole, stats), DataError) << "grain 1 without an owner";
+  EXPECT_THROW(set_step_terms(without_1.keys, without_1.values, whole, stats, platen_force, platen_stiffness), DataError)
+      << "grain 1 without an owner";
   EXPECT_THROW(sorted_rows(std::vector<StepRows>{rows, other, other}), DataError) << "grain 1 with two owners";
+  StepRows beyond = all;
+  beyond.keys.back() = platen_rows + 3 * 2;
+  EXPECT_THROW(set_step_terms(beyond.keys, beyond.values, whole, stats, platen_force, platen_stiffness), DataError)
+      << "a platen row of a fourth grain";
 }
 
 TEST(FdemRankState, ShareOwningEveryGrainStepsExactlyAsWithout) {
@@ -272,7 +321,7 @@ TEST(FdemRankState, ContactRolesLeaveOutAbsentGrainsAndPairsWithoutAnOwnedOne) {
   EXPECT_TRUE(contact.owned_pair_sums().empty());
 }
 
-TEST(FdemRankState, OnlyRigidGrainsInContactAreSharedSoFar) {
+TEST(FdemRankState, OnlyRigidGrainsInContactWithPlatensAreSharedSoFar) {
   Model m;
   add_grain(m, box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
   Solver deformable(m, SolverOptions{});
@@ -283,6 +332,6 @@ TEST(FdemRankState, OnlyRigidGrainsInContactAreSharedSoFar) {
   walls.platens.push_back({});
   Solver with_platen(walls, SolverOptions{});
   WholeShare four(4);
-  EXPECT_THROW(with_platen.set_rank_share(&four), UsageError);
+  EXPECT_NO_THROW(with_platen.set_rank_share(&four)) << "platens are shared";
   EXPECT_THROW(with_platen.contact_model()->set_grain_roles(std::vector<GrainRole>(3)), UsageError);
 }

@@ -1,16 +1,20 @@
 // mpi/distributed_run on 1, 2, 3 and 4 ranks (ctest runs this program through mpirun, label
 // `mpi`): rigid grains thrown at each other cross the ranks' boxes many times in 1 000 steps, and
 // every rank count must give every grain the state the plain one-rank Solver gives it in the same
-// process, and the same energies every step.
+// process, and the same energies every step; so must grains pressed between platens, and the
+// platens' forces.
 #include "graintwin/mpi/distributed_run.hpp"
 
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cstdio>
+#include <numeric>
 #include <random>
+#include <tuple>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/primitives.hpp"
@@ -75,6 +79,33 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/// Every grain's state gathered from its owner against the one-rank solver's: the largest position
+/// difference relative to the lattice, and how many grains agree in every bit.
+struct StateMatch {
+  double worst = 0;
+  std::size_t identical = 0;
+};
+StateMatch match_states(const mpi::DistributedRun& run, const fdem::Solver& one) {
+  const std::vector<fdem::RigidBodyState> all = run.gather_states();
+  const std::span<const fdem::RigidBodyState> reference = one.rigid_states();
+  StateMatch out;
+  for (std::size_t g = 0; g < all.size(); ++g) {
+    const double scale = std::max(reference[g].position.norm(), kSpacing);
+    const double d = (all[g].position - reference[g].position).norm() / scale;
+    out.worst = std::max(out.worst, d);
+    EXPECT_LE(d, 1e-10) << "grain " << g;
+    const Eigen::Vector4d q = all[g].orientation.coeffs(), q1 = reference[g].orientation.coeffs();
+    bool same = true;
+    for (int k = 0; k < 3; ++k)
+      same = same && bits(all[g].position[k]) == bits(reference[g].position[k]) &&
+             bits(all[g].velocity[k]) == bits(reference[g].velocity[k]) &&
+             bits(all[g].angular_momentum[k]) == bits(reference[g].angular_momentum[k]);
+    for (int k = 0; k < 4; ++k) same = same && bits(q[k]) == bits(q1[k]);
+    out.identical += same;
+  }
+  return out;
+}
+
 }  // namespace
 
 TEST(DistributedRun, RigidGrainsThrownAcrossRanksMoveAsOnOneRank) {
@@ -104,24 +135,7 @@ TEST(DistributedRun, RigidGrainsThrownAcrossRanksMoveAsOnOneRank) {
   EXPECT_EQ(energy_mismatches, 0u) << "steps whose energies differ from one rank's in any bit";
   EXPECT_GT(contacts, 1000u) << "the grains collide";
 
-  const std::vector<fdem::RigidBodyState> all = run.gather_states();
-  const std::span<const fdem::RigidBodyState> reference = one->rigid_states();
-  double worst = 0;
-  std::size_t identical = 0;
-  for (std::size_t g = 0; g < grains; ++g) {
-    const double scale = std::max(reference[g].position.norm(), kSpacing);
-    const double d = (all[g].position - reference[g].position).norm() / scale;
-    worst = std::max(worst, d);
-    EXPECT_LE(d, 1e-10) << "grain " << g;
-    const Eigen::Vector4d q = all[g].orientation.coeffs(), q1 = reference[g].orientation.coeffs();
-    bool same = true;
-    for (int k = 0; k < 3; ++k)
-      same = same && bits(all[g].position[k]) == bits(reference[g].position[k]) &&
-             bits(all[g].velocity[k]) == bits(reference[g].velocity[k]) &&
-             bits(all[g].angular_momentum[k]) == bits(reference[g].angular_momentum[k]);
-    for (int k = 0; k < 4; ++k) same = same && bits(q[k]) == bits(q1[k]);
-    identical += same;
-  }
+  const auto [worst, identical] = match_states(run, *one);
   const mpi::RankTraffic& t = run.traffic();
   const std::uint64_t migrations = mpi::sum_over_ranks(*g_session, t.migrations);
   const std::uint64_t history = mpi::sum_over_ranks(*g_session, t.history);
@@ -141,6 +155,77 @@ TEST(DistributedRun, RigidGrainsThrownAcrossRanksMoveAsOnOneRank) {
                 one_seconds, run_seconds, t.exchange_seconds, ull(t.bodies), ull(t.doubles));
   }
   EXPECT_EQ(identical, grains) << "bit-identical states (the bound above is 1e-10)";
+}
+
+TEST(DistributedRun, PlatensPressingGrainsAcrossRanksFeelWhatTheyFeelOnOneRank) {
+  // The churning packing between a fixed bottom platen and a top one coming down: each rank sums
+  // the platen contacts of the grains it owns, and the exchange adds them in the one-rank order, so
+  // the platens' forces and stiffnesses, their work and the grains' states match one rank's bits.
+  Scene scene = make_scene();
+  scene.model.platens.push_back({"bottom", Eigen::Vector3d(0, 0, -0.6e-3), Eigen::Vector3d::UnitZ(), 0.3});
+  scene.model.platens.push_back({"top", Eigen::Vector3d(0, 0, kSpacing + 0.6e-3), -Eigen::Vector3d::UnitZ(), 0.3});
+  std::unique_ptr<fdem::Solver> one = thrown(scene), mine = thrown(scene);
+  for (fdem::Solver* s : {one.get(), mine.get()}) s->set_platen_velocity(1, Eigen::Vector3d(0, 0, -2.0));
+  const double dt = 0.5 * one->time_step_limits().stable();
+  mpi::DistributedRun run(*g_session, *mine, scene.domain);
+  std::uint64_t mismatches = 0;
+  std::array<int, 2> steps_pressed{};
+  for (int n = 0; n < kSteps; ++n) {
+    const fdem::StepReport expected = one->step(dt), got = run.step(dt);
+    mismatches += bits(expected.energies.external_work) != bits(got.energies.external_work) ||
+                  bits(expected.energies.dissipated) != bits(got.energies.dissipated);
+    for (std::size_t p = 0; p < 2; ++p) {
+      for (int k = 0; k < 3; ++k) mismatches += bits(one->platen_force(p)[k]) != bits(mine->platen_force(p)[k]);
+      mismatches += bits(one->platen_stiffness(p)) != bits(mine->platen_stiffness(p));
+      steps_pressed[p] += one->platen_force(p).norm() > 0;
+    }
+  }
+  EXPECT_EQ(mismatches, 0u) << "platen forces, stiffnesses and energies that differ from one rank's in any bit";
+  EXPECT_GT(steps_pressed[0], 50) << "grains fall on the bottom platen";
+  EXPECT_GT(steps_pressed[1], 50) << "the top platen meets grains";
+  const StateMatch states = match_states(run, *one);
+  EXPECT_EQ(states.identical, scene.model.grains.size()) << "bit-identical states";
+
+  // For output, rank 0 gathers what one rank holds: contact records, grain stresses, history.
+  run.gather_output();
+  if (g_session->rank() == 0) {
+    const std::span<const fdem::ContactRecord> got = mine->contacts(), expected = one->contacts();
+    ASSERT_EQ(got.size(), expected.size());
+    EXPECT_GT(got.size(), 10u);
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      const fdem::ContactRecord &c = got[i], &e = expected[i];
+      bool same = c.a == e.a && c.b == e.b && bits(c.overlap) == bits(e.overlap) && bits(c.stiffness) == bits(e.stiffness);
+      for (int k = 0; k < 3; ++k)
+        same = same && bits(c.point[k]) == bits(e.point[k]) && bits(c.normal[k]) == bits(e.normal[k]) &&
+               bits(c.force[k]) == bits(e.force[k]);
+      differing += !same;
+    }
+    EXPECT_EQ(differing, 0u) << "contact records that differ from one rank's";
+    for (std::size_t g = 0; g < scene.model.grains.size(); ++g) {
+      const Eigen::Matrix3d a = mine->grain_stress(g), b = one->grain_stress(g);
+      for (int k = 0; k < 9; ++k) EXPECT_EQ(bits(a(k)), bits(b(k))) << "grain " << g;
+    }
+    std::vector<std::uint32_t> every(scene.model.grains.size());
+    std::iota(every.begin(), every.end(), 0u);
+    const std::vector<fdem::ContactHistoryEntry> history = mine->contact_model()->history_of(every),
+                                                 reference = one->contact_model()->history_of(every);
+    ASSERT_EQ(history.size(), reference.size());
+    for (std::size_t i = 0; i < history.size(); ++i) {
+      EXPECT_EQ(std::tie(history[i].a, history[i].b, history[i].node), std::tie(reference[i].a, reference[i].b, reference[i].node));
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(bits(history[i].spring[k]), bits(reference[i].spring[k]));
+    }
+  }
+  // Stepping goes on as before the gathering.
+  for (int n = 0; n < 100; ++n) {
+    const fdem::StepReport expected = one->step(dt), got = run.step(dt);
+    mismatches += bits(expected.energies.kinetic) != bits(got.energies.kinetic);
+  }
+  EXPECT_EQ(mismatches, 0u) << "steps after the gathering that differ from one rank's";
+  if (g_session->rank() == 0)
+    std::printf("%d ranks with platens: the bottom platen pressed in %d steps, the top one in %d; largest position "
+                "difference %.3g relative\n",
+                g_session->size(), steps_pressed[0], steps_pressed[1], states.worst);
 }
 
 TEST(DistributedRun, TooManyRanksForTheSampleAreRefusedOnEveryRank) {

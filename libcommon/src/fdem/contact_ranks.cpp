@@ -40,6 +40,10 @@ void ContactModel::set_grain_roles(std::span<const GrainRole> roles) {
 
 std::span<const PairStepSum> ContactModel::owned_pair_sums() const { return state_->owned_pair_sums; }
 
+std::span<const GrainRole> ContactModel::grain_roles() const { return state_->roles; }
+
+void ContactModel::set_contacts(std::vector<ContactRecord> records) { state_->records = std::move(records); }
+
 std::vector<ContactHistoryEntry> ContactModel::history_of(std::span<const std::uint32_t> grains) const {
   std::vector<ContactHistoryEntry> out;
   for (const HistoryEntry& h : state_->history)

@@ -89,6 +89,20 @@ void pack_message(const RankMessage& message, std::vector<double>& out) {
     out.insert(out.end(), message.rows.values.begin() + i * kTermColumns,
                message.rows.values.begin() + (i + 1) * kTermColumns);
   }
+  out.push_back(static_cast<double>(message.loads.size()));
+  for (const GrainLoad& l : message.loads) {
+    out.push_back(l.grain);
+    append(out, l.load.force);
+    for (int r = 0; r < 3; ++r) append(out, l.load.moment.row(r).transpose());
+  }
+  out.push_back(static_cast<double>(message.records.size()));
+  for (const ContactRecord& c : message.records) {
+    out.insert(out.end(), {double(c.a), double(c.b)});
+    append(out, c.point);
+    append(out, c.normal);
+    append(out, c.force);
+    out.insert(out.end(), {c.overlap, c.stiffness});
+  }
 }
 
 RankMessage unpack_message(std::span<const double> packed) {
@@ -110,6 +124,21 @@ RankMessage unpack_message(std::span<const double> packed) {
     m.rows.keys.push_back(in.key());
     const double* v = in.take(kTermColumns);
     m.rows.values.insert(m.rows.values.end(), v, v + kTermColumns);
+  }
+  m.loads.resize(in.count(kLoadDoubles));
+  for (GrainLoad& l : m.loads) {
+    l.grain = in.index();
+    l.load.force = in.vector();
+    for (int r = 0; r < 3; ++r) l.load.moment.row(r) = in.vector().transpose();
+  }
+  m.records.resize(in.count(kRecordDoubles));
+  for (ContactRecord& c : m.records) {
+    c.a = in.index(), c.b = in.index();
+    c.point = in.vector();
+    c.normal = in.vector();
+    c.force = in.vector();
+    c.overlap = in.next();
+    c.stiffness = in.next();
   }
   if (!in.done())
     throw DataError(fmt::format("a rank's message of {} doubles holds more than its counts say; the ranks must run the "
@@ -214,6 +243,12 @@ StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> own
     rows.keys.push_back(grains + p.a * partners + p.b);
     rows.values.insert(rows.values.end(), {p.elastic_energy, p.dissipated, p.overlap, double(p.node_contacts), 0.0});
   }
+  const std::uint64_t platen_rows = grains + grains * partners;
+  for (const PairStepSum& p : pairs)
+    if (p.b >= grains) {
+      rows.keys.push_back(platen_rows + p.a * platens + (p.b - grains));
+      rows.values.insert(rows.values.end(), {p.force.x(), p.force.y(), p.force.z(), p.stiffness, 0.0});
+    }
   return rows;
 }
 
@@ -235,8 +270,12 @@ StepRows sorted_rows(std::span<const StepRows> parts) {
 }
 
 void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
-                    ContactStepStats& contact) {
-  const std::size_t grains = sums.kinetic.size();
+                    ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness) {
+  const std::size_t grains = sums.kinetic.size(), platens = platen_force.size();
+  if (platen_stiffness.size() != platens)
+    throw UsageError(fmt::format("set_step_terms: {} platen forces but {} stiffnesses; pass one of each per platen",
+                                 platens, platen_stiffness.size()));
+  const std::uint64_t platen_rows = grains + grains * (grains + platens);
   const auto unowned = [](std::size_t g) {
     return DataError(fmt::format("no rank advanced grain {} in this step: every grain needs one owner", g));
   };
@@ -250,12 +289,24 @@ void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double>
   if (i != grains) throw unowned(i);
   contact.elastic_energy = contact.dissipated = contact.max_overlap = 0;
   contact.node_contacts = 0;
-  for (; i < keys.size(); ++i) {
+  for (; i < keys.size() && keys[i] < platen_rows; ++i) {
     const double* r = values.data() + i * kTermColumns;
     contact.elastic_energy += r[0];
     contact.dissipated += r[1];
     contact.max_overlap = std::max(contact.max_overlap, r[2]);
     contact.node_contacts += static_cast<std::size_t>(r[3]);
+  }
+  std::fill(platen_force.begin(), platen_force.end(), Eigen::Vector3d::Zero());
+  std::fill(platen_stiffness.begin(), platen_stiffness.end(), 0.0);
+  for (; i < keys.size(); ++i) {
+    if (keys[i] - platen_rows >= grains * platens)
+      throw DataError(fmt::format("a step's terms came under key {}, beyond the platen rows: the ranks disagree on the "
+                                  "model's grains or platens",
+                                  keys[i]));
+    const std::uint64_t p = (keys[i] - platen_rows) % platens;
+    const double* r = values.data() + i * kTermColumns;
+    platen_force[p] += Eigen::Vector3d(r[0], r[1], r[2]);
+    platen_stiffness[p] += r[3];
   }
 }
 

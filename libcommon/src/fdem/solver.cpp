@@ -373,7 +373,7 @@ StepReport Solver::step(double dt) {
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
   rigid_nodes_stale_ = true;  // rigid grains moved; state() places their nodes when read
-  if (share_) share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact);
+  if (share_) share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact, platen_force_, platen_stiffness_);
 
   Energies& e = report.energies;
   for (std::size_t g = 0; g < grains; ++g) {
@@ -688,9 +688,9 @@ void Solver::load(const io::H5File& f, const std::string& group) {
 void Solver::set_rank_share(RankShare* share) {
   const Model& m = *model_;
   const bool rigid = std::all_of(m.grains.begin(), m.grains.end(), [](const Grain& g) { return g.kind == GrainKind::rigid; });
-  if (share && (!contact_ || !rigid || !m.platens.empty() || boundary_))
-    throw UsageError("a run split over ranks steps rigid grains in contact so far: deformable grains, platens, the wall "
-                     "and the membrane run on one rank (docs/fdemrun.md, across machines)");
+  if (share && (!contact_ || !rigid || boundary_))
+    throw UsageError("a run split over ranks steps rigid grains in contact, with platens, so far: deformable grains, the "
+                     "wall and the membrane run on one rank (docs/fdemrun.md, across machines)");
   if (!share && share_) contact_->set_grain_roles({});  // every grain in contact again
   share_ = share;
 }

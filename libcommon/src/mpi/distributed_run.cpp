@@ -3,10 +3,13 @@
 #include <fmt/format.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <limits>
 #include <numeric>
+#include <tuple>
 
 #include "graintwin/core/error.hpp"
+#include "graintwin/core/interval.hpp"
 #include "graintwin/fdem/rank_state.hpp"
 
 namespace graintwin::mpi {
@@ -22,6 +25,7 @@ int int_count(std::size_t n) {
 /// what r sent this one. Two collectives: the counts (MPI_Alltoall), then the doubles (MPI_Alltoallv).
 std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<double>>& outgoing) {
   const std::size_t ranks = outgoing.size();
+  if (ranks == 1) return outgoing;  // one rank sends itself what it has, with or without MPI
   std::vector<int> send_counts(ranks), receive_counts(ranks);
   for (std::size_t r = 0; r < ranks; ++r) send_counts[r] = int_count(outgoing[r].size());
   MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
@@ -64,8 +68,9 @@ DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, con
 DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
 
 void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
-                                 fdem::ContactStepStats& contact) {
-  const double start = MPI_Wtime();
+                                 fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
+                                 std::span<double> platen_stiffness) {
+  const double start = monotonic_seconds();
   const int rank = session_.rank();
   fdem::ExchangePlan plan =
       fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
@@ -89,14 +94,46 @@ void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fd
       parts.push_back(std::move(received.back().rows));
     }
   const fdem::StepRows all = fdem::sorted_rows(parts);
-  fdem::set_step_terms(all.keys, all.values, grains, contact);
+  fdem::set_step_terms(all.keys, all.values, grains, contact, platen_force, platen_stiffness);
   roles_ = fdem::roles_after_exchange(subdomains_, rank, roles_.size(), plan, received);
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
   for (const fdem::RankMessage& m : received) {
     for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
     solver_.contact_model()->merge_history(m.history);
   }
-  traffic_.exchange_seconds += MPI_Wtime() - start;
+  traffic_.exchange_seconds += monotonic_seconds() - start;
+}
+
+void DistributedRun::gather_output() {
+  fdem::ContactModel& contact = *solver_.contact_model();
+  // The grains advanced in the last step hold its loads and records (their owners may have changed
+  // since); before the first step they are the owned ones.
+  const std::span<const fdem::GrainRole> stepped = contact.grain_roles().empty() ? std::span<const fdem::GrainRole>(roles_)
+                                                                                   : contact.grain_roles();
+  const std::vector<std::uint32_t> advanced = fdem::grains_with_role(stepped, fdem::GrainRole::owned);
+  fdem::RankMessage mine;
+  const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
+  for (std::uint32_t g : owned_) mine.bodies.push_back({g, states[g]});
+  for (std::uint32_t g : advanced) mine.loads.push_back({g, solver_.rigid_load(g)});
+  for (const fdem::ContactRecord& r : contact.contacts())
+    if (stepped[r.a] == fdem::GrainRole::owned) mine.records.push_back(r);
+  mine.history = contact.history_of(advanced);
+  std::vector<std::vector<double>> outgoing(session_.size());
+  if (session_.rank() != 0) fdem::pack_message(mine, outgoing[0]);
+  const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
+  if (session_.rank() != 0) return;
+  std::vector<fdem::ContactRecord> records = std::move(mine.records);
+  for (std::size_t r = 1; r < incoming.size(); ++r) {
+    const fdem::RankMessage m = fdem::unpack_message(incoming[r]);
+    for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
+    for (const fdem::GrainLoad& l : m.loads) solver_.set_rigid_load(l.grain, l.load);
+    records.insert(records.end(), m.records.begin(), m.records.end());
+    contact.merge_history(m.history);
+  }
+  // One rank records candidates in (a, b) order, and each candidate has one owner here.
+  std::sort(records.begin(), records.end(),
+            [](const fdem::ContactRecord& p, const fdem::ContactRecord& q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); });
+  contact.set_contacts(std::move(records));
 }
 
 std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {

@@ -163,6 +163,8 @@ struct PairStepSum {
   double dissipated = 0;       ///< J
   double overlap = 0;          ///< m, deepest
   std::uint64_t node_contacts = 0;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  ///< N, as ContactRecord (a platen's sum needs it)
+  double stiffness = 0;                             ///< N/m, as ContactRecord
 };
 
 class ContactModel {
@@ -271,6 +273,11 @@ class ContactModel {
   /// pairs'). An entry it already holds must be the same, bit for bit: the ranks evaluating a pair
   /// keep the same history, else DataError naming the entry.
   void merge_history(std::span<const ContactHistoryEntry> entries);
+  /// The grains' roles of the last step (set_grain_roles; empty: every grain owned).
+  std::span<const GrainRole> grain_roles() const;
+  /// Replaces the last step's records (contacts()) with `records`, in candidate order: a run split
+  /// over ranks gathers every rank's on rank 0 to write them. The next step makes its own.
+  void set_contacts(std::vector<ContactRecord> records);
 
  private:
   struct State;

@@ -34,23 +34,37 @@ struct StepRows {
   std::vector<double> values;
 };
 
+/// A rigid grain's last-step load as it travels to rank 0 for output.
+struct GrainLoad {
+  std::uint32_t grain = 0;
+  RigidLoad load;
+};
+
 /// What one rank sends another after a step: the states of the grains the receiver owns or ghosts
 /// from now on, the friction history of the pairs of those among them that change owner, and the
-/// sender's terms of the step (the same rows to every rank).
+/// sender's terms of the step (the same rows to every rank). For output (a frame or a checkpoint
+/// written by rank 0) a rank sends rank 0 instead the states of the grains it owns, and for the
+/// grains it advanced in the last step their loads, the records of the candidates it owned and
+/// their pairs' history.
 struct RankMessage {
   std::vector<GrainBody> bodies;
   std::vector<ContactHistoryEntry> history;
   StepRows rows;
+  std::vector<GrainLoad> loads;
+  std::vector<ContactRecord> records;
 };
 
 /// Doubles per packed RigidBodyState (position 3, quaternion w x y z, velocity 3, angular
 /// momentum 3), per packed GrainBody (the grain's index, then its state) and per packed
 /// ContactHistoryEntry (a, b, node, spring 3, offset).
 inline constexpr std::size_t kStateDoubles = 13, kBodyDoubles = 1 + kStateDoubles, kHistoryDoubles = 7;
+/// Doubles per packed GrainLoad (the grain's index, force 3, moment 9 row by row) and per packed
+/// ContactRecord (a, b, point 3, normal 3, force 3, overlap, stiffness).
+inline constexpr std::size_t kLoadDoubles = 13, kRecordDoubles = 13;
 
 /// Appends `message` to `out` as doubles: [bodies, kBodyDoubles each..., entries, kHistoryDoubles
-/// each..., rows, (key, kTermColumns values) each...]; indices and keys are exact (below 2^53),
-/// values keep their bits.
+/// each..., rows, (key, kTermColumns values) each..., loads, kLoadDoubles each..., records,
+/// kRecordDoubles each...]; indices and keys are exact (below 2^53), values keep their bits.
 void pack_message(const RankMessage& message, std::vector<double>& out);
 /// The message pack_message wrote into `packed` (all of it). DataError when its counts do not
 /// fit its length or an index is not a whole number in [0, 2^32) (a row key: [0, 2^53)).
@@ -106,8 +120,10 @@ std::vector<double> surface_node_work(const Model& model);
 // exchange of states, and every rank rebuilds the one-rank sums from all ranks' rows.
 
 /// This rank's rows: each owned grain g's terms under key g, then each owned candidate (a, b)'s
-/// sums under grains + a x (grains + platens) + b (b as in ContactRecord), so that key order is
-/// grain order, then candidate order.
+/// sums under grains + a x (grains + platens) + b (b as in ContactRecord), then each owned
+/// candidate of grain a and platen p its force (3) and stiffness under grains + grains x (grains +
+/// platens) + a x platens + p, so that key order is grain order, then candidate order, then the
+/// platen candidates' order.
 StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
                    std::size_t platens);
 
@@ -116,10 +132,11 @@ StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> own
 StepRows sorted_rows(std::span<const StepRows> parts);
 
 /// From every rank's rows in increasing key order (sorted_rows): every grain's terms into `sums` (whose size is
-/// the grain count), and contact's elastic_energy, dissipated, node_contacts and max_overlap added
-/// from zero in candidate order, as the one-rank contact step adds them. DataError unless every
-/// grain has exactly one row.
+/// the grain count), contact's elastic_energy, dissipated, node_contacts and max_overlap, and each
+/// platen's force and stiffness (`platen_force` and `platen_stiffness`, one per platen) added from
+/// zero in candidate order, as the one-rank contact step adds them. DataError unless every grain
+/// has exactly one row.
 void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
-                    ContactStepStats& contact);
+                    ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness);
 
 }  // namespace graintwin::fdem

@@ -168,10 +168,11 @@ class RankShare {
   /// Called by Solver::step once this rank's owned grains have moved, before the energies are
   /// summed. On entry `grains` holds the terms of the owned grains (the others' are zero) and
   /// `owned_pairs` the sums of the contact candidates this rank owns; on return `grains` holds
-  /// every grain's terms, and contact's elastic_energy, dissipated, node_contacts and max_overlap
-  /// are the whole run's, added in candidate order as one rank adds them.
-  virtual void finish_step(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs,
-                           ContactStepStats& contact) = 0;
+  /// every grain's terms, contact's elastic_energy, dissipated, node_contacts and max_overlap are
+  /// the whole run's, and so are the platens' forces and stiffnesses (one each per platen), all
+  /// added in candidate order as one rank adds them.
+  virtual void finish_step(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs, ContactStepStats& contact,
+                           std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness) = 0;
 };
 
 class Solver {
@@ -294,12 +295,16 @@ class Solver {
   /// Steps only the grains `share` names owned from the next step on, and finishes each step
   /// through it (not owned; nullptr: every grain, one rank). Forces, loads and contacts read
   /// from this solver are then whole for its owned grains only. Rigid grains only, with contact
-  /// and without platens or a boundary so far: UsageError otherwise.
+  /// and without a boundary so far: UsageError otherwise.
   void set_rank_share(RankShare* share);
   /// Replaces rigid grain g's state (a ghost's, or a grain migrating here, from its owner).
   void set_rigid_state(std::size_t grain, const RigidBodyState& state);
   /// Every grain's body state, without placing rigid grains' nodes (state() does).
   std::span<const RigidBodyState> rigid_states() const { return state_.bodies; }
+  /// Rigid grain g's contact and boundary load of the last step (its Love-Weber stress).
+  const RigidLoad& rigid_load(std::size_t grain) const { return rigid_loads_.at(grain); }
+  /// Replaces it (a run split over ranks gathers the owners' on rank 0 to write them).
+  void set_rigid_load(std::size_t grain, const RigidLoad& load) { rigid_loads_.at(grain) = load; }
 
   /// Checkpoint: the state, the last step's platen forces, the contact history (membrane balls'
   /// included) and the boundary's state when one is set, under `group`.

@@ -56,14 +56,21 @@ class DistributedRun final : public fdem::RankShare {
   const RankTraffic& traffic() const { return traffic_; }
   /// Every grain's state from its owner, on every rank (collective): for output and checks.
   std::vector<fdem::RigidBodyState> gather_states() const;
+  /// Gives rank 0's solver what one rank's solver would hold after the last step (collective):
+  /// every grain's state, every rigid grain's load, the contact records in candidate order and
+  /// the friction history, sent by their owners. Rank 0 then writes frames and checkpoints alone.
+  /// The other ranks' solvers are unchanged, and so is stepping: what rank 0 received for the
+  /// grains it ghosts is what their owners sent it, and its absent grains take no part in its steps.
+  void gather_output();
 
   /// The exchange, from within the solver's step once the owned grains moved: sends the owned
   /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
-  /// and this rank's terms of the step to every rank, takes the others', completes the step's sums
-  /// and sets the roles for the next step. Two collectives (MPI_Alltoall of the counts,
+  /// and this rank's terms of the step (platen forces included) to every rank, takes the others',
+  /// completes the step's sums and sets the roles for the next step. Two collectives (MPI_Alltoall of the counts,
   /// MPI_Alltoallv of the doubles).
   void finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
-                   fdem::ContactStepStats& contact) override;
+                   fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
+                   std::span<double> platen_stiffness) override;
 
  private:
 
