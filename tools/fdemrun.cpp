@@ -23,6 +23,8 @@
 #include "graintwin/fdem/stages_run.hpp"
 #include "graintwin/io/atomic_output.hpp"
 #include "graintwin/micro/micro_file.hpp"
+#include "graintwin/mpi/distributed_run.hpp"
+#include "graintwin/mpi/session.hpp"
 
 namespace fs = std::filesystem;
 using namespace graintwin;
@@ -62,7 +64,9 @@ constexpr const char* kDescription =
     "checkpoints also hold the wall, the membrane and where the procedure stands, so --restart resumes it mid-phase. "
     "Before the first step it refuses grains started inside each other or behind a platen deeper than [run] "
     "overlap_tolerance (or pushes them apart with relax_overlaps = true) and a run of more estimated steps than [run] "
-    "max_steps. The scene format is in docs/fdemrun.md.";
+    "max_steps. Under mpirun -np N a scene of rigid grains with platens and [[stages]] runs across N ranks with "
+    "the one-rank results bit for bit (rank 0 writes every output; checkpoints continue on any rank count; triaxial "
+    "tests and deformable grains run on one rank so far). The scene format is in docs/fdemrun.md.";
 
 /// The command line: the scene, the results and the run's own files.
 struct Options {
@@ -209,9 +213,11 @@ void log_schedule(const Scene& scene, const Model& model, const RunSchedule& s) 
 
 /// The scene's [[stages]] up to the end or --stop-step, with a progress display.
 void run_stages_shown(cli::RunContext& ctx, Solver& solver, const Scene& scene, const RunSchedule& schedule, std::uint64_t stop_step,
-                      ResultsWriter& writer, StagesRunHooks hooks) {
+                      ResultsWriter* writer, StagesRunHooks hooks) {
   const std::uint64_t last = stop_step > 0 ? std::min(stop_step, schedule.total) : schedule.total;
-  auto progress = ctx.progress("steps", last - std::min(last, solver.step_count()));
+  const std::size_t steps = last - std::min(last, solver.step_count());
+  // The rank that writes shows the progress.
+  auto progress = writer ? ctx.progress("steps", steps) : std::make_unique<cli::Progress>("steps", steps, false);
   hooks.step = [&] {
     progress->advance();
     throw_if_interrupted();
@@ -265,6 +271,33 @@ std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solve
   return run;
 }
 
+/// A run split over the session's ranks (mpirun -np N, N > 1), or none on one rank. Rigid grains
+/// with platens in [[stages]] so far; the rest is refused naming what runs on one rank.
+std::unique_ptr<mpi::DistributedRun> split_over_ranks(const mpi::Session& session, const Scene& scene, Solver& solver,
+                                                      const std::string& where) {
+  if (session.size() == 1) return nullptr;
+  const auto one_rank = [&](const std::string& what) {
+    return UsageError(fmt::format("{}: {} runs on one rank so far (docs/fdemrun.md, across machines); run it without "
+                                  "mpirun, or with -np 1",
+                                  where, what));
+  };
+  if (scene.triaxial) throw one_rank("a [triaxial] test");
+  if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
+  // The ranks split the sample's box: every node where it is now, with room for round-off.
+  Aabb domain;
+  for (const Eigen::Vector3d& x : solver.state().x) domain.grow(x);
+  domain = domain.inflated(1e-6 * (domain.hi - domain.lo).norm());
+  return std::make_unique<mpi::DistributedRun>(session, solver, domain);
+}
+
+void log_ranks(const mpi::DistributedRun& run, int ranks) {
+  const mpi::RankTraffic& t = run.traffic();
+  spdlog::info("{} ranks: rank 0 owns {} grains at the end; it sent {} grain states ({} migrations, {} history entries), "
+               "{:.3g} MB in all, and spent {:.3g} s in the exchanges",
+               ranks, run.owned().size(), t.bodies, t.migrations, t.history, 8e-6 * static_cast<double>(t.doubles),
+               t.exchange_seconds);
+}
+
 void log_end(const ResultsWriter& writer, const Solver& solver, int threads, double vtk_seconds, const Checkpoints& checkpoints) {
   spdlog::info("{} frames, final time {:.6g} s after {} steps{}", writer.frames(), solver.time(), solver.step_count(),
                solver.has_contact() ? fmt::format(", contact search rebuilt {} times", solver.contact_model()->rebuild_count())
@@ -289,14 +322,19 @@ void log_end(const ResultsWriter& writer, const Solver& solver, int threads, dou
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Under mpirun the ranks share the run (docs/fdemrun.md, across machines); started alone, it is one
+  // rank without MPI.
+  mpi::Session session(argc, argv, mpi::Session::Start::when_launched);
+  const bool writes = session.rank() == 0;  // rank 0 writes every output and tells the run
   cli::Tool tool("fdemrun", kDescription);
   Options o;
   add_options(tool, o);
 
-  return tool.run(argc, argv, [&](cli::RunContext& ctx) {
+  const int code = tool.run(argc, argv, [&](cli::RunContext& ctx) {
+    if (!writes) spdlog::set_level(spdlog::level::warn);
     check_files(o, ctx.force());
     std::optional<io::AtomicOutput> vtk_out;
-    if (!o.vtk.empty()) vtk_out.emplace(o.vtk, ctx.force());
+    if (!o.vtk.empty() && writes) vtk_out.emplace(o.vtk, ctx.force());
     const Scene scene = read_scene(o.scene, o.model, [](const fs::path& micro, std::size_t state, std::size_t increment) {
       return micro::d2min_by_label(micro::read_micro_tables(micro), micro.string(), state, increment);
     });
@@ -312,17 +350,23 @@ int main(int argc, char** argv) {
     log_schedule(scene, model, schedule);
 
     const std::string digest = run_digest(scene_text, model_bytes, schedule.dt);
-    io::AtomicOutput out(o.output, ctx.force());
+    std::optional<io::AtomicOutput> out;
+    if (writes) out.emplace(o.output, ctx.force());
     if (!o.restart.empty() && !scene.triaxial)
       restart_from(o, solver, digest, nullptr);
     else if (o.restart.empty())
       set_initial_velocities(solver, scene);
+    // Split after a restart: the ranks cut the sample where its grains are now.
+    const std::unique_ptr<mpi::DistributedRun> ranks = split_over_ranks(session, scene, solver, o.scene.string());
     nlohmann::json p = run_parameters(scene, o.scene.string(), scene_text, start, schedule, ctx.threads(), o.restart.string());
     p["grain_kinds"] = grain_kinds_json(scene, model);
-    ResultsWriter writer(out.temp_path(), solver, p.dump());
+    p["ranks"] = {{"count", session.size()}};
+    std::optional<ResultsWriter> writer;
+    if (writes) writer.emplace(out->temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());
-    const Checkpoints checkpoints{o.checkpoint, solver, digest};
+    const fs::path checkpoint_path = writes ? o.checkpoint : fs::path();
+    const Checkpoints checkpoints{checkpoint_path, solver, digest};
     double vtk_seconds = 0;
     const auto add_vtk_frame = [&] {
       if (!frames) return;
@@ -336,7 +380,7 @@ int main(int argc, char** argv) {
       if (!o.restart.empty()) hooks.restore = [&](TriaxialRunProgress& at) { restart_from(o, solver, digest, &at); };
       std::optional<TriaxialRunSummary> summary;
       try {
-        summary = run_triaxial_shown(ctx, solver, scene, schedule, o.stop_step, writer, hooks, checkpoints);
+        summary = run_triaxial_shown(ctx, solver, scene, schedule, o.stop_step, *writer, hooks, checkpoints);
       } catch (Error& e) {
         checkpoints.add_context(e);
         throw;
@@ -349,17 +393,38 @@ int main(int argc, char** argv) {
         p["stopped_at_step"] = solver.step_count();
       }
       p["steps"] = solver.step_count();
-      writer.set_parameters(p.dump());
+      writer->set_parameters(p.dump());
     } else {
       StagesRunHooks hooks;
+      hooks.before_frame = [&] {
+        if (ranks) ranks->gather_output();
+      };
       hooks.frame = add_vtk_frame;
-      hooks.checkpoint = [&] { checkpoints.save(nullptr); };
+      hooks.checkpoint = [&] {
+        if (o.checkpoint.empty()) return;
+        if (ranks) ranks->gather_output();  // rank 0 writes what one rank holds
+        checkpoints.save(nullptr);
+      };
       hooks.step_failed = [&](Error& e) { checkpoints.add_context(e); };
-      run_stages_shown(ctx, solver, scene, schedule, o.stop_step, writer, hooks);
+      run_stages_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks);
+      if (ranks) {  // what travelled between the ranks, summed over them (collective)
+        const mpi::RankTraffic& t = ranks->traffic();
+        p["ranks"] = {{"count", session.size()},
+                      {"migrations", mpi::sum_over_ranks(session, t.migrations)},
+                      {"history_entries", mpi::sum_over_ranks(session, t.history)},
+                      {"grain_states_sent", mpi::sum_over_ranks(session, t.bodies)},
+                      {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)}};
+        if (writer) writer->set_parameters(p.dump());
+      }
     }
-    writer.finish(ctx.history());
+    if (!writes) return;
+    writer->finish(ctx.history());
     if (frames) frames->finish();
-    io::commit_outputs({&out, vtk_out ? &*vtk_out : nullptr});
-    log_end(writer, solver, ctx.threads(), vtk_seconds, checkpoints);
+    io::commit_outputs({&*out, vtk_out ? &*vtk_out : nullptr});
+    log_end(*writer, solver, ctx.threads(), vtk_seconds, checkpoints);
+    if (ranks) log_ranks(*ranks, session.size());
   });
+  // An error one rank met alone leaves the others waiting for it in a collective: end them all.
+  if (code != 0 && session.size() > 1) session.abort(code);
+  return code;
 }

@@ -133,7 +133,7 @@ TEST(FdemStagesRun, StagesSetThePlatensAndTakeFramesRowsAndCheckpointsOnSchedule
   hooks.step = [&] { ++steps; };
   {
     ResultsWriter writer(dir / "r.h5", solver, "{}");
-    run_stages(solver, run.scene, s, s.total, writer, hooks);
+    run_stages(solver, run.scene, s, s.total, &writer, hooks);
     writer.finish({"test"});
   }
   EXPECT_EQ(steps, s.total);
@@ -165,7 +165,7 @@ TEST(FdemStagesRun, ARunStopsAtTheLastStepAskedWithACheckpointThere) {
   StagesRunHooks hooks;
   hooks.checkpoint = [&] { checkpoints.push_back(solver.step_count()); };
   ResultsWriter writer(run.dir / "r.h5", solver, "{}");
-  run_stages(solver, run.scene, run.schedule, 37, writer, hooks);
+  run_stages(solver, run.scene, run.schedule, 37, &writer, hooks);
   EXPECT_EQ(solver.step_count(), 37u);
   ASSERT_FALSE(checkpoints.empty());
   EXPECT_EQ(checkpoints.back(), 37u);
@@ -184,7 +184,7 @@ TEST(FdemStagesRun, AFailingStepIsHandedToTheCallerBeforeItPropagates) {
   };
   ResultsWriter writer(run.dir / "r.h5", run.solver, "{}");
   try {
-    run_stages(run.solver, run.scene, s, s.total, writer, hooks);
+    run_stages(run.solver, run.scene, s, s.total, &writer, hooks);
     ADD_FAILURE() << "the step did not fail";
   } catch (const Error& e) {
     ASSERT_FALSE(e.context().empty());

@@ -131,12 +131,17 @@ nlohmann::json triaxial_summary_json(const TriaxialRunSummary& s) {
           {"ball_radius", s.ball_radius},                 {"membrane_density_scaling", s.density_scaling}};
 }
 
-void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule, std::uint64_t last, ResultsWriter& writer,
+void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule, std::uint64_t last, ResultsWriter* writer,
                 const StagesRunHooks& hooks) {
   double start = 0;
-  for (const StageSpec& st : scene.stages) writer.add_stage(st.name, start), start += st.duration;
+  for (const StageSpec& st : scene.stages) {
+    if (writer) writer->add_stage(st.name, start);
+    start += st.duration;
+  }
   const auto add_frame = [&] {
-    writer.add_frame(solver);
+    if (hooks.before_frame) hooks.before_frame();
+    if (!writer) return;
+    writer->add_frame(solver);
     if (hooks.frame) hooks.frame();
   };
   std::uint32_t stage = 0;
@@ -157,7 +162,7 @@ void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule,
       if (hooks.step_failed) hooks.step_failed(e);
       throw;
     }
-    if (n % schedule.row_every == 0) writer.add_row(solver, report, stage, schedule.dt);
+    if (writer && n % schedule.row_every == 0) writer->add_row(solver, report, stage, schedule.dt);
     const std::uint64_t done = solver.step_count();
     if (hooks.checkpoint && ((schedule.checkpoint_every > 0 && done % schedule.checkpoint_every == 0) || done == last))
       hooks.checkpoint();

@@ -76,6 +76,8 @@ nlohmann::json triaxial_summary_json(const TriaxialRunSummary& summary);
 
 /// The run's calls out of the stages' time loop.
 struct StagesRunHooks {
+  /// before each frame, on every rank (a run split over ranks gathers the output state on rank 0)
+  std::function<void()> before_frame;
   std::function<void()> frame;              ///< after a frame went to the results (e.g. to write it as VTK too)
   std::function<void()> checkpoint;         ///< every schedule.checkpoint_every steps and after the last step
   std::function<void()> step;               ///< after every step and its checkpoint (progress, interrupts; may throw)
@@ -84,9 +86,11 @@ struct StagesRunHooks {
 
 /// Runs the scene's [[stages]] (named in the results with their start times) from the solver's
 /// current step (0, or a restart's) up to step `last` (schedule.total, or earlier to stop): each
-/// step takes its stage's damping (all three kinds) and platen velocities; a series row every row_every steps, a
-/// frame every frame_every steps and one after the last step.
-void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule, std::uint64_t last, ResultsWriter& writer,
+/// step takes its stage's damping (all three kinds) and platen velocities; a series row every
+/// row_every steps, a frame every frame_every steps and one after the last step. `writer` is
+/// nullptr on the ranks of a run split over ranks that write nothing (all but rank 0): they step
+/// alike and join in hooks.before_frame.
+void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule, std::uint64_t last, ResultsWriter* writer,
                 const StagesRunHooks& hooks);
 
 /// Runs the scene's triaxial test (run_triaxial) with checkpoints: `checkpoint` every

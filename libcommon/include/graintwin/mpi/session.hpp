@@ -14,9 +14,16 @@ namespace graintwin::mpi {
 
 class Session {
  public:
+  /// When a session starts MPI.
+  enum class Start {
+    always,         ///< with or without a launcher (a program alone is then MPI's one-rank "singleton")
+    when_launched,  ///< only under a launcher (mpirun, srun: its environment names the ranks); a program
+                    ///< started alone is one rank without MPI, and skips the singleton's start (0.3-0.4 s here)
+  };
   /// Starts MPI (MPI_Init_thread, funneled: OpenMP threads inside a rank, MPI calls from the
-  /// thread that made the session). One per process: UsageError when MPI was started before.
-  Session(int& argc, char**& argv);
+  /// thread that made the session), or not (`start`). One per process: UsageError when MPI was
+  /// started before.
+  explicit Session(int& argc, char**& argv, Start start = Start::always);
   /// Ends MPI (MPI_Finalize) on every rank alike. When the session is left by an exception on a
   /// run of several ranks it aborts the whole job (MPI_Abort, exit 1) instead, since the other
   /// ranks may be waiting in a collective for this one and would wait for ever: so let an error
@@ -27,9 +34,14 @@ class Session {
 
   int rank() const { return rank_; }  ///< 0 .. size() - 1
   int size() const { return size_; }  ///< number of ranks
+  bool started() const { return started_; }  ///< MPI runs (else one rank, and the collectives below are local)
+  /// Ends every rank of the job with exit code `code` (MPI_Abort; without MPI, std::exit): for an
+  /// error one rank may have met alone, while the others wait for it in a collective.
+  [[noreturn]] void abort(int code) const;
 
  private:
   int rank_ = 0, size_ = 1;
+  bool started_ = false;
   int uncaught_at_start_ = 0;  ///< std::uncaught_exceptions() when made: more at the end means unwinding
 };
 
