@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """fdemrun across ranks: 48 rigid boxes thrown at each other between a bottom platen and a top one
 pressing down, run alone and by `mpirun -np N`, give the same results bit for bit (every dataset but
-the run's parameters and provenance), and checkpoints move between rank counts: one written on N
+the run's parameters and provenance, and every --vtk file), and checkpoints move between rank counts: one written on N
 ranks continues alone, and one written alone continues on N ranks, to the same last frame. Run by
 ctest (label fdemrun) once per rank count:
 
@@ -82,8 +82,14 @@ with tempfile.TemporaryDirectory() as tmp:
     tmp = Path(tmp)
     scene = tmp / "scene.toml"
     scene.write_text(scene_text())
-    fdemrun([scene, tmp / "one.h5"])
-    fdemrun([scene, tmp / "many.h5"], ranks)
+    fdemrun([scene, tmp / "one.h5", "--vtk", tmp / "one_vtk"])
+    fdemrun([scene, tmp / "many.h5", "--vtk", tmp / "many_vtk"], ranks)
+    vtk = sorted(p.name for p in (tmp / "one_vtk").iterdir())
+    if vtk != sorted(p.name for p in (tmp / "many_vtk").iterdir()):
+        failures.append("the --vtk folders hold different files")
+    differing_vtk = [n for n in vtk if (tmp / "one_vtk" / n).read_bytes() != (tmp / "many_vtk" / n).read_bytes()]
+    if differing_vtk:
+        failures.append(f"--vtk files that differ from one rank's: {differing_vtk}")
     one, many = datasets(tmp / "one.h5"), datasets(tmp / "many.h5")
     if sorted(one) != sorted(many):
         failures.append(f"datasets differ: {sorted(set(one) ^ set(many))}")

@@ -698,7 +698,13 @@ void Solver::set_rank_share(RankShare* share) {
 void Solver::set_rigid_state(std::size_t g, const RigidBodyState& state) {
   if (model_->grains.at(g).kind != GrainKind::rigid)
     throw UsageError(fmt::format("grain {} is not rigid: only a rigid grain's state is set whole", g));
-  state_.bodies[g] = state;
+  RigidBodyState& held = state_.bodies[g];
+  // The same state (a ghost refreshed, or a gathering before any step) leaves the placed nodes as
+  // they are: placing them again would round the initial node velocities differently.
+  if (held.position == state.position && held.orientation.coeffs() == state.orientation.coeffs() &&
+      held.velocity == state.velocity && held.angular_momentum == state.angular_momentum)
+    return;
+  held = state;
   rigid_nodes_stale_ = true;
 }
 
