@@ -271,11 +271,10 @@ std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solve
   return run;
 }
 
-/// A run split over the session's ranks (mpirun -np N, N > 1), or none on one rank. Rigid grains
-/// with platens in [[stages]] so far; the rest is refused naming what runs on one rank.
-std::unique_ptr<mpi::DistributedRun> split_over_ranks(const mpi::Session& session, const Scene& scene, Solver& solver,
-                                                      const std::string& where) {
-  if (session.size() == 1) return nullptr;
+/// What a scene asks for that runs on one rank only, refused on several before the model is built
+/// (deformable grains are refused once the model says which grains deform).
+void check_runs_across_ranks(const mpi::Session& session, const Scene& scene, const std::string& where) {
+  if (session.size() == 1) return;
   const auto one_rank = [&](const std::string& what) {
     return UsageError(fmt::format("{}: {} runs on one rank so far (docs/fdemrun.md, across machines); run it without "
                                   "mpirun, or with -np 1",
@@ -283,6 +282,13 @@ std::unique_ptr<mpi::DistributedRun> split_over_ranks(const mpi::Session& sessio
   };
   if (scene.triaxial) throw one_rank("a [triaxial] test");
   if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
+}
+
+/// A run split over the session's ranks (mpirun -np N, N > 1), or none on one rank: rigid grains
+/// with platens in [[stages]] so far (check_runs_across_ranks; Solver::set_rank_share refuses
+/// deformable grains).
+std::unique_ptr<mpi::DistributedRun> split_over_ranks(const mpi::Session& session, Solver& solver) {
+  if (session.size() == 1) return nullptr;
   // The ranks split the sample's box: every node where it is now, with room for round-off.
   Aabb domain;
   for (const Eigen::Vector3d& x : solver.state().x) domain.grow(x);
@@ -338,6 +344,7 @@ int main(int argc, char** argv) {
     const Scene scene = read_scene(o.scene, o.model, [](const fs::path& micro, std::size_t state, std::size_t increment) {
       return micro::d2min_by_label(micro::read_micro_tables(micro), micro.string(), state, increment);
     });
+    check_runs_across_ranks(session, scene, o.scene.string());
     if (scene.model) io::declare_input(scene.model->path);
     const std::string scene_text = file_bytes(o.scene);
     const std::string model_bytes = scene.model ? file_bytes(scene.model->path) : std::string();  // a restart needs the same model file too
@@ -357,7 +364,7 @@ int main(int argc, char** argv) {
     else if (o.restart.empty())
       set_initial_velocities(solver, scene);
     // Split after a restart: the ranks cut the sample where its grains are now.
-    const std::unique_ptr<mpi::DistributedRun> ranks = split_over_ranks(session, scene, solver, o.scene.string());
+    const std::unique_ptr<mpi::DistributedRun> ranks = split_over_ranks(session, solver);
     nlohmann::json p = run_parameters(scene, o.scene.string(), scene_text, start, schedule, ctx.threads(), o.restart.string());
     p["grain_kinds"] = grain_kinds_json(scene, model);
     p["ranks"] = {{"count", session.size()}};

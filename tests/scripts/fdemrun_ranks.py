@@ -41,6 +41,19 @@ def scene_text():
     return "\n".join(lines)
 
 
+TRIAXIAL = """[sample]
+radius = 5e-3
+axis_xy = [3e-3, 2e-3, 0]
+z_min = -0.6e-3
+z_max = 1.8e-3
+
+[triaxial]
+boundary = "wall"
+confining_pressure = 1e5
+target_axial_strain = 0.01
+"""
+
+
 def fdemrun(args, on_ranks=None):
     cmd = [str(bin_dir / "fdemrun"), *map(str, args), "-q", "-j", "1", "--force"]
     if on_ranks:
@@ -119,6 +132,14 @@ with tempfile.TemporaryDirectory() as tmp:
         bad = [k for k in reference if k not in got or not same_bits(reference[k], got[k])]
         if bad:
             failures.append(f"{name}'s last frame differs from the uninterrupted run's in {bad}")
+
+    # What runs on one rank only is refused on several, before any work, and nothing is written.
+    triaxial = tmp / "triaxial.toml"
+    triaxial.write_text(scene_text().split("[[platens]]")[0] + TRIAXIAL)
+    cmd = [*mpirun, ranks, str(bin_dir / "fdemrun"), str(triaxial), str(tmp / "refused.h5"), "-q"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 2 or "a [triaxial] test runs on one rank so far" not in r.stderr or (tmp / "refused.h5").exists():
+        failures.append(f"a triaxial scene on {ranks} ranks: exit {r.returncode}, {r.stderr[-500:]!r}")
 
 print(f"{ranks} ranks: {len(one)} datasets, {frames} frames, {contacts} node contacts over the rows, largest platen "
       f"force component {pressed:.3g} N; {moved['migrations']} migrations with {moved['history_entries']} history entries, "
