@@ -65,7 +65,8 @@ constexpr const char* kDescription =
     "Before the first step it refuses grains started inside each other or behind a platen deeper than [run] "
     "overlap_tolerance (or pushes them apart with relax_overlaps = true) and a run of more estimated steps than [run] "
     "max_steps. Under mpirun -np N a scene of rigid grains with platens and [[stages]] runs across N ranks with "
-    "the one-rank results bit for bit (rank 0 writes every output; checkpoints continue on any rank count; triaxial "
+    "the one-rank results bit for bit (rank 0 writes every output; the sample is cut again when the work measured per "
+    "grain is out of balance; checkpoints continue on any rank count; triaxial "
     "tests and deformable grains run on one rank so far). The scene format is in docs/fdemrun.md.";
 
 /// The command line: the scene, the results and the run's own files.
@@ -218,7 +219,8 @@ void run_stages_shown(cli::RunContext& ctx, Solver& solver, const Scene& scene, 
   const std::size_t steps = last - std::min(last, solver.step_count());
   // The rank that writes shows the progress.
   auto progress = writer ? ctx.progress("steps", steps) : std::make_unique<cli::Progress>("steps", steps, false);
-  hooks.step = [&] {
+  hooks.step = [&, then = hooks.step] {
+    if (then) then();
     progress->advance();
     throw_if_interrupted();
   };
@@ -284,6 +286,10 @@ void check_runs_across_ranks(const mpi::Session& session, const Scene& scene, co
   if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
 }
 
+/// Steps between two checks of the ranks' balance (DistributedRun::rebalance): a check gathers every
+/// grain's state, so it is not done every step.
+constexpr std::uint64_t kBalanceCheckSteps = 200;
+
 /// A run split over the session's ranks (mpirun -np N, N > 1), or none on one rank: rigid grains
 /// with platens in [[stages]] so far (check_runs_across_ranks; Solver::set_rank_share refuses
 /// deformable grains).
@@ -299,9 +305,9 @@ std::unique_ptr<mpi::DistributedRun> split_over_ranks(const mpi::Session& sessio
 void log_ranks(const mpi::DistributedRun& run, int ranks) {
   const mpi::RankTraffic& t = run.traffic();
   spdlog::info("{} ranks: rank 0 owns {} grains at the end; it sent {} grain states ({} migrations, {} history entries), "
-               "{:.3g} MB in all, and spent {:.3g} s in the exchanges",
+               "{:.3g} MB in all, and spent {:.3g} s in the exchanges; the sample was cut again {} times by measured work",
                ranks, run.owned().size(), t.bodies, t.migrations, t.history, 8e-6 * static_cast<double>(t.doubles),
-               t.exchange_seconds);
+               t.exchange_seconds, run.rebalances());
 }
 
 void log_end(const ResultsWriter& writer, const Solver& solver, int threads, double vtk_seconds, const Checkpoints& checkpoints) {
@@ -413,6 +419,9 @@ int main(int argc, char** argv) {
         checkpoints.save(nullptr);
       };
       hooks.step_failed = [&](Error& e) { checkpoints.add_context(e); };
+      hooks.step = [&] {  // across ranks: cut the sample again when the measured work is out of balance
+        if (ranks && solver.step_count() % kBalanceCheckSteps == 0) ranks->rebalance();
+      };
       run_stages_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks);
       if (ranks) {  // what travelled between the ranks, summed over them (collective)
         const mpi::RankTraffic& t = ranks->traffic();
@@ -420,7 +429,8 @@ int main(int argc, char** argv) {
                       {"migrations", mpi::sum_over_ranks(session, t.migrations)},
                       {"history_entries", mpi::sum_over_ranks(session, t.history)},
                       {"grain_states_sent", mpi::sum_over_ranks(session, t.bodies)},
-                      {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)}};
+                      {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)},
+                      {"rebalances", ranks->rebalances()}};
         if (writer) writer->set_parameters(p.dump());
       }
     }

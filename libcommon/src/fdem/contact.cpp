@@ -257,6 +257,12 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.node_checks += s.checks[i].nodes;
     stats.triangle_checks += s.checks[i].triangles;
     stats.pair_lists_built += s.checks[i].lists_built;
+    if (!s.roles.empty()) {  // the work each owned grain brought this rank
+      const double work = static_cast<double>(s.checks[i].nodes + s.checks[i].triangles);
+      if (s.grain_work.empty()) s.grain_work.assign(grain_count, 0.0);
+      if (s.roles[c.a] == GrainRole::owned) s.grain_work[c.a] += work;
+      if (c.b < grain_count && s.roles[c.b] == GrainRole::owned) s.grain_work[c.b] += work;
+    }
     if (s.hits[i].empty()) continue;
     // Forces on deformable grains' nodes, in candidate order; rigid grains get their sums.
     const bool platen = c.b >= grain_count;

@@ -42,6 +42,14 @@ std::span<const PairStepSum> ContactModel::owned_pair_sums() const { return stat
 
 std::span<const GrainRole> ContactModel::grain_roles() const { return state_->roles; }
 
+std::vector<double> ContactModel::take_grain_work() {
+  State& s = *state_;
+  std::vector<double> work(s.grains.size(), 0.0);
+  if (!s.grain_work.empty()) std::swap(work, s.grain_work);
+  s.grain_work.clear();
+  return work;
+}
+
 void ContactModel::set_contacts(std::vector<ContactRecord> records) { state_->records = std::move(records); }
 
 std::vector<ContactHistoryEntry> ContactModel::history_of(std::span<const std::uint32_t> grains) const {

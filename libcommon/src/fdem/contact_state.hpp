@@ -270,6 +270,9 @@ struct ContactModel::State {
   // A rank's share of the grains (contact_ranks.cpp); empty roles: every grain owned.
   std::vector<GrainRole> roles;
   std::vector<PairStepSum> owned_pair_sums;  ///< with roles: this step's, of candidates with an owned a
+  /// Per grain, the node and triangle checks of the candidates it was in, owned grains only, since
+  /// the last take_grain_work (the measured work a rank balances)
+  std::vector<double> grain_work;
   bool present(std::uint32_t g) const { return roles.empty() || roles[g] != GrainRole::absent; }
   bool owned(std::uint32_t g) const { return roles.empty() || roles[g] == GrainRole::owned; }
   /// The broad phase's `pairs` a rank evaluates: those with an owned grain (all without roles).

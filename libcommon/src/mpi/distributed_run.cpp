@@ -45,7 +45,7 @@ std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<
 }  // namespace
 
 DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain)
-    : session_(session), solver_(solver) {
+    : session_(session), solver_(solver), domain_(domain) {
   solver.set_rank_share(this);  // refuses what does not run across ranks yet
   try {
     const fdem::Model& m = solver.model();
@@ -134,6 +134,41 @@ void DistributedRun::gather_output() {
   std::sort(records.begin(), records.end(),
             [](const fdem::ContactRecord& p, const fdem::ContactRecord& q) { return std::tie(p.a, p.b) < std::tie(q.a, q.b); });
   contact.set_contacts(std::move(records));
+}
+
+bool DistributedRun::rebalance(bool force) {
+  fdem::ContactModel& contact = *solver_.contact_model();
+  std::vector<double> work = contact.take_grain_work();
+  sum_over_ranks(session_, work);  // each grain's checks from the ranks that owned it: whole numbers
+  for (double& w : work) w += 1;   // a grain out of contact still costs its motion
+  const std::vector<fdem::RigidBodyState> all = gather_states();
+  std::vector<Eigen::Vector3d> centroids;
+  for (const fdem::RigidBodyState& s : all) centroids.push_back(s.position), domain_.grow(s.position);
+  const std::vector<double> loads = fdem::rank_loads(fdem::owner_ranks(subdomains_, centroids), work, session_.size());
+  if (!force && !fdem::needs_rebalance(loads)) return false;
+  fdem::Subdomains next;
+  try {
+    next = fdem::bisect_domain(centroids, radii_, work, domain_, session_.size(), contact.skin());
+  } catch (const UsageError&) {
+    return false;  // no cut by these weights leaves every box thick enough (on every rank alike): keep this one
+  }
+  // Every rank takes every grain's state and every rank's friction history, then its new share.
+  std::vector<std::uint32_t> every(all.size());
+  std::iota(every.begin(), every.end(), 0u);
+  fdem::RankMessage mine;
+  mine.history = contact.history_of(every);
+  std::vector<double> packed;
+  fdem::pack_message(mine, packed);
+  std::vector<std::vector<double>> outgoing(session_.size(), packed);
+  outgoing[session_.rank()].clear();
+  for (const auto& buffer : exchange_buffers(outgoing))
+    if (!buffer.empty()) contact.merge_history(fdem::unpack_message(buffer).history);
+  for (std::size_t g = 0; g < all.size(); ++g) solver_.set_rigid_state(g, all[g]);
+  subdomains_ = std::move(next);
+  roles_ = fdem::initial_roles(subdomains_, session_.rank(), all, radii_);
+  owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
+  ++rebalances_;
+  return true;
 }
 
 std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {

@@ -125,6 +125,11 @@ std::vector<double> ordered_sum(const Session& session, std::span<const std::uin
   return {result.begin() + 1, result.end()};
 }
 
+void sum_over_ranks(const Session& session, std::span<double> values) {
+  if (!session.started() || values.empty()) return;
+  MPI_Allreduce(MPI_IN_PLACE, values.data(), checked_count(values.size(), "values"), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+}
+
 std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count) {
   if (!session.started()) return count;
   std::uint64_t total = 0;

@@ -275,6 +275,10 @@ class ContactModel {
   void merge_history(std::span<const ContactHistoryEntry> entries);
   /// The grains' roles of the last step (set_grain_roles; empty: every grain owned).
   std::span<const GrainRole> grain_roles() const;
+  /// Per grain, the node and triangle checks of the candidates it was in while owned here, since
+  /// the last call (zeros without roles), and starts counting again: the measured work a run
+  /// split over ranks balances.
+  std::vector<double> take_grain_work();
   /// Replaces the last step's records (contacts()) with `records`, in candidate order: a run split
   /// over ranks gathers every rank's on rank 0 to write them. The next step makes its own.
   void set_contacts(std::vector<ContactRecord> records);

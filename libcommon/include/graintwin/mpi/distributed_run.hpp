@@ -56,6 +56,16 @@ class DistributedRun final : public fdem::RankShare {
   const RankTraffic& traffic() const { return traffic_; }
   /// Every grain's state from its owner, on every rank (collective): for output and checks.
   std::vector<fdem::RigidBodyState> gather_states() const;
+  /// Weighs every grain by the work measured since the last call (the node and triangle checks of
+  /// its contact candidates on the rank that owned it, plus one) and, when the ranks' loads under
+  /// those weights differ by more than kRebalanceImbalance (or `force`), cuts the sample again with
+  /// them (collective; the same decision and cut on every rank). Each rank then holds every
+  /// grain's state and the whole friction history, and takes the grains its new box holds; the
+  /// run goes on with the same bits. Returns whether it cut again.
+  bool rebalance(bool force = false);
+  /// Times the sample was cut again since the start.
+  std::size_t rebalances() const { return rebalances_; }
+
   /// Gives rank 0's solver what one rank's solver would hold after the last step (collective):
   /// every grain's state, every rigid grain's load, the contact records in candidate order and
   /// the friction history, sent by their owners. Rank 0 then writes frames and checkpoints alone.
@@ -77,6 +87,8 @@ class DistributedRun final : public fdem::RankShare {
   const Session& session_;
   fdem::Solver& solver_;
   std::vector<double> radii_;  ///< per grain, m (grain_bounding_radii)
+  fdem::Aabb domain_;          ///< the box cut at the start, grown by the grains that left it
+  std::size_t rebalances_ = 0;
   fdem::Subdomains subdomains_;
   std::vector<fdem::GrainRole> roles_;
   std::vector<std::uint32_t> owned_;

@@ -68,5 +68,9 @@ std::vector<double> ordered_sum(const Session& session, std::span<const std::uin
 
 /// The sum of one count per rank, on every rank (integers: exact in any order).
 std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count);
+/// Element-wise sums of `values` over the ranks, in place on every rank (MPI_Allreduce). Exact, so
+/// the same bits on every rank and count, when the values are whole numbers whose sums stay below
+/// 2^53 (counts of work), or when one rank alone contributes each element.
+void sum_over_ranks(const Session& session, std::span<double> values);
 
 }  // namespace graintwin::mpi
