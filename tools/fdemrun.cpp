@@ -273,35 +273,6 @@ std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solve
   return run;
 }
 
-/// What a scene asks for that runs on one rank only, refused on several before the model is built
-/// (deformable grains are refused once the model says which grains deform).
-void check_runs_across_ranks(const mpi::Session& session, const Scene& scene, const std::string& where) {
-  if (session.size() == 1) return;
-  const auto one_rank = [&](const std::string& what) {
-    return UsageError(fmt::format("{}: {} runs on one rank so far (docs/fdemrun.md, across machines); run it without "
-                                  "mpirun, or with -np 1",
-                                  where, what));
-  };
-  if (scene.triaxial) throw one_rank("a [triaxial] test");
-  if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
-}
-
-/// Steps between two checks of the ranks' balance (DistributedRun::rebalance): a check gathers every
-/// grain's state, so it is not done every step.
-constexpr std::uint64_t kBalanceCheckSteps = 200;
-
-/// A run split over the session's ranks (mpirun -np N, N > 1), or none on one rank: rigid grains
-/// with platens in [[stages]] so far (check_runs_across_ranks; Solver::set_rank_share refuses
-/// deformable grains).
-std::unique_ptr<mpi::DistributedRun> split_over_ranks(const mpi::Session& session, Solver& solver) {
-  if (session.size() == 1) return nullptr;
-  // The ranks split the sample's box: every node where it is now, with room for round-off.
-  Aabb domain;
-  for (const Eigen::Vector3d& x : solver.state().x) domain.grow(x);
-  domain = domain.inflated(1e-6 * (domain.hi - domain.lo).norm());
-  return std::make_unique<mpi::DistributedRun>(session, solver, domain);
-}
-
 void log_ranks(const mpi::DistributedRun& run, int ranks) {
   const mpi::RankTraffic& t = run.traffic();
   spdlog::info("{} ranks: rank 0 owns {} grains at the end; it sent {} grain states ({} migrations, {} history entries), "
@@ -350,7 +321,7 @@ int main(int argc, char** argv) {
     const Scene scene = read_scene(o.scene, o.model, [](const fs::path& micro, std::size_t state, std::size_t increment) {
       return micro::d2min_by_label(micro::read_micro_tables(micro), micro.string(), state, increment);
     });
-    check_runs_across_ranks(session, scene, o.scene.string());
+    mpi::check_runs_across_ranks(session, scene, o.scene.string());
     if (scene.model) io::declare_input(scene.model->path);
     const std::string scene_text = file_bytes(o.scene);
     const std::string model_bytes = scene.model ? file_bytes(scene.model->path) : std::string();  // a restart needs the same model file too
@@ -370,7 +341,7 @@ int main(int argc, char** argv) {
     else if (o.restart.empty())
       set_initial_velocities(solver, scene);
     // Split after a restart: the ranks cut the sample where its grains are now.
-    const std::unique_ptr<mpi::DistributedRun> ranks = split_over_ranks(session, solver);
+    const std::unique_ptr<mpi::DistributedRun> ranks = mpi::split_over_ranks(session, solver);
     nlohmann::json p = run_parameters(scene, o.scene.string(), scene_text, start, schedule, ctx.threads(), o.restart.string());
     p["grain_kinds"] = grain_kinds_json(scene, model);
     p["ranks"] = {{"count", session.size()}};
@@ -420,7 +391,7 @@ int main(int argc, char** argv) {
       };
       hooks.step_failed = [&](Error& e) { checkpoints.add_context(e); };
       hooks.step = [&] {  // across ranks: cut the sample again when the measured work is out of balance
-        if (ranks && solver.step_count() % kBalanceCheckSteps == 0) ranks->rebalance();
+        if (ranks && solver.step_count() % mpi::kBalanceCheckSteps == 0) ranks->rebalance();
       };
       run_stages_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks);
       if (ranks) {  // what travelled between the ranks, summed over them (collective)

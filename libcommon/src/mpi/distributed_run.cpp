@@ -192,4 +192,22 @@ std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {
   return all;
 }
 
+void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, const std::string& where) {
+  if (session.size() == 1) return;
+  const auto one_rank = [&](const std::string& what) {
+    return UsageError(fmt::format("{}: {} runs on one rank so far (docs/fdemrun.md, across machines); run it without "
+                                  "mpirun, or with -np 1",
+                                  where, what));
+  };
+  if (scene.triaxial) throw one_rank("a [triaxial] test");
+  if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
+}
+
+std::unique_ptr<DistributedRun> split_over_ranks(const Session& session, fdem::Solver& solver) {
+  if (session.size() == 1) return nullptr;
+  fdem::Aabb domain;  // with room for round-off
+  for (const Eigen::Vector3d& x : solver.state().x) domain.grow(x);
+  return std::make_unique<DistributedRun>(session, solver, domain.inflated(1e-6 * (domain.hi - domain.lo).norm()));
+}
+
 }  // namespace graintwin::mpi

@@ -10,10 +10,13 @@
 // adds in the one-rank order. The ghost lists are refreshed every step. The plain-data side is
 // fdem/rank_state.
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "graintwin/fdem/decomposition.hpp"
+#include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
 #include "graintwin/mpi/session.hpp"
 
@@ -94,5 +97,19 @@ class DistributedRun final : public fdem::RankShare {
   std::vector<std::uint32_t> owned_;
   RankTraffic traffic_;
 };
+
+/// What a scene asks for that runs on one rank only, refused (UsageError naming `where`, the scene
+/// file) on several ranks before the model is built: a [triaxial] test, [run] rigid_stress =
+/// "elastostatic". Deformable grains are refused once the model says which grains deform
+/// (Solver::set_rank_share). Nothing on one rank.
+void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, const std::string& where);
+
+/// The run of `solver` split over the session's ranks (collective), or nullptr on one rank: the
+/// sample's box is that of every node where it is now (after a restart, where the grains are then).
+std::unique_ptr<DistributedRun> split_over_ranks(const Session& session, fdem::Solver& solver);
+
+/// Steps between two checks of the ranks' balance (DistributedRun::rebalance): a check gathers every
+/// grain's state, so it is not done every step.
+inline constexpr std::uint64_t kBalanceCheckSteps = 200;
 
 }  // namespace graintwin::mpi
