@@ -310,6 +310,7 @@ int main(int argc, char** argv) {
   mpi::Session session(argc, argv, mpi::Session::Start::when_launched);
   const bool writes = session.rank() == 0;  // rank 0 writes every output and tells the run
   cli::Tool tool("fdemrun", kDescription);
+  tool.share_cores_with(session.ranks_on_this_machine());
   Options o;
   add_options(tool, o);
 

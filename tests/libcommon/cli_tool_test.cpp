@@ -1,6 +1,7 @@
 // Positional arguments of the tool wrapper (its own executable: the interrupt test of cli_test
 // leaves the process-wide interrupted flag set).
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <csignal>
 #include <fstream>
@@ -165,4 +166,25 @@ TEST(Tool, AnOutputThatIsAnInputIsRefusedBeforeTheBody) {
   std::string volume, out;
   EXPECT_EQ(run_optional_middle({l, l, "--force"}, volume, out), 2);
   EXPECT_EQ(out, "") << "the body ran";
+}
+
+TEST(Tool, ProcessesSharingTheMachineSplitItsCoresUnlessThreadsAreGiven) {
+  // Under mpirun each rank of a machine takes its share of the cores with -j 0 (at least one), and
+  // -j still sets a rank's threads whatever the sharing.
+  const auto threads = [](int processes, const std::vector<std::string>& extra) {
+    cli::Tool tool("t", "test");
+    tool.share_cores_with(processes);
+    std::vector<std::string> all{"t", "-q"};
+    all.insert(all.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : all) argv.push_back(a.data());
+    int used = -1;
+    EXPECT_EQ(tool.run(static_cast<int>(argv.size()), argv.data(), [&](cli::RunContext& ctx) { used = ctx.threads(); }), 0);
+    return used;
+  };
+  const int cores = omp_get_num_procs();
+  EXPECT_EQ(threads(1, {}), cores);
+  EXPECT_EQ(threads(2, {}), std::max(1, cores / 2));
+  EXPECT_EQ(threads(4 * cores, {}), 1) << "more ranks than cores: one thread each";
+  EXPECT_EQ(threads(2, {"-j", "3"}), 3);
 }

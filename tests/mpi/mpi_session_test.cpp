@@ -83,6 +83,7 @@ TEST(MpiSession, RanksAreNumberedFromZero) {
   EXPECT_GE(g_session->rank(), 0);
   EXPECT_LT(g_session->rank(), g_session->size());
   EXPECT_EQ(mpi::sum_over_ranks(*g_session, 1), static_cast<std::uint64_t>(g_session->size()));
+  EXPECT_EQ(g_session->ranks_on_this_machine(), g_session->size()) << "ctest starts every rank on this machine";
 }
 
 TEST(MpiSession, EveryGrainHasExactlyOneOwner) {

@@ -92,6 +92,12 @@ void Tool::use_positional_config(const std::string& name, fs::path& target, cons
   inputs_.push_back(&target);
 }
 
+void Tool::share_cores_with(int processes) {
+  sharing_processes_ = std::max(1, processes);
+  app_.get_option("--threads")
+      ->description("Worker threads (0 = all cores; under mpirun, each rank an equal share of its machine's cores)");
+}
+
 void Tool::set_examples(const std::vector<std::string>& examples) {
   std::string footer = "\nExamples:\n";
   for (const auto& e : examples) footer += "  " + e + "\n";
@@ -194,7 +200,7 @@ int Tool::run(int argc, char** argv, const std::function<void(RunContext&)>& bod
   ctx.name_ = name_;
   ctx.force_ = force_;
   ctx.quiet_ = quiet_;
-  ctx.threads_ = threads_ > 0 ? threads_ : omp_get_num_procs();
+  ctx.threads_ = threads_ > 0 ? threads_ : std::max(1, omp_get_num_procs() / sharing_processes_);
   omp_set_num_threads(ctx.threads_);
   std::string cmd = name_;
   for (int i = 1; i < argc; ++i) cmd += " " + shell_quote(argv[i]);

@@ -76,6 +76,10 @@ Session::Session(int& argc, char**& argv, Start start) : uncaught_at_start_(std:
   started_ = true;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  MPI_Comm machine = MPI_COMM_NULL;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &machine);
+  MPI_Comm_size(machine, &local_size_);
+  MPI_Comm_free(&machine);
 }
 
 Session::~Session() {

@@ -77,6 +77,9 @@ class Tool {
   /// option and its value), less the options left empty: "" means "the default", which leaving the
   /// key out gives too, and a length option would refuse "" when the file is read back.
   std::string effective_config() const;
+  /// Processes of one run that share this machine's cores (the MPI ranks on it): -j 0 then gives
+  /// each its share, at least one thread. 1 by default.
+  void share_cores_with(int processes);
   /// Example lines shown under "Examples:" at the end of --help, plus the docs pointer.
   void set_examples(const std::vector<std::string>& examples);
 
@@ -95,6 +98,7 @@ class Tool {
   bool quiet_ = false;
   bool force_ = false;
   int threads_ = 0;
+  int sharing_processes_ = 1;
   std::vector<std::filesystem::path*> inputs_;
   std::vector<std::filesystem::path*> unchecked_inputs_;  // add_input(..., must_exist = false)
   std::vector<std::filesystem::path*> outputs_;

@@ -34,13 +34,15 @@ class Session {
 
   int rank() const { return rank_; }  ///< 0 .. size() - 1
   int size() const { return size_; }  ///< number of ranks
+  /// Ranks of the job on this machine (sharing its memory and cores), this one included.
+  int ranks_on_this_machine() const { return local_size_; }
   bool started() const { return started_; }  ///< MPI runs (else one rank, and the collectives below are local)
   /// Ends every rank of the job with exit code `code` (MPI_Abort; without MPI, std::exit): for an
   /// error one rank may have met alone, while the others wait for it in a collective.
   [[noreturn]] void abort(int code) const;
 
  private:
-  int rank_ = 0, size_ = 1;
+  int rank_ = 0, size_ = 1, local_size_ = 1;
   bool started_ = false;
   int uncaught_at_start_ = 0;  ///< std::uncaught_exceptions() when made: more at the end means unwinding
 };
