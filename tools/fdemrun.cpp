@@ -64,10 +64,10 @@ constexpr const char* kDescription =
     "checkpoints also hold the wall, the membrane and where the procedure stands, so --restart resumes it mid-phase. "
     "Before the first step it refuses grains started inside each other or behind a platen deeper than [run] "
     "overlap_tolerance (or pushes them apart with relax_overlaps = true) and a run of more estimated steps than [run] "
-    "max_steps. Under mpirun -np N a scene of rigid grains with platens and [[stages]] runs across N ranks with "
-    "the one-rank results bit for bit (rank 0 writes every output; the sample is cut again when the work measured per "
-    "grain is out of balance; checkpoints continue on any rank count; triaxial "
-    "tests and deformable grains run on one rank so far). The scene format is in docs/fdemrun.md.";
+    "max_steps. Under mpirun -np N a scene of rigid grains, with [[stages]] or a triaxial test, runs across N ranks "
+    "with the one-rank results bit for bit (rank 0 writes every output; the sample is cut again when the work measured "
+    "per grain is out of balance; checkpoints continue on any rank count; deformable grains run on one rank so far). "
+    "The scene format is in docs/fdemrun.md.";
 
 /// The command line: the scene, the results and the run's own files.
 struct Options {
@@ -233,19 +233,24 @@ void run_stages_shown(cli::RunContext& ctx, Solver& solver, const Scene& scene, 
 /// most allowed steps would mislead), a warning when shearing was not quasi-static. The summary, or
 /// nothing when the run stopped at --stop-step.
 std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solver& solver, const Scene& scene,
-                                                     const RunSchedule& schedule, std::uint64_t stop_step, ResultsWriter& writer,
-                                                     TriaxialRunHooks hooks, const Checkpoints& checkpoints) {
+                                                     const RunSchedule& schedule, std::uint64_t stop_step, ResultsWriter* writer,
+                                                     TriaxialRunHooks hooks,
+                                                     const std::function<void(const TriaxialRunProgress&)>& checkpoint) {
   std::unique_ptr<cli::Progress> progress;
   std::string phase;
   Interval status(kStatusLineSeconds);
   hooks.phase = [&](const std::string& name, std::size_t steps) {
     if (progress) progress->done();
-    progress = steps ? ctx.progress(name + " steps", steps) : nullptr;
+    // The rank that writes shows the progress.
+    progress = !steps ? nullptr
+               : writer ? ctx.progress(name + " steps", steps)
+                        : std::make_unique<cli::Progress>(name + " steps", steps, false);
     phase = name;
     status = Interval(kStatusLineSeconds);
     spdlog::info("{} begins at step {}{}", name, solver.step_count(), steps ? fmt::format(" ({} steps)", steps) : "");
   };
-  hooks.step = [&](const TriaxialMeasure& m, const StepReport& r, const TriaxialRunProgress& at) {
+  hooks.step = [&, then = hooks.step](const TriaxialMeasure& m, const StepReport& r, const TriaxialRunProgress& at) {
+    if (then) then(m, r, at);
     if (progress)
       progress->advance();
     else if (status.due())
@@ -253,8 +258,7 @@ std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solve
                    consolidation_status(*scene.triaxial, m, r, at.procedure), solver.contact_model()->rebuild_count());
     throw_if_interrupted();
   };
-  const std::optional<TriaxialRunSummary> run = run_triaxial_scene(
-      solver, scene, schedule, stop_step, writer, hooks, [&](const TriaxialRunProgress& at) { checkpoints.save(&at); });
+  const std::optional<TriaxialRunSummary> run = run_triaxial_scene(solver, scene, schedule, stop_step, writer, hooks, checkpoint);
   if (progress) progress->done();
   if (!run) return run;
   const TriaxialRunSummary& s = *run;
@@ -341,8 +345,11 @@ int main(int argc, char** argv) {
       restart_from(o, solver, digest, nullptr);
     else if (o.restart.empty())
       set_initial_velocities(solver, scene);
-    // Split after a restart: the ranks cut the sample where its grains are now.
-    const std::unique_ptr<mpi::DistributedRun> ranks = mpi::split_over_ranks(session, solver);
+    // Split after a restart: the ranks cut the sample where its grains are now (a triaxial test's
+    // restart is loaded once its boundary is set).
+    std::unique_ptr<mpi::DistributedRun> ranks;
+    const auto split = [&] { ranks = mpi::split_over_ranks(session, solver); };
+    if (!scene.triaxial) split();
     nlohmann::json p = run_parameters(scene, o.scene.string(), scene_text, start, schedule, ctx.threads(), o.restart.string());
     p["grain_kinds"] = grain_kinds_json(scene, model);
     p["ranks"] = {{"count", session.size()}};
@@ -359,13 +366,27 @@ int main(int argc, char** argv) {
       frames->add(solver);
       vtk_seconds += monotonic_seconds() - start;
     };
+    const auto gather = [&] {  // rank 0 writes what one rank holds
+      if (ranks) ranks->gather_output();
+    };
+    const auto rebalance = [&] {  // across ranks: cut the sample again when the measured work is out of balance
+      if (ranks && solver.step_count() % mpi::kBalanceCheckSteps == 0) ranks->rebalance();
+    };
     if (scene.triaxial) {
       TriaxialRunHooks hooks;
+      hooks.before_frame = gather;
       hooks.frame = add_vtk_frame;
       if (!o.restart.empty()) hooks.restore = [&](TriaxialRunProgress& at) { restart_from(o, solver, digest, &at); };
+      hooks.ready = split;
+      hooks.step = [&](const TriaxialMeasure&, const StepReport&, const TriaxialRunProgress&) { rebalance(); };
       std::optional<TriaxialRunSummary> summary;
       try {
-        summary = run_triaxial_shown(ctx, solver, scene, schedule, o.stop_step, *writer, hooks, checkpoints);
+        summary = run_triaxial_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks,
+                                     [&](const TriaxialRunProgress& at) {
+                                       if (o.checkpoint.empty()) return;
+                                       gather();
+                                       checkpoints.save(&at);
+                                     });
       } catch (Error& e) {
         checkpoints.add_context(e);
         throw;
@@ -378,34 +399,29 @@ int main(int argc, char** argv) {
         p["stopped_at_step"] = solver.step_count();
       }
       p["steps"] = solver.step_count();
-      writer->set_parameters(p.dump());
     } else {
       StagesRunHooks hooks;
-      hooks.before_frame = [&] {
-        if (ranks) ranks->gather_output();
-      };
+      hooks.before_frame = gather;
       hooks.frame = add_vtk_frame;
       hooks.checkpoint = [&] {
         if (o.checkpoint.empty()) return;
-        if (ranks) ranks->gather_output();  // rank 0 writes what one rank holds
+        gather();
         checkpoints.save(nullptr);
       };
       hooks.step_failed = [&](Error& e) { checkpoints.add_context(e); };
-      hooks.step = [&] {  // across ranks: cut the sample again when the measured work is out of balance
-        if (ranks && solver.step_count() % mpi::kBalanceCheckSteps == 0) ranks->rebalance();
-      };
+      hooks.step = rebalance;
       run_stages_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks);
-      if (ranks) {  // what travelled between the ranks, summed over them (collective)
-        const mpi::RankTraffic& t = ranks->traffic();
-        p["ranks"] = {{"count", session.size()},
-                      {"migrations", mpi::sum_over_ranks(session, t.migrations)},
-                      {"history_entries", mpi::sum_over_ranks(session, t.history)},
-                      {"grain_states_sent", mpi::sum_over_ranks(session, t.bodies)},
-                      {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)},
-                      {"rebalances", ranks->rebalances()}};
-        if (writer) writer->set_parameters(p.dump());
-      }
     }
+    if (ranks) {  // what travelled between the ranks, summed over them (collective)
+      const mpi::RankTraffic& t = ranks->traffic();
+      p["ranks"] = {{"count", session.size()},
+                    {"migrations", mpi::sum_over_ranks(session, t.migrations)},
+                    {"history_entries", mpi::sum_over_ranks(session, t.history)},
+                    {"grain_states_sent", mpi::sum_over_ranks(session, t.bodies)},
+                    {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)},
+                    {"rebalances", ranks->rebalances()}};
+    }
+    if (writer) writer->set_parameters(p.dump());
     if (!writes) return;
     writer->finish(ctx.history());
     if (frames) frames->finish();

@@ -893,12 +893,12 @@ TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheirForcesGoToTheirLoad
     const ContactStepStats a = placed.add_forces(x, v, {&c.floor, 1}, dt, fa, poses);
     const ContactStepStats b = unread.add_forces(garbage, garbage, {&c.floor, 1}, dt, fb, poses);
     world.add_forces(x, v, {&c.floor, 1}, dt, fw);
-    const BoundaryContactStats wall_a = placed.add_wall_forces(x, v, wall, dt, fa);
-    const BoundaryContactStats wall_b = unread.add_wall_forces(garbage, garbage, wall, dt, fb);
+    const BoundaryContactStats wall_a = wall_contact_stats(placed.add_wall_forces(x, v, wall, dt, fa));
+    const BoundaryContactStats wall_b = wall_contact_stats(unread.add_wall_forces(garbage, garbage, wall, dt, fb));
     world.add_wall_forces(x, v, wall, dt, fw);
-    ball_contacts += placed.add_ball_forces(x, v, balls, still, still, ball_options, dt, fa, ball_fa, moment_a).contacts;
-    unread.add_ball_forces(garbage, garbage, balls, still, still, ball_options, dt, fb, ball_fb, moment_b);
-    world.add_ball_forces(x, v, balls, still, still, ball_options, dt, fw, ball_fw, moment_w);
+    ball_contacts += add_ball_contacts(placed.add_ball_forces(x, v, balls, still, still, ball_options, dt, fa), ball_fa, moment_a).contacts;
+    add_ball_contacts(unread.add_ball_forces(garbage, garbage, balls, still, still, ball_options, dt, fb), ball_fb, moment_b);
+    add_ball_contacts(world.add_ball_forces(x, v, balls, still, still, ball_options, dt, fw), ball_fw, moment_w);
     ASSERT_EQ(a.node_contacts, b.node_contacts) << step;
     ASSERT_EQ(wall_a.contacts, wall_b.contacts) << step;
     ASSERT_EQ(ball_fa, ball_fb) << step;
@@ -1008,8 +1008,8 @@ TEST(ContactModel, MembraneBallMemosGiveTheForcesOfSearchingAnew) {
          moment_a = zeros(kBalls), moment_b = zeros(kBalls);
     remembering.add_forces(x, v, {}, dt, fa, poses);
     searching.add_forces(x, v, {}, dt, fb, poses);
-    contacts += remembering.add_ball_forces(x, v, centres, still, still, ball_options, dt, fa, ball_fa, moment_a).contacts;
-    searching.add_ball_forces(x, v, centres, still, still, ball_options, dt, fb, ball_fb, moment_b);
+    contacts += add_ball_contacts(remembering.add_ball_forces(x, v, centres, still, still, ball_options, dt, fa), ball_fa, moment_a).contacts;
+    add_ball_contacts(searching.add_ball_forces(x, v, centres, still, still, ball_options, dt, fb), ball_fb, moment_b);
     ASSERT_EQ(ball_fa, ball_fb) << "step " << step;
     ASSERT_EQ(moment_a, moment_b) << "step " << step;
     ASSERT_TRUE(same_loads(remembering.rigid_loads(), searching.rigid_loads())) << "step " << step;

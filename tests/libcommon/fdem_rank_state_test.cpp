@@ -70,7 +70,7 @@ class WholeShare : public RankShare {
   explicit WholeShare(std::size_t grains) : roles_(grains, GrainRole::owned) {}
   std::span<const GrainRole> roles() const override { return roles_; }
   void finish_step(GrainStepSums&, std::span<const PairStepSum> pairs, ContactStepStats&, std::span<Eigen::Vector3d>,
-                   std::span<double>) override {
+                   std::span<double>, StepRows&) override {
     owned_pairs += pairs.size();
   }
   std::size_t owned_pairs = 0;
@@ -230,11 +230,17 @@ TEST(FdemRankState, StepSumsAreRebuiltInTheOneRankOrder) {
   const std::vector<PairStepSum> pairs{pair(2, 4, -1e16, 1e16, 2e-6, 2, -1e16), pair(0, 1, 1e16, 1.0, 1e-6, 3, 7.0),
                                        pair(0, 3, 1.0, -1e16, 3e-6, 1, 5.0), pair(0, 4, 0.0, 0.0, 0.0, 1, 1e16)};
   const std::vector<std::uint32_t> owned{2, 0};
-  const StepRows rows = step_rows(sums, owned, pairs, 2);
+  // The boundary's rows (a wall's two grains here) travel after every step term, under keys of their own.
+  StepRows wall;
+  wall.keys = {0, 2};
+  wall.values = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
+  const StepRows rows = step_rows(sums, owned, pairs, 2, wall);
+  const std::uint64_t boundary = first_boundary_key(3, 2);
+  EXPECT_EQ(boundary, 3 + 3 * 5 + 3 * 2u);
   const std::uint64_t platen_rows = 3 + 3 * 5;
   ASSERT_EQ(rows.keys, (std::vector<std::uint64_t>{2, 0, 3 + 2 * 5 + 4, 3 + 1, 3 + 3, 3 + 4, platen_rows + 2 * 2 + 1,
-                                                   platen_rows + 0, platen_rows + 1}));
-  ASSERT_EQ(rows.values.size(), 9 * kTermColumns);
+                                                   platen_rows + 0, platen_rows + 1, boundary, boundary + 2}));
+  ASSERT_EQ(rows.values.size(), 11 * kTermColumns);
   EXPECT_EQ(rows.values[1], 3.0);
   EXPECT_EQ(rows.values[4], 1.0);
 
@@ -244,8 +250,15 @@ TEST(FdemRankState, StepSumsAreRebuiltInTheOneRankOrder) {
   other_sums.kinetic = {0.0, 11.0, 0.0};
   other_sums.bad.assign(3, 0);
   const std::vector<std::uint32_t> other_owned{1};
-  const StepRows other = step_rows(other_sums, other_owned, std::vector<PairStepSum>{pair(1, 4, 0.0, 0.0, 0.0, 1, 1.0)}, 2);
-  const StepRows all = sorted_rows(std::vector<StepRows>{rows, other});
+  StepRows other_wall;
+  other_wall.keys = {1};
+  other_wall.values = {11, 12, 13, 14, 15};
+  const StepRows other =
+      step_rows(other_sums, other_owned, std::vector<PairStepSum>{pair(1, 4, 0.0, 0.0, 0.0, 1, 1.0)}, 2, other_wall);
+  StepRows all = sorted_rows(std::vector<StepRows>{rows, other});
+  const StepRows walls = take_boundary_rows(all, boundary);
+  EXPECT_EQ(walls.keys, (std::vector<std::uint64_t>{0, 1, 2}));
+  EXPECT_EQ(walls.values, (std::vector<double>{1, 2, 3, 4, 5, 11, 12, 13, 14, 15, 6, 7, 8, 9, 10}));
   EXPECT_EQ(all.keys, (std::vector<std::uint64_t>{0, 1, 2, 3 + 1, 3 + 3, 3 + 4, 3 + 5 + 4, 3 + 2 * 5 + 4, platen_rows,
                                                   platen_rows + 1, platen_rows + 2 + 1, platen_rows + 4 + 1}));
   GrainStepSums whole = sums;

@@ -2,7 +2,7 @@
 // `mpi`): rigid grains thrown at each other cross the ranks' boxes many times in 1 000 steps, and
 // every rank count must give every grain the state the plain one-rank Solver gives it in the same
 // process, and the same energies every step; so must grains pressed between platens, and the
-// platens' forces.
+// platens' forces, and a triaxial test's servo wall and membrane.
 #include "graintwin/mpi/distributed_run.hpp"
 
 #include <gtest/gtest.h>
@@ -19,6 +19,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/primitives.hpp"
+#include "graintwin/fdem/triaxial.hpp"
 
 using namespace graintwin;
 
@@ -270,6 +271,149 @@ TEST(DistributedRun, CuttingTheSampleAgainByMeasuredWorkKeepsTheOneRankBits) {
   if (g_session->rank() == 0)
     std::printf("%d ranks: cut again %zu times by measured work, moving %llu grains to other ranks\n", g_session->size(),
                 run.rebalances(), static_cast<unsigned long long>(moved));
+}
+
+namespace {
+
+constexpr double kEdge = 1e-3;  // m, the triaxial sample's cubes
+
+/// A triaxial sample cut by the ranks along its height: 3 x 3 columns of 8 rigid 1 mm cubes, 2 %
+/// apart, in a sample cylinder enclosing them, between platens "bottom" and "top" (each of 4 ranks
+/// gets two layers, thick enough for a cube and the skin).
+fdem::Model column_sample() {
+  fdem::Model m;
+  const fdem::TetMesh cube = fdem::box_mesh(Eigen::Vector3d::Constant(kEdge), 0.5 * kEdge);
+  const double pitch = 1.02 * kEdge;
+  constexpr int kLayers = 8;
+  std::uint32_t label = 0;
+  for (int i = -1; i <= 1; ++i)
+    for (int j = -1; j <= 1; ++j)
+      for (int k = 0; k < kLayers; ++k)
+        fdem::add_grain(m, cube, Eigen::Vector3d(i * pitch, j * pitch, (k + 0.5) * pitch), fdem::GrainKind::rigid, 0, ++label);
+  fdem::SampleCylinder s;
+  s.radius = std::hypot(1.5 * pitch, 1.5 * pitch) * 1.01;
+  s.z_min = 0.0;
+  s.z_max = kLayers * pitch;
+  m.sample = s;
+  m.platens = {fdem::Platen{"bottom", Eigen::Vector3d(0, 0, s.z_min), Eigen::Vector3d::UnitZ(), 0.0},
+               fdem::Platen{"top", Eigen::Vector3d(0, 0, s.z_max), -Eigen::Vector3d::UnitZ(), 0.0}};
+  return m;
+}
+
+/// One side of the comparison: a solver with its triaxial boundary.
+struct Triaxial {
+  std::unique_ptr<fdem::Solver> solver;
+  std::unique_ptr<fdem::TriaxialBoundary> boundary;
+};
+Triaxial triaxial(const fdem::Model& model, const fdem::TriaxialOptions& o) {
+  fdem::SolverOptions so;
+  so.damping = 2e3;  // 1/s: quasi-static settling
+  Triaxial t;
+  t.solver = std::make_unique<fdem::Solver>(model, so);
+  t.boundary = std::make_unique<fdem::TriaxialBoundary>(model, o, fdem::grains_d50(*t.solver));
+  t.solver->set_boundary(t.boundary.get());
+  return t;
+}
+
+/// Runs a consolidation for at most `steps`: whether it settled (it throws DataError when not).
+template <class Procedure>
+bool settles(Procedure&& procedure) {
+  try {
+    procedure();
+    return true;
+  } catch (const DataError&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+TEST(DistributedRun, ATriaxialTestAcrossRanksServoesItsWallAndMovesItsMembraneAsOnOneRank) {
+  // The sample consolidates in the servo wall, then the membrane replaces it under the confining
+  // pressure and the platens shear the sample. Every rank holds the whole wall or membrane; the
+  // contacts of its own grains with it travel with the step's terms and every rank adds all of
+  // them in the one-rank order, so the servo reads the same stresses everywhere and the grains,
+  // the wall, the balls and the energies keep one rank's bits.
+  const fdem::Model model = column_sample();
+  fdem::TriaxialOptions o;
+  o.ball_radius = model.sample->radius / 15;  // a coarse membrane keeps the test fast
+  o.membrane_friction = 0.3;                  // the balls' friction springs must follow their grains' owners
+  o.servo_inertial_number = 0.1;              // the wall reaches the grains within the test's steps
+  Triaxial one = triaxial(model, o), mine = triaxial(model, o);
+  fdem::Aabb domain;
+  for (const Eigen::Vector3d& x : model.nodes) domain.grow(x);
+  const double dt = 0.9 * one.solver->time_step_limits().stable();
+  mpi::DistributedRun run(*g_session, *mine.solver, domain.inflated(0.5 * kEdge));
+  const fdem::PlatenPair platens = fdem::find_platens(model);
+
+  std::uint64_t mismatches = 0, steps = 0, wall_contacts = 0, ball_contacts = 0;
+  const auto compare = [&](const fdem::TriaxialMeasure& expected, const fdem::StepReport& e, const fdem::TriaxialMeasure& got,
+                           const fdem::StepReport& r) {
+    mismatches += bits(e.energies.kinetic) != bits(r.energies.kinetic) ||
+                  bits(e.energies.contact_elastic) != bits(r.energies.contact_elastic) ||
+                  bits(e.energies.dissipated) != bits(r.energies.dissipated) ||
+                  bits(e.energies.external_work) != bits(r.energies.external_work) ||
+                  bits(expected.axial_stress) != bits(got.axial_stress) ||
+                  bits(expected.lateral_stress) != bits(got.lateral_stress) || bits(expected.volume) != bits(got.volume);
+    ++steps;
+  };
+  // The one-rank side's measurements, step by step, then the ranks' side checked against them.
+  std::vector<std::pair<fdem::TriaxialMeasure, fdem::StepReport>> reference;
+  const auto record = [&](const fdem::TriaxialMeasure& m, const fdem::StepReport& r) {
+    reference.emplace_back(m, r);
+    (one.boundary->has_membrane() ? ball_contacts : wall_contacts) += one.boundary->last_contact().contacts;
+  };
+  std::size_t at = 0;
+  const auto check = [&](const fdem::TriaxialMeasure& m, const fdem::StepReport& r) {
+    ASSERT_LT(at, reference.size()) << "more steps across ranks than on one rank";
+    compare(reference[at].first, reference[at].second, m, r);
+    ++at;
+  };
+
+  // Consolidation inside the servo wall, 400 steps.
+  const bool wall_one = settles([&] { fdem::consolidate_in_wall(*one.solver, *one.boundary, o, dt, 400, record); });
+  const bool wall_mine = settles([&] { fdem::consolidate_in_wall(*mine.solver, *mine.boundary, o, dt, 400, check); });
+  EXPECT_EQ(wall_one, wall_mine);
+  EXPECT_EQ(bits(one.boundary->wall().radius), bits(mine.boundary->wall().radius));
+
+  // The membrane replaces the wall, released at once under sigma_3; the platens shear the sample
+  // to 0.4 % axial strain, the ranks cut the sample again half way.
+  for (Triaxial* t : {&one, &mine}) {
+    t->solver->stop_grains();
+    t->boundary->install_membrane(*t->solver->contact_model(), dt);
+    t->boundary->set_membrane_fixed(false);
+    t->boundary->set_pressure(o.confining_pressure);
+  }
+  fdem::ShearOptions shearing;
+  shearing.strain_rate = 4e-3 / (600 * dt);  // about 600 steps
+  shearing.target_axial_strain = 4e-3;
+  const std::size_t shear_steps = fdem::shear(*one.solver, *one.boundary, o, shearing, dt, record);
+  std::size_t taken = 0;
+  fdem::shear(*mine.solver, *mine.boundary, o, shearing, dt, [&](const fdem::TriaxialMeasure& m, const fdem::StepReport& r) {
+    check(m, r);
+    if (++taken == shear_steps / 2) run.rebalance(true);
+  });
+  EXPECT_EQ(at, reference.size()) << "as many steps across ranks as on one rank";
+  EXPECT_EQ(mismatches, 0u) << "steps whose energies or measurements differ from one rank's in any bit";
+  EXPECT_GT(wall_contacts, 100u) << "the grains pressed on the wall";
+  EXPECT_GT(ball_contacts, 100u) << "the grains pressed on the membrane";
+
+  const StateMatch states = match_states(run, *one.solver);
+  EXPECT_EQ(states.identical, model.grains.size()) << "bit-identical grain states";
+  const std::span<const Eigen::Vector3d> balls = one.boundary->membrane_state()->x, my_balls = mine.boundary->membrane_state()->x;
+  ASSERT_EQ(balls.size(), my_balls.size());
+  std::size_t differing_balls = 0;
+  for (std::size_t b = 0; b < balls.size(); ++b)
+    for (int k = 0; k < 3; ++k) differing_balls += bits(balls[b][k]) != bits(my_balls[b][k]);
+  EXPECT_EQ(differing_balls, 0u) << "membrane ball coordinates that differ from one rank's";
+  for (std::size_t p : {platens.bottom, platens.top})
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(bits(one.solver->platen_force(p)[k]), bits(mine.solver->platen_force(p)[k]));
+  if (g_session->rank() == 0)
+    std::printf("%d ranks, triaxial: %llu steps (wall settled: %s), %llu wall and %llu ball contacts over them, "
+                "%zu membrane balls; largest position difference %.3g relative\n",
+                g_session->size(), static_cast<unsigned long long>(steps), wall_one ? "yes" : "no",
+                static_cast<unsigned long long>(wall_contacts), static_cast<unsigned long long>(ball_contacts), balls.size(),
+                states.worst);
 }
 
 TEST(DistributedRun, TooManyRanksForTheSampleAreRefusedOnEveryRank) {

@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """fdemrun across ranks: 48 rigid boxes thrown at each other between a bottom platen and a top one
-pressing down, run alone and by `mpirun -np N`, give the same results bit for bit (every dataset but
-the run's parameters and provenance, and every --vtk file), and checkpoints move between rank counts: one written on N
-ranks continues alone, and one written alone continues on N ranks, to the same last frame. Run by
-ctest (label fdemrun) once per rank count:
+pressing down, and a triaxial test of 72 boxes (servo wall, membrane, shearing), run alone and by
+`mpirun -np N`, give the same results bit for bit (every dataset but the run's parameters and
+provenance, and every --vtk file), and checkpoints move between rank counts: one written on N ranks
+continues alone, and one written alone continues on N ranks, to the same last frame. Run by ctest
+(label fdemrun) once per rank count:
 
     fdemrun_ranks.py BIN_DIR RANKS MPIRUN [MPIRUN ARGS...]   (MPIRUN ARGS end with the -np flag)
 """
@@ -41,17 +42,28 @@ def scene_text():
     return "\n".join(lines)
 
 
-TRIAXIAL = """[sample]
-radius = 5e-3
-axis_xy = [3e-3, 2e-3, 0]
-z_min = -0.6e-3
-z_max = 1.8e-3
-
-[triaxial]
-boundary = "wall"
-confining_pressure = 1e5
-target_axial_strain = 0.01
-"""
+def triaxial_text():
+    """A triaxial test cut by the ranks along its height: 3 x 3 columns of 8 rigid 1 mm boxes, 2 % apart,
+    consolidated in the servo wall, then in the membrane (with friction: the balls' springs must follow
+    their grains' owners), sheared to 0.2 %. A soft penalty, a coarse membrane and a fast servo keep it
+    to about 4 000 steps."""
+    pitch = 1.02e-3
+    lines = ["[run]", "damping = 2000", "frame_interval = 1e-4", "",
+             "[[materials]]", 'name = "glass"', "density = 2500", "young = 60e9", "poisson = 0.2", "friction = 0.4",
+             "normal_penalty = 1e12", "tangential_penalty = 1e12", ""]
+    for i in (-1, 0, 1):
+        for j in (-1, 0, 1):
+            for k in range(8):
+                lines += ["[[grains]]", "size = [1e-3, 1e-3, 1e-3]",
+                          f"position = [{i * pitch!r}, {j * pitch!r}, {(k + 0.5) * pitch!r}]",
+                          "element_size = 0.5e-3", 'kind = "rigid"', 'material = "glass"', ""]
+    lines += ["[[platens]]", 'name = "bottom"', "point = [0, 0, 0]", "normal = [0, 0, 1]", "",
+              "[[platens]]", 'name = "top"', f"point = [0, 0, {8 * pitch!r}]", "normal = [0, 0, -1]", "",
+              "[sample]", f"radius = {1.5 * pitch * 2 ** 0.5 * 1.01!r}", "z_min = 0", f"z_max = {8 * pitch!r}", "",
+              "[triaxial]", "ball_radius = 2.5e-4", "membrane_friction = 0.3", "servo_inertial_number = 0.1",
+              "stress_tolerance = 0.02", "strain_rate = 20", "target_axial_strain = 2e-3", "shear_ramp_strain = 1e-3",
+              "frame_strains = [5e-4, 1e-3]", "pressure_ramp_steps = 500", ""]
+    return "\n".join(lines)
 
 
 def fdemrun(args, on_ranks=None):
@@ -90,60 +102,92 @@ def last_frame(path):
     return out
 
 
+def same_runs(scene, tag):
+    """The scene alone and on the ranks: (the alone run's results, failures)."""
+    fdemrun([scene, tmp / f"{tag}_one.h5", "--vtk", tmp / f"{tag}_one_vtk"])
+    fdemrun([scene, tmp / f"{tag}_many.h5", "--vtk", tmp / f"{tag}_many_vtk"], ranks)
+    found = []
+    vtk = sorted(p.name for p in (tmp / f"{tag}_one_vtk").iterdir())
+    if vtk != sorted(p.name for p in (tmp / f"{tag}_many_vtk").iterdir()):
+        found.append(f"{tag}: the --vtk folders hold different files")
+    differing_vtk = [n for n in vtk if (tmp / f"{tag}_one_vtk" / n).read_bytes() != (tmp / f"{tag}_many_vtk" / n).read_bytes()]
+    if differing_vtk:
+        found.append(f"{tag}: --vtk files that differ from one rank's: {differing_vtk}")
+    one, many = datasets(tmp / f"{tag}_one.h5"), datasets(tmp / f"{tag}_many.h5")
+    if sorted(one) != sorted(many):
+        found.append(f"{tag}: datasets differ: {sorted(set(one) ^ set(many))}")
+    differing = [name for name in one if name in many and not same_bits(one[name], many[name])]
+    if differing:
+        found.append(f"{tag}: {len(differing)} datasets differ from one rank's in some bit: {differing[:8]}")
+    return one, found
+
+
+def across_checkpoints(scene, tag, stop):
+    """Stopped at `stop` on one rank count and continued on the other, both ways: failures where the last
+    frame differs from the uninterrupted run's."""
+    fdemrun([scene, tmp / f"{tag}_half_many.h5", "--stop-step", stop, "--checkpoint", tmp / f"{tag}_many_ck.h5"], ranks)
+    fdemrun([scene, tmp / f"{tag}_rest_one.h5", "--restart", tmp / f"{tag}_many_ck.h5"])
+    fdemrun([scene, tmp / f"{tag}_half_one.h5", "--stop-step", stop, "--checkpoint", tmp / f"{tag}_alone_ck.h5"])
+    fdemrun([scene, tmp / f"{tag}_rest_many.h5", "--restart", tmp / f"{tag}_alone_ck.h5"], ranks)
+    reference = last_frame(tmp / f"{tag}_one.h5")
+    found = []
+    for name in (f"{tag}_rest_one.h5", f"{tag}_rest_many.h5"):
+        got = last_frame(tmp / name)
+        bad = [k for k in reference if k not in got or not same_bits(reference[k], got[k])]
+        if bad:
+            found.append(f"{name}'s last frame differs from the uninterrupted run's in {bad}")
+    return found
+
+
 failures = []
 with tempfile.TemporaryDirectory() as tmp:
     tmp = Path(tmp)
     scene = tmp / "scene.toml"
     scene.write_text(scene_text())
-    fdemrun([scene, tmp / "one.h5", "--vtk", tmp / "one_vtk"])
-    fdemrun([scene, tmp / "many.h5", "--vtk", tmp / "many_vtk"], ranks)
-    vtk = sorted(p.name for p in (tmp / "one_vtk").iterdir())
-    if vtk != sorted(p.name for p in (tmp / "many_vtk").iterdir()):
-        failures.append("the --vtk folders hold different files")
-    differing_vtk = [n for n in vtk if (tmp / "one_vtk" / n).read_bytes() != (tmp / "many_vtk" / n).read_bytes()]
-    if differing_vtk:
-        failures.append(f"--vtk files that differ from one rank's: {differing_vtk}")
-    one, many = datasets(tmp / "one.h5"), datasets(tmp / "many.h5")
-    if sorted(one) != sorted(many):
-        failures.append(f"datasets differ: {sorted(set(one) ^ set(many))}")
-    differing = [name for name in one if name in many and not same_bits(one[name], many[name])]
-    if differing:
-        failures.append(f"{len(differing)} datasets differ from one rank's in some bit: {differing[:8]}")
-    with h5py.File(tmp / "one.h5", "r") as f:
+    one, found = same_runs(scene, "stages")
+    failures += found
+    with h5py.File(tmp / "stages_one.h5", "r") as f:
         contacts = int(np.sum(f["series/node_contacts"][...]))
         frames = len(f["frames"])
         pressed = float(np.max(np.abs(f["series/platen_force"][...])))
         half = str(int(f["series/step"][-1]) // 2)
-    with h5py.File(tmp / "many.h5", "r") as f:
+    with h5py.File(tmp / "stages_many.h5", "r") as f:
         moved = json.loads(f["run/parameters"][0])["ranks"]
     if moved["count"] != int(ranks) or moved["migrations"] < 4 or moved["history_entries"] == 0:
         failures.append(f"the grains barely change ranks: {moved}")
     if contacts < 100 or not pressed > 0:
         failures.append(f"the boxes barely touch ({contacts} node contacts over the rows, platen force {pressed:g} N)")
+    failures += across_checkpoints(scene, "stages", half)
 
-    # Checkpoints across rank counts: stopped half way on one count, continued on the other.
-    fdemrun([scene, tmp / "half_many.h5", "--stop-step", half, "--checkpoint", tmp / "many_ck.h5"], ranks)
-    fdemrun([scene, tmp / "rest_one.h5", "--restart", tmp / "many_ck.h5"])
-    fdemrun([scene, tmp / "half_one.h5", "--stop-step", half, "--checkpoint", tmp / "alone_ck.h5"])
-    fdemrun([scene, tmp / "rest_many.h5", "--restart", tmp / "alone_ck.h5"], ranks)
-    reference = last_frame(tmp / "one.h5")
-    for name in ("rest_one.h5", "rest_many.h5"):
-        got = last_frame(tmp / name)
-        bad = [k for k in reference if k not in got or not same_bits(reference[k], got[k])]
-        if bad:
-            failures.append(f"{name}'s last frame differs from the uninterrupted run's in {bad}")
+    # The triaxial test: the same series, frames and --vtk files, and checkpoints taken in the membrane
+    # phase continue on the other rank count.
+    triaxial = tmp / "triaxial.toml"
+    triaxial.write_text(triaxial_text())
+    test, found = same_runs(triaxial, "triaxial")
+    failures += found
+    stage = test["series/stage"]
+    membrane_steps = test["series/step"][stage == 1]
+    phases = [int(np.sum(stage == k)) for k in range(3)]
+    if min(phases) == 0:
+        failures.append(f"the triaxial test left out a phase: rows per phase {phases}")
+    else:
+        failures += across_checkpoints(triaxial, "triaxial", str(int(membrane_steps[len(membrane_steps) // 2])))
+    with h5py.File(tmp / "triaxial_many.h5", "r") as f:
+        triaxial_ranks = json.loads(f["run/parameters"][0])["ranks"]
 
     # What runs on one rank only is refused on several, before any work, and nothing is written.
-    triaxial = tmp / "triaxial.toml"
-    triaxial.write_text(scene_text().split("[[platens]]")[0] + TRIAXIAL)
-    cmd = [*mpirun, ranks, str(bin_dir / "fdemrun"), str(triaxial), str(tmp / "refused.h5"), "-q"]
+    elastostatic = tmp / "elastostatic.toml"
+    elastostatic.write_text(scene_text().replace("[run]", '[run]\nrigid_stress = "elastostatic"', 1))
+    cmd = [*mpirun, ranks, str(bin_dir / "fdemrun"), str(elastostatic), str(tmp / "refused.h5"), "-q"]
     r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 2 or "a [triaxial] test runs on one rank so far" not in r.stderr or (tmp / "refused.h5").exists():
-        failures.append(f"a triaxial scene on {ranks} ranks: exit {r.returncode}, {r.stderr[-500:]!r}")
+    if r.returncode != 2 or 'rigid_stress = "elastostatic" runs on one rank so far' not in r.stderr or (tmp / "refused.h5").exists():
+        failures.append(f"an elastostatic scene on {ranks} ranks: exit {r.returncode}, {r.stderr[-500:]!r}")
 
 print(f"{ranks} ranks: {len(one)} datasets, {frames} frames, {contacts} node contacts over the rows, largest platen "
       f"force component {pressed:.3g} N; {moved['migrations']} migrations with {moved['history_entries']} history entries, "
       f"{moved['bytes_sent'] / 1e6:.3g} MB sent")
+print(f"{ranks} ranks, triaxial: series rows per phase (wall, membrane, shearing) {phases}; {triaxial_ranks['migrations']} "
+      f"migrations, {triaxial_ranks['bytes_sent'] / 1e6:.3g} MB sent, cut again {triaxial_ranks['rebalances']} times")
 for f in failures:
     print("FAILED:", f)
 sys.exit(1 if failures else 0)

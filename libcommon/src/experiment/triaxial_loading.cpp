@@ -285,7 +285,7 @@ synth::LoadingSimulation triaxial_loading(const TriaxialLoadingParams& params) {
       throw_if_interrupted();
     };
     const std::optional<fdem::TriaxialRunSummary> summary =
-        fdem::run_triaxial_scene(solver, scene, schedule, 0, writer, hooks, [](const fdem::TriaxialRunProgress&) {});
+        fdem::run_triaxial_scene(solver, scene, schedule, 0, &writer, hooks, [](const fdem::TriaxialRunProgress&) {});
     shear_progress = nullptr;
     parameters["triaxial"] = fdem::triaxial_summary_json(*summary);
     parameters["steps"] = solver.step_count();

@@ -10,8 +10,40 @@
 
 namespace graintwin::fdem {
 
-BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                                                   const CylinderWallState& wall, double dt, std::span<Eigen::Vector3d> f) {
+BoundaryContactStats wall_contact_stats(std::span<const WallContactSum> grains) {
+  BoundaryContactStats stats;
+  for (const WallContactSum& g : grains) {
+    stats.contacts += g.contacts;
+    stats.radial_force += g.radial_force;
+    stats.radial_stiffness += g.radial_stiffness;
+    stats.elastic_energy += g.elastic_energy;
+    stats.dissipated += g.dissipated;
+  }
+  return stats;
+}
+
+BoundaryContactStats add_ball_contacts(std::span<const BallContact> contacts, std::span<Eigen::Vector3d> ball_force,
+                                       std::span<Eigen::Vector3d> ball_moment) {
+  BoundaryContactStats stats;
+  for (const BallContact& c : contacts) {
+    if (c.ball >= ball_force.size() || c.ball >= ball_moment.size())
+      throw DataError(fmt::format("a contact of membrane ball {} came for a membrane of {} balls; the ranks must run the "
+                                  "same membrane",
+                                  c.ball, ball_force.size()));
+    ball_force[c.ball] += c.force;
+    ball_moment[c.ball] += c.moment;
+    stats.elastic_energy += c.elastic_energy;
+    stats.dissipated += c.dissipated;
+    stats.max_overlap = std::max(stats.max_overlap, c.overlap);
+    ++stats.contacts;
+  }
+  return stats;
+}
+
+std::span<const WallContactSum> ContactModel::add_wall_forces(std::span<const Eigen::Vector3d> x,
+                                                              std::span<const Eigen::Vector3d> v,
+                                                              const CylinderWallState& wall, double dt,
+                                                              std::span<Eigen::Vector3d> f) {
   State& s = *state_;
   const auto grain_count = static_cast<std::int64_t>(s.grains.size());
   s.wall_hits.resize(s.grains.size());
@@ -19,6 +51,7 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
   for (std::int64_t g = 0; g < grain_count; ++g) {
     std::vector<WallHit>& hits = s.wall_hits[g];
     hits.clear();
+    if (!s.owned(static_cast<std::uint32_t>(g))) continue;  // its owner's rank pushes it
     const Aabb& box = s.trees.bounds(static_cast<std::size_t>(g));
     if (!(box.lo.array() <= box.hi.array()).all()) continue;
     // The box corner farthest from the axis, and the bounding sphere, decide whether the wall can
@@ -43,32 +76,36 @@ BoundaryContactStats ContactModel::add_wall_forces(std::span<const Eigen::Vector
                                                     Eigen::Vector3d::Zero(), dt)});
     }
   }
-  BoundaryContactStats stats;
-  for (std::uint32_t g = 0; g < grain_count; ++g)
+  s.wall_sums.clear();
+  for (std::uint32_t g = 0; g < grain_count; ++g) {
+    if (s.wall_hits[g].empty()) continue;
+    WallContactSum sum{g};
     for (const auto& [node, arm, law] : s.wall_hits[g]) {
       if (s.pose[g].rigid) s.loads[g].add(arm, law.force);
       else f[node] += law.force;
       s.record(node, kNoTriangle, Eigen::Vector3d::Zero(), law.force);
-      stats.radial_force += law.normal_force;
-      stats.radial_stiffness += law.normal_stiffness;
-      stats.elastic_energy += law.elastic_energy;
-      stats.dissipated += law.dissipated;
-      ++stats.contacts;
+      sum.radial_force += law.normal_force;
+      sum.radial_stiffness += law.normal_stiffness;
+      sum.elastic_energy += law.elastic_energy;
+      sum.dissipated += law.dissipated;
+      ++sum.contacts;
     }
-  return stats;
+    s.wall_sums.push_back(sum);
+  }
+  return s.wall_sums;
 }
 
-BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                                                   std::span<const Eigen::Vector3d> centres,
-                                                   std::span<const Eigen::Vector3d> ball_velocity,
-                                                   std::span<const Eigen::Vector3d> ball_spin,
-                                                   const BallContactOptions& balls, double dt, std::span<Eigen::Vector3d> f,
-                                                   std::span<Eigen::Vector3d> ball_force,
-                                                   std::span<Eigen::Vector3d> ball_moment) {
+std::span<const BallContact> ContactModel::add_ball_forces(std::span<const Eigen::Vector3d> x,
+                                                           std::span<const Eigen::Vector3d> v,
+                                                           std::span<const Eigen::Vector3d> centres,
+                                                           std::span<const Eigen::Vector3d> ball_velocity,
+                                                           std::span<const Eigen::Vector3d> ball_spin,
+                                                           const BallContactOptions& balls, double dt,
+                                                           std::span<Eigen::Vector3d> f) {
   State& s = *state_;
   const std::size_t n = centres.size();
-  if (ball_velocity.size() != n || ball_spin.size() != n || ball_force.size() != n || ball_moment.size() != n)
-    throw DataError("fdem contact: ball positions, velocities, spins, forces and moments must have one entry per ball");
+  if (ball_velocity.size() != n || ball_spin.size() != n)
+    throw DataError("fdem contact: ball positions, velocities and spins must have one entry per ball");
   if (!(balls.radius > 0) || !(balls.mass > 0)) throw UsageError("membrane balls need a positive radius and mass");
   const double r = balls.radius;
   const double moved2 = 0.25 * s.skin * s.skin;
@@ -98,7 +135,7 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
     const std::span<const BallHistoryEntry> past = history_of(static_cast<std::uint32_t>(b));
     for (BallCandidate& candidate : s.ball_candidates[b]) {
       const std::uint32_t g = candidate.grain;
-      if (!s.trees.bounds(g).inflated(r).contains(c)) continue;
+      if (!s.owned(g) || !s.trees.bounds(g).inflated(r).contains(c)) continue;  // another rank's grain: its owner's
       SurfaceTrees::Nearest near;
       if (!s.ball_nearest(candidate, c, r + s.max_penetration, r, x, near)) continue;
       const Eigen::Vector3d d = near.closest.point - c;  // from the centre to the surface
@@ -124,13 +161,10 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
     }
     std::sort(out.begin(), out.end(), [](const BallHit& p, const BallHit& q) { return p.grain < q.grain; });
   }
-  BoundaryContactStats stats;
-  s.ball_history.clear();
+  s.ball_contacts.clear();
   for (std::uint32_t b = 0; b < n; ++b)
     for (const BallHit& h : s.ball_hits[b]) {
       const Eigen::Vector3d& force = h.law.force;
-      ball_force[b] += force;
-      ball_moment[b] += (-r * h.normal).cross(force - h.law.normal_force * h.normal);
       if (s.pose[h.grain].rigid) {
         s.loads[h.grain].add(s.surface_arm(h.triangle, h.weights), -force);
       } else {
@@ -138,13 +172,23 @@ BoundaryContactStats ContactModel::add_ball_forces(std::span<const Eigen::Vector
         for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
       }
       s.record(kNoNode, h.triangle, h.weights, force);
-      stats.elastic_energy += h.law.elastic_energy;
-      stats.dissipated += h.law.dissipated;
-      stats.max_overlap = std::max(stats.max_overlap, h.overlap);
-      ++stats.contacts;
-      s.ball_history.push_back({b, h.grain, h.law.spring});
+      s.ball_contacts.push_back({b, h.grain, force, (-r * h.normal).cross(force - h.law.normal_force * h.normal),
+                                 h.law.spring, h.law.elastic_energy, h.law.dissipated, h.overlap});
     }
-  return stats;
+  set_ball_history(s.ball_contacts);
+  return s.ball_contacts;
+}
+
+void ContactModel::set_ball_history(std::span<const BallContact> contacts) {
+  State& s = *state_;
+  s.ball_history.clear();
+  for (const BallContact& c : contacts) {
+    if (c.grain >= s.grains.size())
+      throw DataError(fmt::format("a membrane ball's contact names grain {} of a model of {} grains; the ranks must run "
+                                  "the same model",
+                                  c.grain, s.grains.size()));
+    s.ball_history.push_back({c.ball, c.grain, c.spring});
+  }
 }
 
 void ContactModel::State::build_ball_lists(std::span<const Eigen::Vector3d> centres, double radius) {

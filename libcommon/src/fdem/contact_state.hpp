@@ -239,6 +239,7 @@ struct ContactModel::State {
 
   std::vector<BallHistoryEntry> ball_history;  ///< sorted by (ball, grain)
   std::vector<std::vector<BallHit>> ball_hits;   ///< per ball, this step
+  std::vector<BallContact> ball_contacts;        ///< this step's, in (ball, grain) order (add_ball_forces)
   /// Per ball, the grains it may touch: every grain whose box, grown by the ball radius and the
   /// skin, held the ball's centre at the build. Complete until the ball moves skin / 2 from
   /// ball_built_at or the broad phase rebuilds (a grain node moved skin / 2); then built again.
@@ -265,6 +266,7 @@ struct ContactModel::State {
   std::vector<std::vector<NodeHit>> hits;
   std::vector<CandidateSum> sums;  ///< per candidate with hits
   std::vector<std::vector<WallHit>> wall_hits;  ///< per grain, this step
+  std::vector<WallContactSum> wall_sums;        ///< this step's, in grain order (add_wall_forces)
   std::vector<Checks> checks;
 
   // A rank's share of the grains (contact_ranks.cpp); empty roles: every grain owned.

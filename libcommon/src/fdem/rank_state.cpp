@@ -230,8 +230,24 @@ std::vector<double> surface_node_work(const Model& model) {
   return work;
 }
 
+std::uint64_t first_boundary_key(std::size_t grains, std::size_t platens) {
+  const std::uint64_t n = grains;
+  return n + n * (n + platens) + n * platens;
+}
+
+StepRows take_boundary_rows(StepRows& rows, std::uint64_t first_key) {
+  const auto begin = std::lower_bound(rows.keys.begin(), rows.keys.end(), first_key);
+  const std::size_t at = static_cast<std::size_t>(begin - rows.keys.begin());
+  StepRows boundary;
+  for (auto k = begin; k != rows.keys.end(); ++k) boundary.keys.push_back(*k - first_key);
+  boundary.values.assign(rows.values.begin() + at * kTermColumns, rows.values.end());
+  rows.keys.resize(at);
+  rows.values.resize(at * kTermColumns);
+  return boundary;
+}
+
 StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
-                   std::size_t platens) {
+                   std::size_t platens, const StepRows& boundary) {
   const std::uint64_t grains = sums.kinetic.size(), partners = grains + platens;
   StepRows rows;
   for (std::uint32_t g : owned) {
@@ -249,6 +265,9 @@ StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> own
       rows.keys.push_back(platen_rows + p.a * platens + (p.b - grains));
       rows.values.insert(rows.values.end(), {p.force.x(), p.force.y(), p.force.z(), p.stiffness, 0.0});
     }
+  const std::uint64_t first = first_boundary_key(grains, platens);
+  for (std::uint64_t k : boundary.keys) rows.keys.push_back(first + k);
+  rows.values.insert(rows.values.end(), boundary.values.begin(), boundary.values.end());
   return rows;
 }
 

@@ -169,7 +169,6 @@ void Solver::stop_grains() {
 
 void Solver::set_boundary(Boundary* boundary) {
   if (boundary && !contact_) throw UsageError("a sample boundary (wall or membrane) needs contact; enable contact in the scene");
-  if (boundary && share_) throw UsageError("the wall and the membrane run on one rank so far (docs/fdemrun.md, across machines)");
   boundary_ = boundary;
 }
 
@@ -302,12 +301,11 @@ StepReport Solver::step(double dt) {
   }
   sum_platen_contacts();
   times_.contact += seconds_since();
-  BoundaryStep boundary;
+  StepRows boundary_rows;
+  double boundary_seconds = 0;
   if (boundary_) {
-    boundary = boundary_->apply(*contact_, state_.x, state_.v, dt, options_.damping, first, force_);
-    const double seconds = seconds_since();
-    times_.boundary += seconds;
-    if (const std::size_t bodies = boundary_->bodies()) times_.body_steps += bodies, times_.body_seconds += seconds;
+    boundary_rows = boundary_->add_contact_forces(*contact_, state_.x, state_.v, dt, force_);
+    boundary_seconds = seconds_since();
   }
   if (contact_) {
     const std::span<const RigidLoad> loads = contact_->rigid_loads();
@@ -373,7 +371,17 @@ StepReport Solver::step(double dt) {
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
   rigid_nodes_stale_ = true;  // rigid grains moved; state() places their nodes when read
-  if (share_) share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact, platen_force_, platen_stiffness_);
+  if (share_)
+    share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact, platen_force_, platen_stiffness_,
+                        boundary_rows);
+  times_.motion += seconds_since();
+  BoundaryStep boundary;
+  if (boundary_) {  // from every rank's contacts with it: every rank moves it alike
+    boundary = boundary_->finish(*contact_, boundary_rows, dt, options_.damping, first);
+    boundary_seconds += seconds_since();
+    times_.boundary += boundary_seconds;
+    if (const std::size_t bodies = boundary_->bodies()) times_.body_steps += bodies, times_.body_seconds += boundary_seconds;
+  }
 
   Energies& e = report.energies;
   for (std::size_t g = 0; g < grains; ++g) {
@@ -688,9 +696,9 @@ void Solver::load(const io::H5File& f, const std::string& group) {
 void Solver::set_rank_share(RankShare* share) {
   const Model& m = *model_;
   const bool rigid = std::all_of(m.grains.begin(), m.grains.end(), [](const Grain& g) { return g.kind == GrainKind::rigid; });
-  if (share && (!contact_ || !rigid || boundary_))
-    throw UsageError("a run split over ranks steps rigid grains in contact, with platens, so far: deformable grains, the "
-                     "wall and the membrane run on one rank (docs/fdemrun.md, across machines)");
+  if (share && (!contact_ || !rigid))
+    throw UsageError("a run split over ranks steps rigid grains in contact so far: deformable grains run on one rank "
+                     "(docs/fdemrun.md, across machines)");
   if (!share && share_) contact_->set_grain_roles({});  // every grain in contact again
   share_ = share;
 }

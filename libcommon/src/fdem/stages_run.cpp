@@ -172,7 +172,7 @@ void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule,
 }
 
 std::optional<TriaxialRunSummary> run_triaxial_scene(Solver& solver, const Scene& scene, const RunSchedule& schedule,
-                                                     std::uint64_t stop_step, ResultsWriter& writer, TriaxialRunHooks hooks,
+                                                     std::uint64_t stop_step, ResultsWriter* writer, TriaxialRunHooks hooks,
                                                      const std::function<void(const TriaxialRunProgress&)>& checkpoint) {
   // A triaxial test's length is known only as it settles: checkpoints every interval, at the stop
   // step and at the end.

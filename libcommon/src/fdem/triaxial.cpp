@@ -46,7 +46,8 @@ double grains_d50(const Solver& solver) {
   return d50_of_volumes(std::move(volume));
 }
 
-TriaxialBoundary::TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50) : options_(options) {
+TriaxialBoundary::TriaxialBoundary(const Model& model, const TriaxialOptions& options, double d50)
+    : options_(options), grain_count_(model.grains.size()) {
   if (!model.sample)
     throw UsageError("a triaxial test needs the model's sample cylinder; build the model with shapes2mesh or give [sample]");
   if (!(options.confining_pressure > 0) || !std::isfinite(options.confining_pressure))
@@ -136,12 +137,75 @@ double TriaxialBoundary::volume_radial() const {
   return enclosed().radial;
 }
 
-BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
-                                     std::span<const Eigen::Vector3d> v, double dt, double damping, bool first,
-                                     std::span<Eigen::Vector3d> f) {
+namespace {
+
+/// Rows per membrane contact (force and energies; moment and overlap; spring) and where the
+/// membrane's rows begin, after the wall's (one per grain).
+constexpr std::uint64_t kBallContactRows = 3;
+
+}  // namespace
+
+StepRows TriaxialBoundary::add_contact_forces(ContactModel& contact, std::span<const Eigen::Vector3d> x,
+                                              std::span<const Eigen::Vector3d> v, double dt, std::span<Eigen::Vector3d> f) {
+  StepRows rows;
+  const auto add = [&rows](std::uint64_t key, std::initializer_list<double> values) {
+    rows.keys.push_back(key);
+    rows.values.insert(rows.values.end(), values);
+  };
+  if (!membrane_) {
+    for (const WallContactSum& g : contact.add_wall_forces(x, v, wall_, dt, f))
+      add(g.grain, {g.radial_force, g.radial_stiffness, g.elastic_energy, g.dissipated, static_cast<double>(g.contacts)});
+    return rows;
+  }
+  const MembraneState& s = membrane_state_;
+  const std::uint64_t grains = grain_count_;
+  for (const BallContact& c :
+       contact.add_ball_forces(x, v, s.x, s.v, s.spin, {membrane_->ball_radius, membrane_->ball_mass, options_.membrane_friction},
+                               dt, f)) {
+    const std::uint64_t key = grains + kBallContactRows * (c.ball * grains + c.grain);
+    add(key, {c.force.x(), c.force.y(), c.force.z(), c.elastic_energy, c.dissipated});
+    add(key + 1, {c.moment.x(), c.moment.y(), c.moment.z(), c.overlap, 0.0});
+    add(key + 2, {c.spring.x(), c.spring.y(), c.spring.z(), 0.0, 0.0});
+  }
+  return rows;
+}
+
+std::vector<BallContact> TriaxialBoundary::ball_contacts(const StepRows& rows) const {
+  const std::uint64_t grains = grain_count_, balls = membrane_->balls();
+  if (rows.keys.size() % kBallContactRows != 0)
+    throw DataError("the membrane's contact rows do not come in threes; the ranks must run the same program");
+  std::vector<BallContact> contacts(rows.keys.size() / kBallContactRows);
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const std::uint64_t key = rows.keys[kBallContactRows * i];
+    const std::uint64_t pair = (key - grains) / kBallContactRows;
+    if (key < grains || (key - grains) % kBallContactRows != 0 || pair / grains >= balls ||
+        rows.keys[kBallContactRows * i + 1] != key + 1 || rows.keys[kBallContactRows * i + 2] != key + 2)
+      throw DataError(fmt::format("a membrane contact came under key {}, which names no ball of {} and grain of {}; the "
+                                  "ranks must run the same model and membrane",
+                                  key, balls, grains));
+    const double* r = rows.values.data() + kTermColumns * kBallContactRows * i;
+    BallContact& c = contacts[i];
+    c.ball = static_cast<std::uint32_t>(pair / grains);
+    c.grain = static_cast<std::uint32_t>(pair % grains);
+    c.force = {r[0], r[1], r[2]};
+    c.elastic_energy = r[3];
+    c.dissipated = r[4];
+    c.moment = {r[5], r[6], r[7]};
+    c.overlap = r[8];
+    c.spring = {r[10], r[11], r[12]};
+  }
+  return contacts;
+}
+
+BoundaryStep TriaxialBoundary::finish(ContactModel& contact, const StepRows& rows, double dt, double damping, bool first) {
   BoundaryStep out;
   if (!membrane_) {
-    const BoundaryContactStats s = contact.add_wall_forces(x, v, wall_, dt, f);
+    std::vector<WallContactSum> grains(rows.keys.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) {
+      const double* r = rows.values.data() + kTermColumns * i;
+      grains[i] = {static_cast<std::uint32_t>(rows.keys[i]), static_cast<std::uint32_t>(r[4]), r[0], r[1], r[2], r[3]};
+    }
+    const BoundaryContactStats s = wall_contact_stats(grains);
     last_contact_ = s;
     wall_force_ = s.radial_force;
     wall_stiffness_ = s.radial_stiffness;
@@ -156,8 +220,9 @@ BoundaryStep TriaxialBoundary::apply(ContactModel& contact, std::span<const Eige
   ++membrane_moves_;
   std::fill(ball_force_.begin(), ball_force_.end(), Eigen::Vector3d::Zero());
   std::fill(ball_moment_.begin(), ball_moment_.end(), Eigen::Vector3d::Zero());
-  const BoundaryContactStats c = contact.add_ball_forces(x, v, s.x, s.v, s.spin, {m.ball_radius, m.ball_mass, options_.membrane_friction},
-                                                         dt, f, ball_force_, ball_moment_);
+  const std::vector<BallContact> contacts = ball_contacts(rows);
+  contact.set_ball_history(contacts);  // every rank's springs: a grain's next owner finds its own
+  const BoundaryContactStats c = add_ball_contacts(contacts, ball_force_, ball_moment_);
   out.elastic = c.elastic_energy + add_bond_forces(m, s, dt, ball_force_, ball_moment_);
   out.dissipated = c.dissipated;
   last_contact_ = c;

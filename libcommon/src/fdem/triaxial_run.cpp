@@ -127,7 +127,7 @@ TriaxialRunProgress load_progress(const io::H5File& file) {
 }
 
 TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double dt, std::uint64_t row_every,
-                                ResultsWriter& writer, const TriaxialRunHooks& hooks) {
+                                ResultsWriter* writer, const TriaxialRunHooks& hooks) {
   if (!solver.has_contact()) throw UsageError("a triaxial test acts through contact; remove [run] contact = false");
   using Phase = TriaxialProgress::Phase;
   const PlatenPair platens = find_platens(solver.model());
@@ -146,6 +146,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   } detach{solver};
   TriaxialRunProgress run;
   if (hooks.restore) hooks.restore(run);
+  if (hooks.ready) hooks.ready();
   TriaxialProgress& procedure = run.procedure;
 
   // Series stages: consolidation, membrane (when it replaces the wall), shearing.
@@ -155,12 +156,12 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   };
   double shearing_rate = std::numeric_limits<double>::quiet_NaN();
   const auto book = [&](const TriaxialMeasure& m, const StepReport& r) {
-    if ((solver.step_count() - 1) % row_every == 0) {
+    if (writer && (solver.step_count() - 1) % row_every == 0) {
       TriaxialRow row{m, std::numeric_limits<double>::quiet_NaN()};
       if (std::isfinite(shearing_rate))
         row.inertial_number = inertial_number(shearing_rate, summary.d50, density,
                                               (m.axial_stress + 2 * m.lateral_stress) / 3);
-      writer.add_row(solver, r, stage(), dt, row);
+      writer->add_row(solver, r, stage(), dt, row);
     }
   };
   const auto after_step = [&](const TriaxialMeasure& m, const StepReport& r) {
@@ -168,11 +169,13 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   };
   const auto consolidation_step = [&](const TriaxialMeasure& m, const StepReport& r) { book(m, r), after_step(m, r); };
   const auto take_frame = [&](double axial_strain) {
-    writer.add_frame(solver, &boundary, axial_strain);
+    if (hooks.before_frame) hooks.before_frame();
+    if (!writer) return;
+    writer->add_frame(solver, &boundary, axial_strain);
     if (hooks.frame) hooks.frame();
   };
   const auto begin = [&](const char* name, std::size_t steps) {
-    writer.add_stage(name, solver.time());
+    if (writer) writer->add_stage(name, solver.time());
     if (hooks.phase) hooks.phase(name, steps);
   };
 
@@ -197,7 +200,7 @@ TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double
   const bool fresh_shearing = procedure.phase != Phase::shearing;
   if (fresh_shearing) run.start = measure(solver, boundary, platens);
   summary.start = run.start;
-  writer.set_strain_reference(run.start.height, run.start.volume);
+  if (writer) writer->set_strain_reference(run.start.height, run.start.volume);
   const auto expected = static_cast<std::size_t>(shear_steps(spec, summary.strain_rate, dt));
   begin("shearing", expected - std::min<std::size_t>(expected, fresh_shearing ? 0 : procedure.step));
   shearing_rate = summary.strain_rate;

@@ -69,12 +69,13 @@ DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
 
 void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
                                  fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
-                                 std::span<double> platen_stiffness) {
+                                 std::span<double> platen_stiffness, fdem::StepRows& boundary_rows) {
   const double start = monotonic_seconds();
   const int rank = session_.rank();
   fdem::ExchangePlan plan =
       fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
-  const fdem::StepRows rows = fdem::step_rows(grains, owned_, owned_pairs, solver_.model().platens.size());
+  const std::size_t platens = solver_.model().platens.size();
+  const fdem::StepRows rows = fdem::step_rows(grains, owned_, owned_pairs, platens, boundary_rows);
   std::vector<std::vector<double>> outgoing(plan.to.size());
   for (std::size_t r = 0; r < plan.to.size(); ++r) {
     if (static_cast<int>(r) == rank) continue;
@@ -93,7 +94,8 @@ void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fd
       received.push_back(fdem::unpack_message(incoming[r]));
       parts.push_back(std::move(received.back().rows));
     }
-  const fdem::StepRows all = fdem::sorted_rows(parts);
+  fdem::StepRows all = fdem::sorted_rows(parts);
+  boundary_rows = fdem::take_boundary_rows(all, fdem::first_boundary_key(grains.kinetic.size(), platens));
   fdem::set_step_terms(all.keys, all.values, grains, contact, platen_force, platen_stiffness);
   roles_ = fdem::roles_after_exchange(subdomains_, rank, roles_.size(), plan, received);
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
@@ -199,7 +201,6 @@ void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, c
                                   "mpirun, or with -np 1",
                                   where, what));
   };
-  if (scene.triaxial) throw one_rank("a [triaxial] test");
   if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
 }
 

@@ -113,6 +113,33 @@ struct BoundaryContactStats {
   double max_overlap = 0;       ///< m
 };
 
+/// One grain's contacts with the wall in a step, summed over its surface nodes in node order.
+struct WallContactSum {
+  std::uint32_t grain = 0;
+  std::uint32_t contacts = 0;   ///< its nodes beyond the wall
+  double radial_force = 0;      ///< N, their outward push on the wall
+  double radial_stiffness = 0;  ///< N/m, their normal stiffness
+  double elastic_energy = 0;    ///< J
+  double dissipated = 0;        ///< J
+};
+/// Sums the grains' wall contacts in the order given (grain order): what the wall felt.
+BoundaryContactStats wall_contact_stats(std::span<const WallContactSum> grains);
+
+/// One membrane ball touching one grain in a step.
+struct BallContact {
+  std::uint32_t ball = 0, grain = 0;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();   ///< N, on the ball (the grain gets minus it)
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();  ///< N m, the friction moment on the ball
+  Eigen::Vector3d spring = Eigen::Vector3d::Zero();  ///< N, the tangential spring the next step starts from
+  double elastic_energy = 0;                         ///< J
+  double dissipated = 0;                             ///< J
+  double overlap = 0;                                ///< m
+};
+/// Adds the contacts, in the order given ((ball, grain) order), to their balls' force and moment
+/// (one entry per ball) and returns what the balls felt.
+BoundaryContactStats add_ball_contacts(std::span<const BallContact> contacts, std::span<Eigen::Vector3d> ball_force,
+                                       std::span<Eigen::Vector3d> ball_moment);
+
 /// The membrane balls as contact partners of the grains.
 struct BallContactOptions {
   double radius = 0;    ///< m
@@ -195,22 +222,28 @@ class ContactModel {
   /// of the smallest grain's smallest box side): for the rest of the run, to their depth and that
   /// tenth beyond.
   void keep_initial_overlaps(std::span<const Overlap> overlaps);
-  /// Adds the cylinder wall's forces on the grains' surface nodes to f (call after add_forces of
-  /// the same step). Deterministic for a given thread count.
-  BoundaryContactStats add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                                       const CylinderWallState& wall, double dt, std::span<Eigen::Vector3d> f);
-  /// Balls (centres, velocities, spins at the half step) against the grains' surfaces (call after
-  /// add_forces of the same step, which refits the trees): penetration = radius minus the distance
-  /// from the centre to the surface (plus it, for a centre inside), pushed along the surface
-  /// normal; k_n = p_n pi r^2 and k_t = p_t pi r^2 of the grain's material, its damping ratio, the
-  /// ball's mass in the dashpot, Coulomb friction with a tangential spring per (ball, grain). The
-  /// ball gets the force and the friction moment, the grain's triangle the reaction (barycentric).
-  BoundaryContactStats add_ball_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                                       std::span<const Eigen::Vector3d> centres,
-                                       std::span<const Eigen::Vector3d> ball_velocity,
-                                       std::span<const Eigen::Vector3d> ball_spin, const BallContactOptions& balls,
-                                       double dt, std::span<Eigen::Vector3d> f, std::span<Eigen::Vector3d> ball_force,
-                                       std::span<Eigen::Vector3d> ball_moment);
+  /// Adds the cylinder wall's forces on the surface nodes of the grains this rank owns (every grain
+  /// without roles) to f (call after add_forces of the same step). Returns, in grain order, each
+  /// touching grain's sums (wall_contact_stats adds them up), valid until the next call.
+  /// Deterministic for a given thread count.
+  std::span<const WallContactSum> add_wall_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                                  const CylinderWallState& wall, double dt, std::span<Eigen::Vector3d> f);
+  /// Balls (centres, velocities, spins at the half step) against the surfaces of the grains this
+  /// rank owns (call after add_forces of the same step, which refits the trees): penetration =
+  /// radius minus the distance from the centre to the surface (plus it, for a centre inside),
+  /// pushed along the surface normal; k_n = p_n pi r^2 and k_t = p_t pi r^2 of the grain's
+  /// material, its damping ratio, the ball's mass in the dashpot, Coulomb friction with a
+  /// tangential spring per (ball, grain). The grain's triangle gets the reaction (barycentric);
+  /// the contacts are returned in (ball, grain) order for the balls (add_ball_contacts), valid
+  /// until the next call, and their springs become the friction history of the next step.
+  std::span<const BallContact> add_ball_forces(std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                                               std::span<const Eigen::Vector3d> centres,
+                                               std::span<const Eigen::Vector3d> ball_velocity,
+                                               std::span<const Eigen::Vector3d> ball_spin, const BallContactOptions& balls,
+                                               double dt, std::span<Eigen::Vector3d> f);
+  /// The balls' friction history the next step starts from, replaced by the springs of `contacts`
+  /// (every rank's, in (ball, grain) order): across ranks, a grain's new owner finds its springs.
+  void set_ball_history(std::span<const BallContact> contacts);
   /// Every grain pair, and grain and platen, that overlaps with the nodes at x (every node read from
   /// x, none placed by a pose), sorted by (a, b): for the initial state's check, not for stepping.
   /// Unlike the step, whose search looks no deeper than a tenth of the smallest grain, it finds

@@ -23,16 +23,10 @@ struct GrainBody {
   RigidBodyState state;
 };
 
-/// Columns of a row of a step's terms: a grain's strain, kinetic, damped, gravity work and bad (0
-/// or 1), J; a contact candidate's elastic energy and dissipated (J), deepest overlap (m), node
-/// contacts and 0.
-inline constexpr std::size_t kTermColumns = 5;
-
-/// Keyed rows of a step's terms, kTermColumns values each.
-struct StepRows {
-  std::vector<std::uint64_t> keys;
-  std::vector<double> values;
-};
+// Columns of a row of a step's terms (StepRows, kTermColumns): a grain's strain, kinetic, damped,
+// gravity work and bad (0 or 1), J; a contact candidate's elastic energy and dissipated (J),
+// deepest overlap (m), node contacts and 0; a platen candidate's force (3) and stiffness; then
+// the boundary's rows (Boundary::add_contact_forces).
 
 /// A rigid grain's last-step load as it travels to rank 0 for output.
 struct GrainLoad {
@@ -124,8 +118,16 @@ std::vector<double> surface_node_work(const Model& model);
 /// candidate of grain a and platen p its force (3) and stiffness under grains + grains x (grains +
 /// platens) + a x platens + p, so that key order is grain order, then candidate order, then the
 /// platen candidates' order.
+/// Then the boundary's rows (Boundary::add_contact_forces), each under first_boundary_key + its key.
 StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
-                   std::size_t platens);
+                   std::size_t platens, const StepRows& boundary);
+
+/// The key after every grain's, candidate's and platen candidate's: where the boundary's rows begin.
+std::uint64_t first_boundary_key(std::size_t grains, std::size_t platens);
+
+/// Moves the boundary's rows (keys from first_key on, the last ones of sorted rows) out of `rows`,
+/// with their own keys again (minus first_key).
+StepRows take_boundary_rows(StepRows& rows, std::uint64_t first_key);
 
 /// Every rank's rows as one set in increasing key order. DataError when a key comes twice (two
 /// ranks owning one grain or candidate).

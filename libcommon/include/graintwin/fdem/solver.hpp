@@ -127,17 +127,32 @@ struct BoundaryStep {
   double work = 0;        ///< done on the system from outside in this step (confining pressure, moving walls)
 };
 
+/// Columns of a keyed row of a step's terms (StepRows).
+inline constexpr std::size_t kTermColumns = 5;
+
+/// A step's terms as keyed rows of kTermColumns values each, in increasing key order where they
+/// are summed: across ranks each rank sends its rows, and every rank adds every rank's in key
+/// order, as one rank adds its own (fdem/rank_state, mpi/distributed_run).
+struct StepRows {
+  std::vector<std::uint64_t> keys;
+  std::vector<double> values;
+};
+
 /// A boundary of the sample beyond the platens, stepped with the grains: the triaxial test's servo
-/// wall and membrane (fdem/triaxial.hpp). The solver calls apply() once per step after the grain
-/// contacts, with the grain nodes at t_n; it adds its forces on the grain nodes and advances its own
-/// state over dt.
+/// wall and membrane (fdem/triaxial.hpp). Each step, after the grain contacts and with the grain
+/// nodes at t_n, the solver calls add_contact_forces(), moves the grains, then calls finish() with
+/// the contact terms of every rank (its own on one rank), which advances the boundary's own state
+/// over dt. Every rank holds the whole boundary and advances it alike.
 class Boundary {
  public:
   virtual ~Boundary() = default;
+  /// Adds the boundary's contact forces on the grains this rank advances (all of them on one rank)
+  /// and returns those contacts' terms as rows in key order, for finish().
+  virtual StepRows add_contact_forces(ContactModel& contact, std::span<const Eigen::Vector3d> x,
+                                      std::span<const Eigen::Vector3d> v, double dt, std::span<Eigen::Vector3d> f) = 0;
+  /// Advances the boundary over dt from the contact rows of every rank in key order.
   /// `damping`: the run's mass-proportional alpha (1/s), for the boundary's own bodies too.
-  virtual BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x,
-                             std::span<const Eigen::Vector3d> v, double dt, double damping, bool first,
-                             std::span<Eigen::Vector3d> f) = 0;
+  virtual BoundaryStep finish(ContactModel& contact, const StepRows& rows, double dt, double damping, bool first) = 0;
   /// The boundary's own stable time step, s (infinity if it sets none).
   virtual double stable_time_step(const ContactModel& contact) const = 0;
   /// How many bodies of its own it steps (membrane balls), for the run's time accounts.
@@ -171,8 +186,11 @@ class RankShare {
   /// every grain's terms, contact's elastic_energy, dissipated, node_contacts and max_overlap are
   /// the whole run's, and so are the platens' forces and stiffnesses (one each per platen), all
   /// added in candidate order as one rank adds them.
+  /// `boundary_rows`: on entry this rank's rows of Boundary::add_contact_forces, on return every
+  /// rank's, in key order.
   virtual void finish_step(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs, ContactStepStats& contact,
-                           std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness) = 0;
+                           std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness,
+                           StepRows& boundary_rows) = 0;
 };
 
 class Solver {

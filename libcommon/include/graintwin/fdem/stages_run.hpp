@@ -96,8 +96,9 @@ void run_stages(Solver& solver, const Scene& scene, const RunSchedule& schedule,
 /// Runs the scene's triaxial test (run_triaxial) with checkpoints: `checkpoint` every
 /// schedule.checkpoint_every steps, at `stop_step` (0: none) and at the end, before hooks.step.
 /// The test's summary, or nothing when it stopped at `stop_step` (its checkpoint written).
+/// `writer`: as for run_stages.
 std::optional<TriaxialRunSummary> run_triaxial_scene(Solver& solver, const Scene& scene, const RunSchedule& schedule,
-                                                     std::uint64_t stop_step, ResultsWriter& writer, TriaxialRunHooks hooks,
+                                                     std::uint64_t stop_step, ResultsWriter* writer, TriaxialRunHooks hooks,
                                                      const std::function<void(const TriaxialRunProgress&)>& checkpoint);
 
 }  // namespace graintwin::fdem

@@ -78,8 +78,14 @@ class TriaxialBoundary final : public Boundary {
   /// The wall's or the balls' contacts with the grains in the last step.
   const BoundaryContactStats& last_contact() const { return last_contact_; }
 
-  BoundaryStep apply(ContactModel& contact, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
-                     double dt, double damping, bool first, std::span<Eigen::Vector3d> f) override;
+  /// The wall's contacts as one row per touching grain (key: the grain), or the membrane's as
+  /// three rows per (ball, grain) contact.
+  StepRows add_contact_forces(ContactModel& contact, std::span<const Eigen::Vector3d> x, std::span<const Eigen::Vector3d> v,
+                              double dt, std::span<Eigen::Vector3d> f) override;
+  /// The wall's force and stiffness from every grain's row, then its radius moves; or the balls'
+  /// contact forces from every contact's rows (in (ball, grain) order, as one rank adds them), their
+  /// friction history, the bonds and the pressure, then the balls move.
+  BoundaryStep finish(ContactModel& contact, const StepRows& rows, double dt, double damping, bool first) override;
   double stable_time_step(const ContactModel& contact) const override;
   /// The wall, the platen heights, the pressure and the membrane (where it was built, its density
   /// scaling, its balls' state, clamps and bond shear); the balls' friction springs are in the
@@ -92,7 +98,12 @@ class TriaxialBoundary final : public Boundary {
   /// density times `density_scaling`, at rest; sizes the per-ball arrays.
   void build_membrane_lattice(double centre_radius, double z_min, double z_max, double density_scaling);
 
+  /// The membrane's contacts from their rows (add_contact_forces' layout). DataError on rows that
+  /// name no ball or grain of this run.
+  std::vector<BallContact> ball_contacts(const StepRows& rows) const;
+
   TriaxialOptions options_;
+  std::size_t grain_count_ = 0;  ///< the model's: the membrane's row keys hold (ball, grain)
   CylinderWallState wall_;
   double wall_force_ = 0;      ///< N, last step
   double wall_stiffness_ = 0;  ///< N/m, last step

@@ -33,11 +33,17 @@ struct TriaxialRunHooks {
   /// After every step, with its measurement, report and the test's progress (progress display,
   /// checkpoints, interrupts: it may throw).
   std::function<void(const TriaxialMeasure&, const StepReport&, const TriaxialRunProgress&)> step;
+  /// Before every frame, on every rank (e.g. to gather on rank 0 what one rank holds, as
+  /// mpi::DistributedRun::gather_output does).
+  std::function<void()> before_frame;
   /// After every frame written to the results (e.g. to write it as VTK too).
   std::function<void()> frame;
   /// A restart: called once the boundary is set, to load the solver's (and so the boundary's) state
   /// and the progress from a checkpoint; the test then resumes where that checkpoint was taken.
   std::function<void(TriaxialRunProgress&)> restore;
+  /// Once the boundary is set and any restart loaded, before the first step (e.g. to split the run
+  /// over ranks where the grains are then).
+  std::function<void()> ready;
 };
 
 /// What the run did, for the log and the results' parameters.
@@ -81,9 +87,10 @@ std::string consolidation_status(const TriaxialSpec& spec, const TriaxialMeasure
                                  const TriaxialProgress& at);
 
 /// Runs the test on `solver` (which must have contact, and platens "bottom" and "top") at time
-/// step `dt`, a series row every `row_every` steps. UsageError before any step on a model the
-/// test cannot run; DataError when a consolidation does not settle.
+/// step `dt`, a series row every `row_every` steps into `writer` (none: a rank that writes nothing
+/// but steps its share). UsageError before any step on a model the test cannot run; DataError
+/// when a consolidation does not settle.
 TriaxialRunSummary run_triaxial(Solver& solver, const TriaxialSpec& spec, double dt, std::uint64_t row_every,
-                                ResultsWriter& writer, const TriaxialRunHooks& hooks = {});
+                                ResultsWriter* writer, const TriaxialRunHooks& hooks = {});
 
 }  // namespace graintwin::fdem

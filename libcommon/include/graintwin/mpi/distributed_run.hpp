@@ -7,8 +7,10 @@
 // the force on its own grain); then, in one exchange, each owner sends its grains' states to the
 // ranks that ghost them, a grain whose centroid left its owner's box goes to the new owner with
 // its pairs' friction history, and every rank sends every other its terms of the step, which each
-// adds in the one-rank order. The ghost lists are refreshed every step. The plain-data side is
-// fdem/rank_state.
+// adds in the one-rank order. The ghost lists are refreshed every step. A triaxial test's wall or
+// membrane is held whole by every rank: each rank's contacts of its grains with it travel as terms
+// of the step, and every rank moves the wall or the balls alike from all of them, so the servo
+// reads the same stresses everywhere. The plain-data side is fdem/rank_state.
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -78,12 +80,12 @@ class DistributedRun final : public fdem::RankShare {
 
   /// The exchange, from within the solver's step once the owned grains moved: sends the owned
   /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
-  /// and this rank's terms of the step (platen forces included) to every rank, takes the others',
+  /// and this rank's terms of the step (platen forces and the wall's or membrane's contacts included) to every rank, takes the others',
   /// completes the step's sums and sets the roles for the next step. Two collectives (MPI_Alltoall of the counts,
   /// MPI_Alltoallv of the doubles).
   void finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
                    fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
-                   std::span<double> platen_stiffness) override;
+                   std::span<double> platen_stiffness, fdem::StepRows& boundary_rows) override;
 
  private:
 
@@ -99,9 +101,9 @@ class DistributedRun final : public fdem::RankShare {
 };
 
 /// What a scene asks for that runs on one rank only, refused (UsageError naming `where`, the scene
-/// file) on several ranks before the model is built: a [triaxial] test, [run] rigid_stress =
-/// "elastostatic". Deformable grains are refused once the model says which grains deform
-/// (Solver::set_rank_share). Nothing on one rank.
+/// file) on several ranks before the model is built: [run] rigid_stress = "elastostatic".
+/// Deformable grains are refused once the model says which grains deform (Solver::set_rank_share).
+/// Nothing on one rank.
 void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, const std::string& where);
 
 /// The run of `solver` split over the session's ranks (collective), or nullptr on one rank: the
