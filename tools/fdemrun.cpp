@@ -64,10 +64,10 @@ constexpr const char* kDescription =
     "checkpoints also hold the wall, the membrane and where the procedure stands, so --restart resumes it mid-phase. "
     "Before the first step it refuses grains started inside each other or behind a platen deeper than [run] "
     "overlap_tolerance (or pushes them apart with relax_overlaps = true) and a run of more estimated steps than [run] "
-    "max_steps. Under mpirun -np N a scene of rigid grains, with [[stages]] or a triaxial test, runs across N ranks "
-    "with the one-rank results bit for bit (rank 0 writes every output; the sample is cut again when the work measured "
-    "per grain is out of balance; checkpoints continue on any rank count; deformable grains run on one rank so far). "
-    "The scene format is in docs/fdemrun.md.";
+    "max_steps. Under mpirun -np N a scene, with [[stages]] or a triaxial test, of rigid or deformable grains runs "
+    "across N ranks with the one-rank results bit for bit (rank 0 writes every output; the sample is cut again when the "
+    "work measured per grain is out of balance; checkpoints continue on any rank count; [run] rigid_stress = "
+    "\"elastostatic\" runs on one rank so far). The scene format is in docs/fdemrun.md.";
 
 /// The command line: the scene, the results and the run's own files.
 struct Options {

@@ -32,6 +32,8 @@ RankMessage sample_message() {
   s.angular_momentum = {-1e-30, 7.0, 0.0};
   m.bodies.push_back({41, s});
   m.bodies.push_back({4000000000u, RigidBodyState{}});
+  m.nodes.push_back({5, true, true, {1.0 / 3.0, -0.0, 1e-310, 4, 5, 6, 7, 8, 1e300}});
+  m.nodes.push_back({6, false, false, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 1.0 / 7.0}});
   m.history.push_back({3, 9, 77, Eigen::Vector3d(1e-9, -2e-9, 1.0 / 7.0), 2.5e-7});
   m.history.push_back({0, 1, 0, Eigen::Vector3d::Zero(), 0.0});
   m.rows.keys = {3, (std::uint64_t{1} << 53) - 1};
@@ -85,7 +87,8 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
   const RankMessage m = sample_message();
   std::vector<double> packed{42.0};  // appended after what is there
   pack_message(m, packed);
-  ASSERT_EQ(packed.size(), 1 + 5 + 2 * kBodyDoubles + 2 * kHistoryDoubles + 2 * (1 + kTermColumns) + kLoadDoubles + kRecordDoubles);
+  ASSERT_EQ(packed.size(), 1 + 6 + 2 * kBodyDoubles + (3 + 9) + (3 + 12) + 2 * kHistoryDoubles + 2 * (1 + kTermColumns) +
+                               kLoadDoubles + kRecordDoubles);
   const RankMessage back = unpack_message(std::span<const double>(packed).subspan(1));
   ASSERT_EQ(back.bodies.size(), 2u);
   ASSERT_EQ(back.history.size(), 2u);
@@ -100,6 +103,14 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
     EXPECT_EQ(std::tie(h.a, h.b, h.node), std::tie(g.a, g.b, g.node));
     expect_same_bits(h.spring, g.spring);
     EXPECT_EQ(bits(h.offset), bits(g.offset));
+  }
+  ASSERT_EQ(back.nodes.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(std::tie(back.nodes[i].grain, back.nodes[i].whole, back.nodes[i].forces),
+              std::tie(m.nodes[i].grain, m.nodes[i].whole, m.nodes[i].forces));
+    ASSERT_EQ(back.nodes[i].values.size(), m.nodes[i].values.size());
+    for (std::size_t k = 0; k < m.nodes[i].values.size(); ++k)
+      EXPECT_EQ(bits(back.nodes[i].values[k]), bits(m.nodes[i].values[k]));
   }
   EXPECT_EQ(back.rows.keys, m.rows.keys);
   ASSERT_EQ(back.rows.values.size(), m.rows.values.size());
@@ -116,7 +127,7 @@ TEST(FdemRankState, PackedMessagesKeepEveryBit) {
   expect_same_bits(c.force, d.force);
   EXPECT_EQ(bits(c.overlap), bits(d.overlap));
   EXPECT_EQ(bits(c.stiffness), bits(d.stiffness));
-  EXPECT_TRUE(unpack_message(std::vector<double>{0.0, 0.0, 0.0, 0.0, 0.0}).bodies.empty());
+  EXPECT_TRUE(unpack_message(std::vector<double>{0.0, 0.0, 0.0, 0.0, 0.0, 0.0}).bodies.empty());
 }
 
 TEST(FdemRankState, DamagedMessagesAreRefused) {
@@ -140,6 +151,13 @@ TEST(FdemRankState, DamagedMessagesAreRefused) {
   std::vector<double> fraction = packed;
   fraction[1] = 41.5;  // the first body's grain index
   refused(fraction, "where an index belongs");
+  const std::size_t nodes_at = 1 + 2 * kBodyDoubles;  // the first grain of nodes: count, grain, flags, values
+  std::vector<double> flags = packed;
+  flags[nodes_at + 2] = 4;
+  refused(flags, "node flags");
+  std::vector<double> partial = packed;
+  partial[nodes_at + 3] = 8;  // 8 values of 9 per node
+  refused(partial, "not whole nodes");
 }
 
 TEST(FdemRankState, ALeavingGrainGoesToItsNewOwnerWithItsPairsHistory) {
@@ -334,13 +352,21 @@ TEST(FdemRankState, ContactRolesLeaveOutAbsentGrainsAndPairsWithoutAnOwnedOne) {
   EXPECT_TRUE(contact.owned_pair_sums().empty());
 }
 
-TEST(FdemRankState, OnlyRigidGrainsInContactWithPlatensAreSharedSoFar) {
+TEST(FdemRankState, GrainsInContactAreSharedDeformableOnesByTheirNodes) {
   Model m;
   add_grain(m, box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
   Solver deformable(m, SolverOptions{});
   WholeShare share(1);
-  EXPECT_THROW(deformable.set_rank_share(&share), UsageError);
-  EXPECT_THROW(deformable.set_rigid_state(0, RigidBodyState{}), UsageError);
+  EXPECT_NO_THROW(deformable.set_rank_share(&share));
+  EXPECT_THROW(deformable.set_rigid_state(0, RigidBodyState{}), UsageError) << "a deformable grain travels by its nodes";
+  deformable.set_node_state(3, Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6));
+  EXPECT_EQ(deformable.state().x[3], Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(deformable.state().v[3], Eigen::Vector3d(4, 5, 6));
+  deformable.set_rank_share(nullptr);
+  SolverOptions without_contact;
+  without_contact.contact.enabled = false;
+  Solver apart(m, without_contact);
+  EXPECT_THROW(apart.set_rank_share(&share), UsageError) << "ranks meet where grains touch";
   Model walls = four_cubes();
   walls.platens.push_back({});
   Solver with_platen(walls, SolverOptions{});

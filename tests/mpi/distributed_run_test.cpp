@@ -42,7 +42,9 @@ struct Scene {
   fdem::Aabb domain;
 };
 
-Scene make_scene() {
+/// `deformable`: the grains are elastic, 4-node and 10-node by turns, of a softer material (0.1 GPa:
+/// a step as long as the rigid packing's).
+Scene make_scene(bool deformable = false) {
   Scene s;
   const fdem::TetMesh cube = fdem::box_mesh(Eigen::Vector3d::Constant(1e-3), 0.5e-3);
   const fdem::TetMesh slab = fdem::box_mesh(Eigen::Vector3d(1.4e-3, 1e-3, 0.8e-3), 0.35e-3);
@@ -54,12 +56,16 @@ Scene make_scene() {
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 8; ++i) {
         const Eigen::Vector3d at(kSpacing * i, kSpacing * j, kSpacing * k);
-        fdem::add_grain(s.model, (i + j + k) % 3 == 0 ? slab : cube, at, fdem::GrainKind::rigid, 0, label++);
+        const fdem::GrainKind kind = !deformable ? fdem::GrainKind::rigid
+                                     : label % 2 ? fdem::GrainKind::tet4
+                                                 : fdem::GrainKind::tet10;
+        fdem::add_grain(s.model, (i + j + k) % 3 == 0 ? slab : cube, at, kind, 0, label++);
         s.domain.grow(at);
         s.velocity.push_back(Eigen::Vector3d(kDrift, 0, 0) + kSpeed * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
         s.spin.push_back(2e3 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
       }
   s.domain = s.domain.inflated(kSpacing / 2);
+  if (deformable) s.model.materials[0].young = 1e8;
   return s;
 }
 
@@ -271,6 +277,52 @@ TEST(DistributedRun, CuttingTheSampleAgainByMeasuredWorkKeepsTheOneRankBits) {
   if (g_session->rank() == 0)
     std::printf("%d ranks: cut again %zu times by measured work, moving %llu grains to other ranks\n", g_session->size(),
                 run.rebalances(), static_cast<unsigned long long>(moved));
+}
+
+TEST(DistributedRun, DeformableGrainsAcrossRanksMoveAsOnOneRank) {
+  // The churning packing of elastic 4- and 10-node boxes: the owner of a grain steps its elements
+  // and sends its surface nodes to the ranks that ghost it, and all its nodes to its next owner.
+  // Every step's energies, then every node's position, velocity and force and every grain's
+  // element stress gathered on rank 0, must be the one-rank run's bits.
+  const Scene scene = make_scene(true);
+  std::unique_ptr<fdem::Solver> one = thrown(scene), mine = thrown(scene);
+  const double dt = 0.5 * one->time_step_limits().stable();
+  mpi::DistributedRun run(*g_session, *mine, scene.domain);
+  constexpr int kDeformableSteps = 800;
+  std::uint64_t mismatches = 0, contacts = 0;
+  for (int n = 0; n < kDeformableSteps; ++n) {
+    const fdem::StepReport expected = one->step(dt), got = run.step(dt);
+    const fdem::Energies &e = expected.energies, &r = got.energies;
+    mismatches += bits(e.kinetic) != bits(r.kinetic) || bits(e.strain) != bits(r.strain) ||
+                  bits(e.contact_elastic) != bits(r.contact_elastic) || bits(e.dissipated) != bits(r.dissipated) ||
+                  expected.contact.node_contacts != got.contact.node_contacts;
+    contacts += expected.contact.node_contacts;
+    if (n == kDeformableSteps / 2) run.rebalance(true);  // every rank takes every node, then its new share
+  }
+  EXPECT_EQ(mismatches, 0u) << "steps whose energies differ from one rank's in any bit";
+  EXPECT_GT(contacts, 500u) << "the grains collide";
+  const std::uint64_t migrations = mpi::sum_over_ranks(*g_session, run.traffic().migrations);
+  if (g_session->size() > 1) EXPECT_GE(migrations, 2u) << "grains change owner, with all their nodes";
+
+  run.gather_output();
+  if (g_session->rank() == 0) {
+    const fdem::SolverState &a = one->state(), &b = mine->state();
+    const std::span<const Eigen::Vector3d> fa = one->node_forces(), fb = mine->node_forces();
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.x.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        differing += bits(a.x[i][k]) != bits(b.x[i][k]) || bits(a.v[i][k]) != bits(b.v[i][k]) || bits(fa[i][k]) != bits(fb[i][k]);
+    EXPECT_EQ(differing, 0u) << "node coordinates, velocities and forces that differ from one rank's";
+    const std::vector<Eigen::Matrix3d> stress_a = one->love_weber_stresses(), stress_b = mine->love_weber_stresses();
+    for (std::size_t g = 0; g < scene.model.grains.size(); ++g)
+      for (int k = 0; k < 9; ++k) {
+        EXPECT_EQ(bits(one->grain_stress(g)(k)), bits(mine->grain_stress(g)(k))) << "grain " << g;
+        EXPECT_EQ(bits(stress_a[g](k)), bits(stress_b[g](k))) << "grain " << g;
+      }
+    std::printf("%d ranks, deformable: %d steps of %.3g s, %llu node contacts over them, %llu migrations\n",
+                g_session->size(), kDeformableSteps, dt, static_cast<unsigned long long>(contacts),
+                static_cast<unsigned long long>(migrations));
+  }
 }
 
 namespace {

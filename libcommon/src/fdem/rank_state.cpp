@@ -77,6 +77,11 @@ void pack_message(const RankMessage& message, std::vector<double>& out) {
     out.push_back(b.grain);
     append_state(b.state, out);
   }
+  out.push_back(static_cast<double>(message.nodes.size()));
+  for (const GrainNodes& n : message.nodes) {
+    out.insert(out.end(), {double(n.grain), double(n.whole) + 2.0 * double(n.forces), double(n.values.size())});
+    out.insert(out.end(), n.values.begin(), n.values.end());
+  }
   out.push_back(static_cast<double>(message.history.size()));
   for (const ContactHistoryEntry& h : message.history) {
     out.insert(out.end(), {double(h.a), double(h.b), double(h.node)});
@@ -112,6 +117,22 @@ RankMessage unpack_message(std::span<const double> packed) {
   for (GrainBody& b : m.bodies) {
     b.grain = in.index();
     b.state = state_from(in.take(kStateDoubles));
+  }
+  m.nodes.resize(in.count(3));
+  for (GrainNodes& n : m.nodes) {
+    n.grain = in.index();
+    const std::uint32_t flags = in.index();
+    if (flags > 3)
+      throw DataError(fmt::format("a rank's message holds node flags {}; the ranks must run the same program", flags));
+    n.whole = flags & 1;
+    n.forces = flags & 2;
+    const std::size_t count = in.count(1);
+    if (count % (n.forces ? 9 : 6) != 0)
+      throw DataError(fmt::format("a rank's message holds {} node values for grain {}, not whole nodes; the ranks must "
+                                  "run the same program",
+                                  count, n.grain));
+    const double* v = in.take(count);
+    n.values.assign(v, v + count);
   }
   m.history.resize(in.count(kHistoryDoubles));
   for (ContactHistoryEntry& h : m.history) {
@@ -184,9 +205,11 @@ std::vector<GrainRole> roles_after_exchange(const Subdomains& subdomains, int ra
   };
   for (std::uint32_t g : plan.kept) role_of(g) = GrainRole::owned;
   for (std::uint32_t g : plan.ghosted) role_of(g) = GrainRole::ghost;
-  for (const RankMessage& m : received)
+  for (const RankMessage& m : received) {
     for (const GrainBody& b : m.bodies)
       role_of(b.grain) = owner_rank(subdomains, b.state.position) == rank ? GrainRole::owned : GrainRole::ghost;
+    for (const GrainNodes& n : m.nodes) role_of(n.grain) = n.whole ? GrainRole::owned : GrainRole::ghost;
+  }
   return roles;
 }
 
@@ -217,16 +240,34 @@ std::vector<double> grain_bounding_radii(const Model& model, std::span<const Bod
   return radii;
 }
 
-std::vector<double> surface_node_work(const Model& model) {
-  std::vector<double> work(model.grains.size(), 0.0);
-  std::vector<std::uint32_t> nodes;
+std::vector<std::vector<std::uint32_t>> grain_surface_nodes(const Model& model) {
+  std::vector<std::vector<std::uint32_t>> surface(model.grains.size());
   for (std::size_t g = 0; g < model.grains.size(); ++g) {
-    nodes.clear();
+    std::vector<std::uint32_t>& nodes = surface[g];
     for (std::uint32_t t = model.grains[g].triangle_begin; t < model.grains[g].triangle_end; ++t)
       nodes.insert(nodes.end(), model.triangles[t].begin(), model.triangles[t].end());
     std::sort(nodes.begin(), nodes.end());
-    work[g] = static_cast<double>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   }
+  return surface;
+}
+
+std::vector<double> element_work(const Model& model) {
+  std::vector<double> work(model.grains.size(), 0.0);
+  for (std::size_t g = 0; g < model.grains.size(); ++g) {
+    const Grain& grain = model.grains[g];
+    const double per_element = grain.kind == GrainKind::tet10 ? kTet10ElementWork
+                               : grain.kind == GrainKind::tet4 ? kTet4ElementWork
+                                                               : 0.0;
+    work[g] = per_element * (grain.element_end - grain.element_begin);
+  }
+  return work;
+}
+
+std::vector<double> surface_node_work(const Model& model) {
+  std::vector<double> work = element_work(model);
+  const std::vector<std::vector<std::uint32_t>> surface = grain_surface_nodes(model);
+  for (std::size_t g = 0; g < work.size(); ++g) work[g] += static_cast<double>(surface[g].size());
   return work;
 }
 

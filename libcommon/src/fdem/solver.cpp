@@ -272,10 +272,11 @@ StepReport Solver::step(double dt) {
     return s;
   };
 
+  const std::span<const GrainRole> roles = share_ ? share_->roles() : std::span<const GrainRole>{};
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
   for (std::size_t g = 0; g < grains; ++g) {
     const Grain& grain = m.grains[g];
-    if (grain.kind == GrainKind::rigid) continue;
+    if (grain.kind == GrainKind::rigid || (!roles.empty() && roles[g] != GrainRole::owned)) continue;
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) force_[i].setZero();
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
     if (beta > 0) {  // from the velocities of the last half step: the stable step is damped_critical_step's
@@ -286,7 +287,6 @@ StepReport Solver::step(double dt) {
 
   times_.elements += seconds_since();
   StepReport report;
-  const std::span<const GrainRole> roles = share_ ? share_->roles() : std::span<const GrainRole>{};
   if (share_) contact_->set_grain_roles(roles);
   if (contact_) {
     // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
@@ -694,13 +694,14 @@ void Solver::load(const io::H5File& f, const std::string& group) {
 // A run split over ranks (docs/fdemrun.md, across machines).
 
 void Solver::set_rank_share(RankShare* share) {
-  const Model& m = *model_;
-  const bool rigid = std::all_of(m.grains.begin(), m.grains.end(), [](const Grain& g) { return g.kind == GrainKind::rigid; });
-  if (share && (!contact_ || !rigid))
-    throw UsageError("a run split over ranks steps rigid grains in contact so far: deformable grains run on one rank "
-                     "(docs/fdemrun.md, across machines)");
+  if (share && !contact_) throw UsageError("a run split over ranks needs contact: its ranks meet where grains touch");
   if (!share && share_) contact_->set_grain_roles({});  // every grain in contact again
   share_ = share;
+}
+
+void Solver::set_node_state(std::uint32_t node, const Eigen::Vector3d& x, const Eigen::Vector3d& v) {
+  state_.x.at(node) = x;
+  state_.v.at(node) = v;
 }
 
 void Solver::set_rigid_state(std::size_t g, const RigidBodyState& state) {

@@ -10,7 +10,6 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interval.hpp"
-#include "graintwin/fdem/rank_state.hpp"
 
 namespace graintwin::mpi {
 namespace {
@@ -44,15 +43,31 @@ std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<
 
 }  // namespace
 
+namespace {
+
+/// A deformable grain's bounding radius grows by this share for its strain (elastic grains strain
+/// far less): its ghosts must reach every rank it may touch.
+constexpr double kStrainReach = 0.02;
+
+}  // namespace
+
 DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain)
     : session_(session), solver_(solver), domain_(domain) {
-  solver.set_rank_share(this);  // refuses what does not run across ranks yet
+  solver.set_rank_share(this);  // refuses what does not run across ranks
   try {
     const fdem::Model& m = solver.model();
     std::vector<fdem::BodyProperties> bodies(m.grains.size());
     for (std::size_t g = 0; g < bodies.size(); ++g) bodies[g] = solver.body(g);
     radii_ = fdem::grain_bounding_radii(m, bodies);
-    const std::span<const fdem::RigidBodyState> states = solver.rigid_states();
+    surface_ = fdem::grain_surface_nodes(m);
+    for (std::size_t g = 0; g < m.grains.size(); ++g) {
+      if (m.grains[g].kind == fdem::GrainKind::rigid) surface_[g].clear();  // a body travels
+      else radii_[g] *= 1 + kStrainReach;
+    }
+    element_work_ = fdem::element_work(m);
+    std::vector<std::uint32_t> every(m.grains.size());
+    std::iota(every.begin(), every.end(), 0u);
+    const std::span<const fdem::RigidBodyState> states = places(every);
     std::vector<Eigen::Vector3d> centroids;
     for (const fdem::RigidBodyState& s : states) centroids.push_back(s.position);
     subdomains_ = fdem::bisect_domain(centroids, radii_, fdem::surface_node_work(m), domain, session.size(),
@@ -67,21 +82,80 @@ DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, con
 
 DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
 
+std::span<const fdem::RigidBodyState> DistributedRun::places(std::span<const std::uint32_t> grains) {
+  const fdem::Model& m = solver_.model();
+  const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
+  if (std::all_of(surface_.begin(), surface_.end(), [](const auto& s) { return s.empty(); })) return states;
+  places_.assign(states.begin(), states.end());
+  for (std::uint32_t g : grains)
+    if (m.grains[g].kind != fdem::GrainKind::rigid) places_[g].position = solver_.grain_centroid(g);
+  return places_;
+}
+
+fdem::GrainNodes DistributedRun::nodes_of(std::uint32_t grain, bool whole, bool forces) const {
+  const fdem::Grain& g = solver_.model().grains[grain];
+  const fdem::SolverState& s = solver_.state();
+  const std::span<const Eigen::Vector3d> f = solver_.node_forces();
+  fdem::GrainNodes out{grain, whole, forces, {}};
+  const auto add = [&](std::uint32_t n) {
+    out.values.insert(out.values.end(), {s.x[n].x(), s.x[n].y(), s.x[n].z(), s.v[n].x(), s.v[n].y(), s.v[n].z()});
+    if (forces) out.values.insert(out.values.end(), {f[n].x(), f[n].y(), f[n].z()});
+  };
+  if (whole)
+    for (std::uint32_t n = g.node_begin; n < g.node_end; ++n) add(n);
+  else
+    for (std::uint32_t n : surface_[grain]) add(n);
+  return out;
+}
+
+void DistributedRun::take_nodes(const fdem::GrainNodes& nodes) {
+  const fdem::Model& m = solver_.model();
+  const std::size_t per_node = nodes.forces ? 9 : 6;
+  if (nodes.grain >= m.grains.size() || m.grains[nodes.grain].kind == fdem::GrainKind::rigid ||
+      nodes.values.size() !=
+          per_node * (nodes.whole ? m.grains[nodes.grain].node_end - m.grains[nodes.grain].node_begin
+                                  : surface_[nodes.grain].size()))
+    throw DataError(fmt::format("a rank sent {} node values for grain {}, which are not its nodes in this model; the ranks "
+                                "must run the same model",
+                                nodes.values.size(), nodes.grain));
+  const fdem::Grain& g = m.grains[nodes.grain];
+  const double* v = nodes.values.data();
+  const auto set = [&](std::uint32_t n) {
+    solver_.set_node_state(n, Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5]));
+    if (nodes.forces) solver_.set_node_force(n, Eigen::Vector3d(v[6], v[7], v[8]));
+    v += per_node;
+  };
+  if (nodes.whole)
+    for (std::uint32_t n = g.node_begin; n < g.node_end; ++n) set(n);
+  else
+    for (std::uint32_t n : surface_[nodes.grain]) set(n);
+}
+
+void DistributedRun::send_nodes(int rank, std::vector<fdem::GrainBody>& bodies, std::vector<fdem::GrainNodes>& nodes) const {
+  const fdem::Model& m = solver_.model();
+  std::erase_if(bodies, [&](const fdem::GrainBody& b) {
+    if (m.grains[b.grain].kind == fdem::GrainKind::rigid) return false;
+    nodes.push_back(nodes_of(b.grain, fdem::owner_rank(subdomains_, b.state.position) == rank, false));
+    return true;
+  });
+}
+
 void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
                                  fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
                                  std::span<double> platen_stiffness, fdem::StepRows& boundary_rows) {
   const double start = monotonic_seconds();
   const int rank = session_.rank();
-  fdem::ExchangePlan plan =
-      fdem::plan_exchange(subdomains_, rank, owned_, solver_.rigid_states(), radii_, *solver_.contact_model());
+  ++steps_measured_;
+  fdem::ExchangePlan plan = fdem::plan_exchange(subdomains_, rank, owned_, places(owned_), radii_, *solver_.contact_model());
   const std::size_t platens = solver_.model().platens.size();
   const fdem::StepRows rows = fdem::step_rows(grains, owned_, owned_pairs, platens, boundary_rows);
   std::vector<std::vector<double>> outgoing(plan.to.size());
   for (std::size_t r = 0; r < plan.to.size(); ++r) {
     if (static_cast<int>(r) == rank) continue;
     plan.to[r].rows = rows;
+    send_nodes(static_cast<int>(r), plan.to[r].bodies, plan.to[r].nodes);
     fdem::pack_message(plan.to[r], outgoing[r]);
-    traffic_.bodies += plan.to[r].bodies.size();
+    traffic_.bodies += plan.to[r].bodies.size() + plan.to[r].nodes.size();
     traffic_.history += plan.to[r].history.size();
     traffic_.doubles += outgoing[r].size();
   }
@@ -101,6 +175,7 @@ void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fd
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
   for (const fdem::RankMessage& m : received) {
     for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
+    for (const fdem::GrainNodes& n : m.nodes) take_nodes(n);
     solver_.contact_model()->merge_history(m.history);
   }
   traffic_.exchange_seconds += monotonic_seconds() - start;
@@ -114,9 +189,15 @@ void DistributedRun::gather_output() {
                                                                                    : contact.grain_roles();
   const std::vector<std::uint32_t> advanced = fdem::grains_with_role(stepped, fdem::GrainRole::owned);
   fdem::RankMessage mine;
+  const fdem::Model& model = solver_.model();
   const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
-  for (std::uint32_t g : owned_) mine.bodies.push_back({g, states[g]});
-  for (std::uint32_t g : advanced) mine.loads.push_back({g, solver_.rigid_load(g)});
+  const auto rigid = [&](std::uint32_t g) { return model.grains[g].kind == fdem::GrainKind::rigid; };
+  for (std::uint32_t g : owned_)
+    if (rigid(g)) mine.bodies.push_back({g, states[g]});
+  // A deformable grain's nodes and forces from the rank that advanced it (its state since).
+  for (std::uint32_t g : advanced)
+    if (rigid(g)) mine.loads.push_back({g, solver_.rigid_load(g)});
+    else mine.nodes.push_back(nodes_of(g, true, true));
   for (const fdem::ContactRecord& r : contact.contacts())
     if (stepped[r.a] == fdem::GrainRole::owned) mine.records.push_back(r);
   mine.history = contact.history_of(advanced);
@@ -128,6 +209,7 @@ void DistributedRun::gather_output() {
   for (std::size_t r = 1; r < incoming.size(); ++r) {
     const fdem::RankMessage m = fdem::unpack_message(incoming[r]);
     for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
+    for (const fdem::GrainNodes& n : m.nodes) take_nodes(n);
     for (const fdem::GrainLoad& l : m.loads) solver_.set_rigid_load(l.grain, l.load);
     records.insert(records.end(), m.records.begin(), m.records.end());
     contact.merge_history(m.history);
@@ -142,7 +224,9 @@ bool DistributedRun::rebalance(bool force) {
   fdem::ContactModel& contact = *solver_.contact_model();
   std::vector<double> work = contact.take_grain_work();
   sum_over_ranks(session_, work);  // each grain's checks from the ranks that owned it: whole numbers
-  for (double& w : work) w += 1;   // a grain out of contact still costs its motion
+  for (std::size_t g = 0; g < work.size(); ++g)  // its elements each step; out of contact it still costs its motion
+    work[g] += element_work_[g] * static_cast<double>(steps_measured_) + 1;
+  steps_measured_ = 0;
   const std::vector<fdem::RigidBodyState> all = gather_states();
   std::vector<Eigen::Vector3d> centroids;
   for (const fdem::RigidBodyState& s : all) centroids.push_back(s.position), domain_.grow(s.position);
@@ -154,18 +238,27 @@ bool DistributedRun::rebalance(bool force) {
   } catch (const UsageError&) {
     return false;  // no cut by these weights leaves every box thick enough (on every rank alike): keep this one
   }
-  // Every rank takes every grain's state and every rank's friction history, then its new share.
+  // Every rank takes every grain's state (a deformable grain's nodes from its owner) and every
+  // rank's friction history, then its new share.
+  const fdem::Model& m = solver_.model();
   std::vector<std::uint32_t> every(all.size());
   std::iota(every.begin(), every.end(), 0u);
   fdem::RankMessage mine;
   mine.history = contact.history_of(every);
+  for (std::uint32_t g : owned_)
+    if (m.grains[g].kind != fdem::GrainKind::rigid) mine.nodes.push_back(nodes_of(g, true, false));
   std::vector<double> packed;
   fdem::pack_message(mine, packed);
   std::vector<std::vector<double>> outgoing(session_.size(), packed);
   outgoing[session_.rank()].clear();
   for (const auto& buffer : exchange_buffers(outgoing))
-    if (!buffer.empty()) contact.merge_history(fdem::unpack_message(buffer).history);
-  for (std::size_t g = 0; g < all.size(); ++g) solver_.set_rigid_state(g, all[g]);
+    if (!buffer.empty()) {
+      const fdem::RankMessage theirs = fdem::unpack_message(buffer);
+      contact.merge_history(theirs.history);
+      for (const fdem::GrainNodes& n : theirs.nodes) take_nodes(n);
+    }
+  for (std::size_t g = 0; g < all.size(); ++g)
+    if (m.grains[g].kind == fdem::GrainKind::rigid) solver_.set_rigid_state(g, all[g]);
   subdomains_ = std::move(next);
   roles_ = fdem::initial_roles(subdomains_, session_.rank(), all, radii_);
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
@@ -176,7 +269,9 @@ bool DistributedRun::rebalance(bool force) {
 std::vector<fdem::RigidBodyState> DistributedRun::gather_states() const {
   const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
   fdem::RankMessage mine;
-  for (std::uint32_t g : owned_) mine.bodies.push_back({g, states[g]});
+  for (std::uint32_t g : owned_)
+    if (solver_.model().grains[g].kind == fdem::GrainKind::rigid) mine.bodies.push_back({g, states[g]});
+    else mine.bodies.push_back({g, fdem::RigidBodyState{solver_.grain_centroid(g)}});
   std::vector<double> packed;
   fdem::pack_message(mine, packed);
   std::vector<fdem::RigidBodyState> all(states.size());

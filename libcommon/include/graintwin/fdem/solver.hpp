@@ -312,9 +312,15 @@ class Solver {
 
   /// Steps only the grains `share` names owned from the next step on, and finishes each step
   /// through it (not owned; nullptr: every grain, one rank). Forces, loads and contacts read
-  /// from this solver are then whole for its owned grains only. Rigid grains only, with contact
-  /// and without a boundary so far: UsageError otherwise.
+  /// from this solver are then whole for its owned grains only. Needs contact: UsageError
+  /// otherwise.
   void set_rank_share(RankShare* share);
+  /// Replaces node n's position and velocity (a deformable grain's, from its owner).
+  void set_node_state(std::uint32_t node, const Eigen::Vector3d& x, const Eigen::Vector3d& v);
+  /// Per node, the forces the last step left on deformable grains' nodes (contact and boundary
+  /// minus internal; their Love-Weber stress), and their replacement (gathered for output).
+  std::span<const Eigen::Vector3d> node_forces() const { return force_; }
+  void set_node_force(std::uint32_t node, const Eigen::Vector3d& force) { force_.at(node) = force; }
   /// Replaces rigid grain g's state (a ghost's, or a grain migrating here, from its owner).
   void set_rigid_state(std::size_t grain, const RigidBodyState& state);
   /// Every grain's body state, without placing rigid grains' nodes (state() does).

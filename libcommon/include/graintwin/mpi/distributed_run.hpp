@@ -1,11 +1,11 @@
 #pragma once
-// The FDEM solver stepping a rigid-grain sample across MPI ranks (docs/fdemrun.md, across
-// machines). Every rank builds the same Solver (the whole model, the same options and initial
+// The FDEM solver stepping a sample across MPI ranks (docs/fdemrun.md, across machines). Every rank builds the same Solver (the whole model, the same options and initial
 // state) and hands it to a DistributedRun, which splits the grains by bisect_domain boxes of their
 // centroids and then, each step: the solver advances the grains this rank owns, with contact among
 // its owned grains and ghosts (a pair between two ranks' grains is evaluated on both, each keeping
 // the force on its own grain); then, in one exchange, each owner sends its grains' states to the
-// ranks that ghost them, a grain whose centroid left its owner's box goes to the new owner with
+// ranks that ghost them (a rigid grain's body, a deformable grain's surface nodes), a grain whose
+// centroid left its owner's box goes to the new owner (a deformable grain with all its nodes) with
 // its pairs' friction history, and every rank sends every other its terms of the step, which each
 // adds in the one-rank order. The ghost lists are refreshed every step. A triaxial test's wall or
 // membrane is held whole by every rank: each rank's contacts of its grains with it travel as terms
@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "graintwin/fdem/decomposition.hpp"
+#include "graintwin/fdem/rank_state.hpp"
 #include "graintwin/fdem/scene.hpp"
 #include "graintwin/fdem/solver.hpp"
 #include "graintwin/mpi/session.hpp"
@@ -27,7 +28,7 @@ namespace graintwin::mpi {
 /// What a rank sent since the run started (its own sends; sum_over_ranks for the run's), and the
 /// time its steps spent in the exchange (waiting for slower ranks included).
 struct RankTraffic {
-  std::uint64_t bodies = 0;      ///< grain states sent (ghost updates and migrations)
+  std::uint64_t bodies = 0;      ///< grain states sent (ghost updates and migrations; a deformable grain's nodes count one)
   std::uint64_t history = 0;     ///< friction history entries sent with migrating grains
   std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
   std::uint64_t doubles = 0;     ///< doubles sent in the exchanges (8 bytes each), the step's terms included
@@ -40,8 +41,8 @@ class DistributedRun final : public fdem::RankShare {
   /// `domain` (m, the sample's box; every centroid inside), weighted by their surface nodes, with
   /// the contact model's skin. Collective: every rank passes a solver built alike. The solver must
   /// outlive the run; it steps this rank's share until the run ends. UsageError from
-  /// Solver::set_rank_share (not rigid grains in contact alone) or bisect_domain (too many ranks
-  /// for the sample: subdomains thinner than a grain), on every rank alike.
+  /// Solver::set_rank_share (no contact) or bisect_domain (too many ranks for the sample:
+  /// subdomains thinner than a grain), on every rank alike.
   DistributedRun(const Session& session, fdem::Solver& solver, const fdem::Aabb& domain);
   /// Hands the solver back to stepping every grain (its states of other ranks' grains are stale).
   ~DistributedRun() override;
@@ -59,10 +60,12 @@ class DistributedRun final : public fdem::RankShare {
   /// The grains this rank owns now, sorted.
   std::span<const std::uint32_t> owned() const { return owned_; }
   const RankTraffic& traffic() const { return traffic_; }
-  /// Every grain's state from its owner, on every rank (collective): for output and checks.
+  /// Every grain's state from its owner, on every rank (collective): for output and checks. A
+  /// deformable grain's is its centroid (position) alone.
   std::vector<fdem::RigidBodyState> gather_states() const;
   /// Weighs every grain by the work measured since the last call (the node and triangle checks of
-  /// its contact candidates on the rank that owned it, plus one) and, when the ranks' loads under
+  /// its contact candidates on the rank that owned it, its elements' work each step, plus one) and,
+  /// when the ranks' loads under
   /// those weights differ by more than kRebalanceImbalance (or `force`), cuts the sample again with
   /// them (collective; the same decision and cut on every rank). Each rank then holds every
   /// grain's state and the whole friction history, and takes the grains its new box holds; the
@@ -72,8 +75,8 @@ class DistributedRun final : public fdem::RankShare {
   std::size_t rebalances() const { return rebalances_; }
 
   /// Gives rank 0's solver what one rank's solver would hold after the last step (collective):
-  /// every grain's state, every rigid grain's load, the contact records in candidate order and
-  /// the friction history, sent by their owners. Rank 0 then writes frames and checkpoints alone.
+  /// every grain's state, every rigid grain's load, every deformable grain's node forces, the
+  /// contact records in candidate order and the friction history, sent by their owners. Rank 0 then writes frames and checkpoints alone.
   /// The other ranks' solvers are unchanged, and so is stepping: what rank 0 received for the
   /// grains it ghosts is what their owners sent it, and its absent grains take no part in its steps.
   void gather_output();
@@ -89,8 +92,23 @@ class DistributedRun final : public fdem::RankShare {
 
  private:
 
+  /// Every grain's state as a body for the exchange's plan: `grains`' (the owned ones) current,
+  /// a deformable grain's centroid as its position.
+  std::span<const fdem::RigidBodyState> places(std::span<const std::uint32_t> grains);
+  /// Deformable grain g's nodes as they travel (whole: all of them, else its surface).
+  fdem::GrainNodes nodes_of(std::uint32_t grain, bool whole, bool forces) const;
+  /// Sets the nodes a message brought. DataError when they do not fit the grain.
+  void take_nodes(const fdem::GrainNodes& nodes);
+  /// Moves each deformable grain of `bodies` (a plan's states for `rank`) into `nodes`: all its
+  /// nodes when `rank` owns it from now on, else its surface.
+  void send_nodes(int rank, std::vector<fdem::GrainBody>& bodies, std::vector<fdem::GrainNodes>& nodes) const;
+
   const Session& session_;
   fdem::Solver& solver_;
+  std::vector<std::vector<std::uint32_t>> surface_;  ///< per deformable grain, its surface nodes
+  std::vector<double> element_work_;                 ///< per grain, its elements' work a step
+  std::vector<fdem::RigidBodyState> places_;         ///< scratch of places()
+  std::uint64_t steps_measured_ = 0;                 ///< steps since the work was last taken
   std::vector<double> radii_;  ///< per grain, m (grain_bounding_radii)
   fdem::Aabb domain_;          ///< the box cut at the start, grown by the grains that left it
   std::size_t rebalances_ = 0;
@@ -102,7 +120,6 @@ class DistributedRun final : public fdem::RankShare {
 
 /// What a scene asks for that runs on one rank only, refused (UsageError naming `where`, the scene
 /// file) on several ranks before the model is built: [run] rigid_stress = "elastostatic".
-/// Deformable grains are refused once the model says which grains deform (Solver::set_rank_share).
 /// Nothing on one rank.
 void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, const std::string& where);
 
