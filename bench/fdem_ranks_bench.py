@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""fdemrun across MPI ranks against one rank: strong scaling of a rigid twin pressed by its top
-platen (docs/benchmarks.md, section fdem_ranks; docs/fdemrun.md, across machines).
+"""fdemrun across MPI ranks against one rank: strong scaling of a twin pressed by its top platen
+(docs/benchmarks.md, section fdem_ranks; docs/fdemrun.md, across machines).
 
 Each --model (kind=fdem_model files of shapes2mesh; default: sand_small's, made first when missing)
-runs the same scene, the model's grains rigid between its own platens, settling under gravity and
-damping while the top platen comes down, for --steps steps:
+runs the same scene for each of --kinds: rigid (the default), or tet4 (the same grains meshed again
+with 4-node elements: shapes2mesh --order 1 with the pipeline's parameters, from the shapes and
+labels of scan_000/ beside the model, its smallest grains rigid), its grains between the model's
+own platens, settling under gravity and damping
+while the top platen comes down, for --steps steps:
 - one rank, one thread (the reference);
 - `mpirun -np 2`, one thread per rank (strong scaling on the same cores: target 1.7 x);
 - one rank, two threads (what the cores give without MPI).
@@ -14,10 +17,11 @@ and the seconds rank 0 spent in the exchange. The results of every run are compa
 with the reference's. A paper-sized model: `bench/paper_scale.py --diameters 5.2 --stages inspect
 segment contacts shapes track mesh --no-publish` leaves its 1 989-grain model.h5 in its folder.
 
-    /usr/bin/python3 bench/fdem_ranks_bench.py [--model PATH ...] [--steps 2000] [--build build]
-        [--scratch /tmp/graintwin_ranks] [--no-publish]
+    /usr/bin/python3 bench/fdem_ranks_bench.py [--model PATH ...] [--kinds rigid tet4] [--steps 2000]
+        [--build build] [--scratch /tmp/graintwin_ranks] [--no-publish]
 """
 import argparse
+import itertools
 import json
 import os
 import re
@@ -43,9 +47,10 @@ mass_scaled_share = 0.05
 gravity = [0, 0, -9.81]
 frame_interval = 1
 series_interval = 1e-5
+max_steps = 1e12   # the runs stop at --stop-step; 4-node grains' steps are far shorter than the stage
 
 [model]
-kind = "rigid"
+{kind_line}
 
 [[stages]]
 name = "press"
@@ -72,6 +77,17 @@ def run(build, scene, model, out, steps, ranks, threads):
         grains = len(f["grains/label"])
     return {"steps": int(m.group(1)), "seconds": float(m.group(2)), "ms_per_step": float(m.group(3)), "wall": wall,
             "exchange_seconds": float(exchange.group(1)) if exchange else 0.0, "ranks": moved, "grains": grains}
+
+
+def elastic_model(build, model, out):
+    """The grains of `model` meshed again with 4-node elements into `out` (once): shapes2mesh --order 1
+    with the pipeline's parameters, from scan_000's shapes and labels beside the model."""
+    if not os.path.exists(out):
+        scan = os.path.join(os.path.dirname(model), "scan_000")
+        subprocess.run([f"{build}/bin/shapes2mesh", os.path.join(scan, "shapes.h5"), os.path.join(scan, "labels.h5"), out,
+                        "--config", os.path.join(SOURCE, "pipelines", "params", "shapes2mesh.toml"), "--order", "1", "-q"],
+                       check=True)
+    return out
 
 
 def same_results(a, b):
@@ -101,6 +117,8 @@ def main():
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--platen-speeds", nargs="+", type=float, default=[0.05, 2.0],
                     help="m/s, the top platen's speed down: slow, the packing settles; fast, it is pressed and flows")
+    ap.add_argument("--kinds", nargs="+", default=["rigid"], choices=["rigid", "tet4"],
+                    help="rigid grains, or the grains meshed again as elastic 4-node ones")
     ap.add_argument("--build", default=os.path.join(SOURCE, "build"))
     ap.add_argument("--scratch", default="/tmp/graintwin_ranks")
     ap.add_argument("--no-publish", action="store_true")
@@ -113,42 +131,42 @@ def main():
     run_dir = tempfile.mkdtemp(prefix="ranks-", dir=a.scratch)
     print(f"outputs in {run_dir}", flush=True)
     results, rows = [], []
-    for k, model in enumerate(a.model):
-        for speed in a.platen_speeds:
-            scene = os.path.join(run_dir, f"scene_{speed:g}.toml")
-            with open(scene, "w") as f:
-                f.write(SCENE.format(speed=-speed))
-            runs = []
-            for label, ranks, threads in RUNS:
-                out = os.path.join(run_dir, f"model{k}_v{speed:g}_r{ranks}_t{threads}.h5")
-                r = run(build, scene, model, out, a.steps, ranks, threads)
-                r.update(label=label, ranks_count=ranks, threads=threads, out=out)
-                runs.append(r)
-                print(label, {key: r[key] for key in ("grains", "steps", "ms_per_step", "exchange_seconds", "ranks")}, flush=True)
-            reference = runs[0]
-            grains = reference["grains"]
-            for r in runs:
-                r["same_as_reference"] = same_results(reference["out"], r["out"])
-                speedup = reference["ms_per_step"] / r["ms_per_step"]
-                moved = r["ranks"]
-                if r["ranks_count"] > 1:
-                    per_rank_step = r["ranks_count"] * r["steps"]
-                    travelled = (f"{moved['bytes_sent'] / per_rank_step / 1e3:.3g} kB and {2 * (r['ranks_count'] - 1)} messages "
-                                 f"(one Alltoall and one Alltoallv) per step per rank; {moved['grain_states_sent'] / per_rank_step:.3g} "
-                                 f"grain states, {moved['migrations']} migrations with {moved['history_entries']} history entries "
-                                 f"in all; the sample cut again {moved['rebalances']} times by measured work; rank 0 in the exchange "
-                                 f"{100 * r['exchange_seconds'] / r['seconds']:.2g} % of its step time")
-                else:
-                    travelled = "-"
-                rows.append(f"| {os.path.basename(os.path.dirname(model)) or model} ({grains} grains) | {speed:g} | {r['label']} | {r['steps']} | "
-                            f"{r['ms_per_step']:.3g} | {speedup:.2f} | {grains * 1e3 / r['ms_per_step'] / (r['ranks_count'] * r['threads']):.3g} | "
-                            f"{travelled} | {'yes' if r['same_as_reference'] else '**no**'} |")
-            results.append({"model": model, "platen_speed": speed, "runs": runs})
+    for (k, given), kind, speed in itertools.product(enumerate(a.model), a.kinds, a.platen_speeds):
+        model = given if kind == "rigid" else elastic_model(build, given, os.path.join(run_dir, f"model{k}_tet4.h5"))
+        scene = os.path.join(run_dir, f"scene_{kind}_{speed:g}.toml")
+        with open(scene, "w") as f:  # a 4-node model keeps its own kinds
+            f.write(SCENE.format(speed=-speed, kind_line='kind = "rigid"' if kind == "rigid" else ""))
+        runs = []
+        for label, ranks, threads in RUNS:
+            out = os.path.join(run_dir, f"model{k}_{kind}_v{speed:g}_r{ranks}_t{threads}.h5")
+            r = run(build, scene, model, out, a.steps, ranks, threads)
+            r.update(label=label, ranks_count=ranks, threads=threads, out=out)
+            runs.append(r)
+            print(label, {key: r[key] for key in ("grains", "steps", "ms_per_step", "exchange_seconds", "ranks")}, flush=True)
+        reference = runs[0]
+        grains = reference["grains"]
+        for r in runs:
+            r["same_as_reference"] = same_results(reference["out"], r["out"])
+            speedup = reference["ms_per_step"] / r["ms_per_step"]
+            moved = r["ranks"]
+            if r["ranks_count"] > 1:
+                per_rank_step = r["ranks_count"] * r["steps"]
+                travelled = (f"{moved['bytes_sent'] / per_rank_step / 1e3:.3g} kB and {2 * (r['ranks_count'] - 1)} messages "
+                             f"(one Alltoall and one Alltoallv) per step per rank; {moved['grain_states_sent'] / per_rank_step:.3g} "
+                             f"grain states, {moved['migrations']} migrations with {moved['history_entries']} history entries "
+                             f"in all; the sample cut again {moved['rebalances']} times by measured work; rank 0 in the exchange "
+                             f"{100 * r['exchange_seconds'] / r['seconds']:.2g} % of its step time")
+            else:
+                travelled = "-"
+            rows.append(f"| {os.path.basename(os.path.dirname(given)) or given} ({grains} {kind} grains) | {speed:g} | {r['label']} | {r['steps']} | "
+                        f"{r['ms_per_step']:.3g} | {speedup:.2f} | {grains * 1e3 / r['ms_per_step'] / (r['ranks_count'] * r['threads']):.3g} | "
+                        f"{travelled} | {'yes' if r['same_as_reference'] else '**no**'} |")
+        results.append({"model": given, "kind": kind, "platen_speed": speed, "runs": runs})
 
     text = ("## fdemrun across MPI ranks: strong scaling\n\n"
             "Strong scaling of fdemrun across MPI ranks (`/usr/bin/python3 bench/fdem_ranks_bench.py "
-            f"{' '.join(sys.argv[1:])}`; {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}): each model's grains rigid "
-            "between its own platens, under gravity and damping (2000 /s) while the top platen comes down at the speed "
+            f"{' '.join(sys.argv[1:])}`; {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}): each model's grains, rigid "
+            "or elastic 4-node, between its own platens, under gravity and damping (2000 /s) while the top platen comes down at the speed "
             f"given (slow: the packing settles; fast: the platen presses it and grains flow across the ranks), {a.steps} steps; fdemrun's own accounts on rank 0 (a step's time includes the exchange); across ranks fdemrun checks the balance of the work measured per grain every 200 steps and cuts the sample again beyond 10 %. Speedup "
             "against one rank with one thread; the target for 2 ranks is 1.7 x. Same bits: every dataset of the results "
             "equal to the one-rank run's.\n\n"
