@@ -302,7 +302,9 @@ TEST(DistributedRun, DeformableGrainsAcrossRanksMoveAsOnOneRank) {
   EXPECT_EQ(mismatches, 0u) << "steps whose energies differ from one rank's in any bit";
   EXPECT_GT(contacts, 500u) << "the grains collide";
   const std::uint64_t migrations = mpi::sum_over_ranks(*g_session, run.traffic().migrations);
-  if (g_session->size() > 1) EXPECT_GE(migrations, 2u) << "grains change owner, with all their nodes";
+  if (g_session->size() > 1) {
+    EXPECT_GE(migrations, 2u) << "grains change owner, with all their nodes";
+  }
 
   run.gather_output();
   if (g_session->rank() == 0) {

@@ -1,6 +1,6 @@
 // mpi/session on 1, 2, 3 and 4 ranks (ctest runs this program through mpirun, label `mpi`): grains
-// owned by the ranks of fdem/decomposition's subdomains are summed in grain order, and every rank
-// count must give the bits one rank's plain loop gives.
+// owned by the ranks of fdem/decomposition's subdomains are summed exactly on each rank and the
+// ranks' sums added, and every rank count must give the bits of one rank's exact sum.
 #include "graintwin/mpi/session.hpp"
 
 #include <gtest/gtest.h>
@@ -59,12 +59,11 @@ Share owned_share(const Scene& s, int rank, int ranks) {
   return share;
 }
 
-// One rank's loop over the grains in index order, as the solver sums on a single rank.
-std::vector<double> serial_sum(const Scene& s, bool (*included)(std::uint32_t)) {
+// A plain loop over the grains in index order.
+std::vector<double> serial_sum(const Scene& s) {
   std::vector<double> sum(3, 0.0);
   for (std::uint32_t g = 0; g < kGrains; ++g)
-    if (included(g))
-      for (int c = 0; c < 3; ++c) sum[c] += s.values[3 * g + c];
+    for (int c = 0; c < 3; ++c) sum[c] += s.values[3 * g + c];
   return sum;
 }
 
@@ -74,7 +73,13 @@ std::vector<std::uint64_t> bits(const std::vector<double>& v) {
   return b;
 }
 
-bool every_grain(std::uint32_t) { return true; }
+std::vector<double> backwards_sum(const Scene& s) {
+  std::vector<double> sum(3, 0.0);
+  for (std::size_t g = kGrains; g-- > 0;)
+    for (int c = 0; c < 3; ++c) sum[c] += s.values[3 * g + c];
+  return sum;
+}
+
 bool platen_grains(std::uint32_t g) { return g % 7 == 3; }  // a sparse few, as those touching a platen
 
 }  // namespace
@@ -95,44 +100,37 @@ TEST(MpiSession, EveryGrainHasExactlyOneOwner) {
   }
 }
 
-TEST(MpiSession, OrderedSumHasTheOneRankBitsOnAnyRankCount) {
+TEST(MpiSession, ExactSumsAddedOverTheRanksHaveTheOneRankBitsOnAnyRankCount) {
+  // Each rank adds the forces of the grains its box owns, in the order it lists them (reversed
+  // here); the ranks' accumulators added word by word round to the one-rank sum's bits.
   const Scene s = make_scene();
-  const std::vector<double> expected = serial_sum(s, every_grain);
-  // The data are order-sensitive: summed backwards they give other bits, so this test can fail.
-  std::vector<double> backwards(3, 0.0);
-  for (std::size_t g = kGrains; g-- > 0;)
-    for (int c = 0; c < 3; ++c) backwards[c] += s.values[3 * g + c];
-  EXPECT_NE(bits(backwards), bits(expected));
+  std::vector<ExactSum> expected(3);
+  for (std::uint32_t g = 0; g < kGrains; ++g)
+    for (int c = 0; c < 3; ++c) expected[c].add(s.values[3 * g + c]);
+  // The data are order-sensitive: a plain sum forwards and backwards gives other bits.
+  EXPECT_NE(bits(serial_sum(s)), bits(backwards_sum(s)));
 
-  Share share = owned_share(s, g_session->rank(), g_session->size());
-  EXPECT_EQ(bits(mpi::ordered_sum(*g_session, share.grains, share.values, 3)), bits(expected))
-      << "rank " << g_session->rank() << " of " << g_session->size();
-}
-
-TEST(MpiSession, OrderedSumOfAFewGrainsEqualsTheLoopOverAll) {
-  const Scene s = make_scene();
-  Share share = owned_share(s, g_session->rank(), g_session->size());
-  Share few;  // handed over in reverse: the order a rank lists its grains in must not matter
+  const Share share = owned_share(s, g_session->rank(), g_session->size());
+  std::vector<ExactSum> mine(3), few(3);
   for (std::size_t i = share.grains.size(); i-- > 0;)
-    if (platen_grains(share.grains[i])) {
-      few.grains.push_back(share.grains[i]);
-      few.values.insert(few.values.end(), share.values.begin() + 3 * i, share.values.begin() + 3 * i + 3);
+    for (int c = 0; c < 3; ++c) {
+      mine[c].add(share.values[3 * i + c]);
+      if (platen_grains(share.grains[i])) few[c].add(share.values[3 * i + c]);
     }
-  EXPECT_EQ(bits(mpi::ordered_sum(*g_session, few.grains, few.values, 3)), bits(serial_sum(s, platen_grains)));
-  const std::vector<double> none = mpi::ordered_sum(*g_session, {}, {}, 2);
-  EXPECT_EQ(none, (std::vector<double>{0.0, 0.0}));
-}
-
-TEST(MpiSession, AGrainSummedTwiceIsRefusedOnEveryRank) {
-  const std::vector<std::uint32_t> grains{7, 7};  // on one rank a duplicate; on several, each rank's too
-  const std::vector<double> values{1.0, 2.0};
-  try {
-    mpi::ordered_sum(*g_session, grains, values, 1);
-    ADD_FAILURE() << "no DataError on rank " << g_session->rank();
-  } catch (const DataError& e) {
-    EXPECT_EQ(e.message(), "grain 7 was summed twice by the ranks: each grain must be contributed by its owner alone");
+  std::vector<ExactSum*> sums;
+  for (ExactSum& e : mine) sums.push_back(&e);
+  for (ExactSum& e : few) sums.push_back(&e);
+  mpi::sum_over_ranks(*g_session, sums);
+  std::vector<ExactSum> few_expected(3);
+  for (std::uint32_t g = 0; g < kGrains; ++g)
+    if (platen_grains(g))
+      for (int c = 0; c < 3; ++c) few_expected[c].add(s.values[3 * g + c]);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(mine[c].value()), std::bit_cast<std::uint64_t>(expected[c].value()))
+        << "rank " << g_session->rank() << " of " << g_session->size();
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(few[c].value()), std::bit_cast<std::uint64_t>(few_expected[c].value()));
   }
-  EXPECT_THROW(mpi::ordered_sum(*g_session, grains, values, 2), UsageError) << "two values for two grains of 2";
+  EXPECT_EQ(mpi::max_over_ranks(*g_session, static_cast<double>(g_session->rank())), g_session->size() - 1.0);
 }
 
 namespace {

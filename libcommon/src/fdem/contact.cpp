@@ -286,7 +286,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.node_contacts += s.hits[i].size();
     stats.max_overlap = std::max(stats.max_overlap, sum.record.overlap);
     s.records.push_back(sum.record);
-    if (!s.roles.empty() && s.roles[c.a] == GrainRole::owned)
+    if (s.owned(c.a))
       s.owned_pair_sums.push_back({c.a, c.b, sum.elastic_energy, sum.dissipated, sum.record.overlap, s.hits[i].size(),
                                    sum.record.force, sum.record.stiffness});
   }

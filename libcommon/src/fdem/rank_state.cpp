@@ -271,47 +271,6 @@ std::vector<double> surface_node_work(const Model& model) {
   return work;
 }
 
-std::uint64_t first_boundary_key(std::size_t grains, std::size_t platens) {
-  const std::uint64_t n = grains;
-  return n + n * (n + platens) + n * platens;
-}
-
-StepRows take_boundary_rows(StepRows& rows, std::uint64_t first_key) {
-  const auto begin = std::lower_bound(rows.keys.begin(), rows.keys.end(), first_key);
-  const std::size_t at = static_cast<std::size_t>(begin - rows.keys.begin());
-  StepRows boundary;
-  for (auto k = begin; k != rows.keys.end(); ++k) boundary.keys.push_back(*k - first_key);
-  boundary.values.assign(rows.values.begin() + at * kTermColumns, rows.values.end());
-  rows.keys.resize(at);
-  rows.values.resize(at * kTermColumns);
-  return boundary;
-}
-
-StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
-                   std::size_t platens, const StepRows& boundary) {
-  const std::uint64_t grains = sums.kinetic.size(), partners = grains + platens;
-  StepRows rows;
-  for (std::uint32_t g : owned) {
-    rows.keys.push_back(g);
-    rows.values.insert(rows.values.end(),
-                       {sums.strain[g], sums.kinetic[g], sums.damped[g], sums.gravity_work[g], double(sums.bad[g])});
-  }
-  for (const PairStepSum& p : pairs) {
-    rows.keys.push_back(grains + p.a * partners + p.b);
-    rows.values.insert(rows.values.end(), {p.elastic_energy, p.dissipated, p.overlap, double(p.node_contacts), 0.0});
-  }
-  const std::uint64_t platen_rows = grains + grains * partners;
-  for (const PairStepSum& p : pairs)
-    if (p.b >= grains) {
-      rows.keys.push_back(platen_rows + p.a * platens + (p.b - grains));
-      rows.values.insert(rows.values.end(), {p.force.x(), p.force.y(), p.force.z(), p.stiffness, 0.0});
-    }
-  const std::uint64_t first = first_boundary_key(grains, platens);
-  for (std::uint64_t k : boundary.keys) rows.keys.push_back(first + k);
-  rows.values.insert(rows.values.end(), boundary.values.begin(), boundary.values.end());
-  return rows;
-}
-
 StepRows sorted_rows(std::span<const StepRows> parts) {
   std::vector<std::pair<std::uint64_t, const double*>> all;
   for (const StepRows& part : parts)
@@ -320,54 +279,11 @@ StepRows sorted_rows(std::span<const StepRows> parts) {
   StepRows rows;
   for (const auto& [key, values] : all) {
     if (!rows.keys.empty() && rows.keys.back() == key)
-      throw DataError(fmt::format("two ranks sent the step's terms under key {}: each grain and contact candidate must "
-                                  "have one owner",
-                                  key));
+      throw DataError(fmt::format("two ranks sent a boundary contact under key {}: each grain must have one owner", key));
     rows.keys.push_back(key);
     rows.values.insert(rows.values.end(), values, values + kTermColumns);
   }
   return rows;
-}
-
-void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
-                    ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness) {
-  const std::size_t grains = sums.kinetic.size(), platens = platen_force.size();
-  if (platen_stiffness.size() != platens)
-    throw UsageError(fmt::format("set_step_terms: {} platen forces but {} stiffnesses; pass one of each per platen",
-                                 platens, platen_stiffness.size()));
-  const std::uint64_t platen_rows = grains + grains * (grains + platens);
-  const auto unowned = [](std::size_t g) {
-    return DataError(fmt::format("no rank advanced grain {} in this step: every grain needs one owner", g));
-  };
-  std::size_t i = 0;
-  for (; i < keys.size() && keys[i] < grains; ++i) {
-    if (keys[i] != i) throw unowned(i);  // the keys are sorted and distinct: grain i has none
-    const double* r = values.data() + i * kTermColumns;
-    sums.strain[i] = r[0], sums.kinetic[i] = r[1], sums.damped[i] = r[2], sums.gravity_work[i] = r[3];
-    sums.bad[i] = r[4] != 0;
-  }
-  if (i != grains) throw unowned(i);
-  contact.elastic_energy = contact.dissipated = contact.max_overlap = 0;
-  contact.node_contacts = 0;
-  for (; i < keys.size() && keys[i] < platen_rows; ++i) {
-    const double* r = values.data() + i * kTermColumns;
-    contact.elastic_energy += r[0];
-    contact.dissipated += r[1];
-    contact.max_overlap = std::max(contact.max_overlap, r[2]);
-    contact.node_contacts += static_cast<std::size_t>(r[3]);
-  }
-  std::fill(platen_force.begin(), platen_force.end(), Eigen::Vector3d::Zero());
-  std::fill(platen_stiffness.begin(), platen_stiffness.end(), 0.0);
-  for (; i < keys.size(); ++i) {
-    if (keys[i] - platen_rows >= grains * platens)
-      throw DataError(fmt::format("a step's terms came under key {}, beyond the platen rows: the ranks disagree on the "
-                                  "model's grains or platens",
-                                  keys[i]));
-    const std::uint64_t p = (keys[i] - platen_rows) % platens;
-    const double* r = values.data() + i * kTermColumns;
-    platen_force[p] += Eigen::Vector3d(r[0], r[1], r[2]);
-    platen_stiffness[p] += r[3];
-  }
 }
 
 }  // namespace graintwin::fdem

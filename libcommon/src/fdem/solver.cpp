@@ -299,7 +299,6 @@ StepReport Solver::step(double dt) {
     times_.triangle_checks += report.contact.triangle_checks;
     times_.pair_lists_built += report.contact.pair_lists_built;
   }
-  sum_platen_contacts();
   times_.contact += seconds_since();
   StepRows boundary_rows;
   double boundary_seconds = 0;
@@ -371,9 +370,23 @@ StepReport Solver::step(double dt) {
     if (!finite(b.position) || !finite(L_new)) bad[g] = 1;
   }
   rigid_nodes_stale_ = true;  // rigid grains moved; state() places their nodes when read
-  if (share_)
-    share_->finish_step(step_sums_, contact_->owned_pair_sums(), report.contact, platen_force_, platen_stiffness_,
-                        boundary_rows);
+  StepTotals totals = step_totals(roles);
+  if (share_) {
+    share_->finish_step(totals, boundary_rows);
+    if (totals.grains.value() != static_cast<double>(grains))
+      throw DataError(fmt::format("the ranks advanced {} of the {} grains in step {}: every grain needs one owner",
+                                  totals.grains.value(), grains, state_.step));
+  }
+  if (contact_) {
+    report.contact.elastic_energy = totals.contact_elastic.value();
+    report.contact.dissipated = totals.contact_dissipated.value();
+    report.contact.node_contacts = static_cast<std::size_t>(totals.node_contacts.value());
+    report.contact.max_overlap = totals.max_overlap;
+  }
+  for (std::size_t p = 0; p < platen_force_.size(); ++p) {
+    for (int k = 0; k < 3; ++k) platen_force_[p][k] = totals.platens[4 * p + k].value();
+    platen_stiffness_[p] = totals.platens[4 * p + 3].value();
+  }
   times_.motion += seconds_since();
   BoundaryStep boundary;
   if (boundary_) {  // from every rank's contacts with it: every rank moves it alike
@@ -384,14 +397,11 @@ StepReport Solver::step(double dt) {
   }
 
   Energies& e = report.energies;
-  for (std::size_t g = 0; g < grains; ++g) {
-    e.strain += strain[g];
-    e.kinetic += kinetic[g];
-    state_.dissipated += damped[g];
-    state_.external_work += gravity_work[g];
-    state_.energy_input += std::max(gravity_work[g], 0.0);
-    if (bad[g]) e.kinetic = std::nan("");
-  }
+  e.strain = totals.strain.value();
+  e.kinetic = totals.bad.value() > 0 ? std::nan("") : totals.kinetic.value();
+  state_.dissipated += totals.damped.value();
+  state_.external_work += totals.gravity_work.value();
+  state_.energy_input += totals.energy_input.value();
   e.contact_elastic = report.contact.elastic_energy + boundary.elastic;
   e.kinetic += boundary.kinetic;
   state_.dissipated += report.contact.dissipated + boundary.dissipated;
@@ -581,12 +591,52 @@ std::span<const ContactRecord> Solver::contacts() const {
 Eigen::Vector3d Solver::platen_force(std::size_t p) const { return platen_force_.at(p); }
 double Solver::platen_stiffness(std::size_t p) const { return platen_stiffness_.at(p); }
 
+std::vector<ExactSum*> StepTotals::accumulators() {
+  std::vector<ExactSum*> all{&strain, &kinetic, &damped, &gravity_work, &energy_input, &grains, &bad,
+                             &contact_elastic, &contact_dissipated, &node_contacts};
+  for (ExactSum& p : platens) all.push_back(&p);
+  return all;
+}
+
+StepTotals Solver::step_totals(std::span<const GrainRole> roles) const {
+  StepTotals t;
+  const std::size_t grains = model_->grains.size();
+  for (std::size_t g = 0; g < grains; ++g) {
+    if (!roles.empty() && roles[g] != GrainRole::owned) continue;
+    t.strain.add(step_sums_.strain[g]);
+    t.kinetic.add(step_sums_.kinetic[g]);
+    t.damped.add(step_sums_.damped[g]);
+    t.gravity_work.add(step_sums_.gravity_work[g]);
+    t.energy_input.add(std::max(step_sums_.gravity_work[g], 0.0));
+    t.grains.add(1.0);
+    if (step_sums_.bad[g]) t.bad.add(1.0);
+  }
+  t.platens.resize(4 * model_->platens.size());
+  if (!contact_) return t;
+  for (const PairStepSum& p : contact_->owned_pair_sums()) {
+    t.contact_elastic.add(p.elastic_energy);
+    t.contact_dissipated.add(p.dissipated);
+    t.node_contacts.add(static_cast<double>(p.node_contacts));
+    t.max_overlap = std::max(t.max_overlap, p.overlap);
+    if (p.b < grains) continue;
+    for (int k = 0; k < 3; ++k) t.platens[4 * (p.b - grains) + k].add(p.force[k]);
+    t.platens[4 * (p.b - grains) + 3].add(p.stiffness);
+  }
+  return t;
+}
+
 void Solver::sum_platen_contacts() {
   const std::size_t grains = model_->grains.size();
-  for (auto& f : platen_force_) f.setZero();
-  std::fill(platen_stiffness_.begin(), platen_stiffness_.end(), 0.0);
+  std::vector<ExactSum> sums(4 * platen_force_.size());
   for (const ContactRecord& r : contacts())
-    if (r.b >= grains) platen_force_[r.b - grains] += r.force, platen_stiffness_[r.b - grains] += r.stiffness;
+    if (r.b >= grains) {
+      for (int k = 0; k < 3; ++k) sums[4 * (r.b - grains) + k].add(r.force[k]);
+      sums[4 * (r.b - grains) + 3].add(r.stiffness);
+    }
+  for (std::size_t p = 0; p < platen_force_.size(); ++p) {
+    for (int k = 0; k < 3; ++k) platen_force_[p][k] = sums[4 * p + k].value();
+    platen_stiffness_[p] = sums[4 * p + 3].value();
+  }
 }
 
 void Solver::save(io::H5File& f, const std::string& group) const {

@@ -140,19 +140,15 @@ void DistributedRun::send_nodes(int rank, std::vector<fdem::GrainBody>& bodies, 
   });
 }
 
-void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
-                                 fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
-                                 std::span<double> platen_stiffness, fdem::StepRows& boundary_rows) {
+void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& boundary_rows) {
   const double start = monotonic_seconds();
   const int rank = session_.rank();
   ++steps_measured_;
   fdem::ExchangePlan plan = fdem::plan_exchange(subdomains_, rank, owned_, places(owned_), radii_, *solver_.contact_model());
-  const std::size_t platens = solver_.model().platens.size();
-  const fdem::StepRows rows = fdem::step_rows(grains, owned_, owned_pairs, platens, boundary_rows);
   std::vector<std::vector<double>> outgoing(plan.to.size());
   for (std::size_t r = 0; r < plan.to.size(); ++r) {
     if (static_cast<int>(r) == rank) continue;
-    plan.to[r].rows = rows;
+    plan.to[r].rows = boundary_rows;
     send_nodes(static_cast<int>(r), plan.to[r].bodies, plan.to[r].nodes);
     fdem::pack_message(plan.to[r], outgoing[r]);
     traffic_.bodies += plan.to[r].bodies.size() + plan.to[r].nodes.size();
@@ -161,16 +157,19 @@ void DistributedRun::finish_step(fdem::GrainStepSums& grains, std::span<const fd
   }
   traffic_.migrations += owned_.size() - plan.kept.size();
   const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
+  // The step's sums: every rank's exact accumulators added (one collective), the deepest overlap.
+  const std::vector<ExactSum*> sums = totals.accumulators();
+  sum_over_ranks(session_, sums);
+  totals.max_overlap = max_over_ranks(session_, totals.max_overlap);
+  traffic_.doubles += sums.size() * ExactSum::kWords + 1;
   std::vector<fdem::RankMessage> received;
-  std::vector<fdem::StepRows> parts{rows};
+  std::vector<fdem::StepRows> parts{std::move(boundary_rows)};
   for (std::size_t r = 0; r < incoming.size(); ++r)
     if (static_cast<int>(r) != rank) {
       received.push_back(fdem::unpack_message(incoming[r]));
       parts.push_back(std::move(received.back().rows));
     }
-  fdem::StepRows all = fdem::sorted_rows(parts);
-  boundary_rows = fdem::take_boundary_rows(all, fdem::first_boundary_key(grains.kinetic.size(), platens));
-  fdem::set_step_terms(all.keys, all.values, grains, contact, platen_force, platen_stiffness);
+  boundary_rows = fdem::sorted_rows(parts);
   roles_ = fdem::roles_after_exchange(subdomains_, rank, roles_.size(), plan, received);
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
   for (const fdem::RankMessage& m : received) {

@@ -3,11 +3,9 @@
 #include <fmt/format.h>
 #include <mpi.h>
 
-#include <algorithm>
 #include <cstdlib>
 #include <exception>
 #include <limits>
-#include <numeric>
 
 #include "graintwin/core/error.hpp"
 
@@ -15,8 +13,6 @@
 // job with MPI's own message, where an exception on one rank would leave the others waiting.
 namespace graintwin::mpi {
 namespace {
-
-constexpr int kRoot = 0;
 
 /// Whether a launcher started this process as one of a job's ranks: Open MPI's mpirun, or a PMI
 /// or PMIx launcher (srun), names the rank in the environment.
@@ -26,38 +22,11 @@ bool launched() {
   return false;
 }
 
-/// [index of a grain contributed twice or -1, per component the sum in grain order]: the root's part
-/// of ordered_sum.
-std::vector<double> sum_in_grain_order(std::span<const std::uint32_t> grains, std::span<const double> values,
-                                       std::size_t components) {
-  const std::size_t total = grains.size();
-  std::vector<double> result(1 + components, 0.0);
-  std::vector<std::size_t> order(total);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return grains[a] < grains[b]; });
-  result[0] = -1;
-  for (std::size_t i = 0; i < total; ++i) {
-    if (i > 0 && grains[order[i]] == grains[order[i - 1]]) {
-      result[0] = grains[order[i]];  // exact: grain indices are 32-bit
-      break;
-    }
-    for (std::size_t c = 0; c < components; ++c) result[1 + c] += values[order[i] * components + c];
-  }
-  return result;
-}
-
 int checked_count(std::size_t n, const char* what) {
   if (n > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw UsageError(fmt::format("{} {} exceed MPI's int counts: sum in slices of at most {}", n, what,
                                  std::numeric_limits<int>::max()));
   return static_cast<int>(n);
-}
-
-// Offsets of consecutive blocks of the given counts (MPI_Gatherv's displacements).
-std::vector<int> offsets_of(const std::vector<int>& counts) {
-  std::vector<int> offsets(counts.size(), 0);
-  std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
-  return offsets;
 }
 
 }  // namespace
@@ -93,45 +62,33 @@ void Session::abort(int code) const {
   std::exit(code);
 }
 
-std::vector<double> ordered_sum(const Session& session, std::span<const std::uint32_t> grains,
-                                std::span<const double> values, std::size_t components) {
-  if (components == 0 || values.size() != grains.size() * components)
-    throw UsageError(fmt::format("an ordered sum needs {} values per grain: got {} values for {} grains", components,
-                                 values.size(), grains.size()));
-  const int count = checked_count(grains.size(), "grains");
-  checked_count(values.size(), "values");
-  const bool root = session.rank() == kRoot;
-  std::vector<double> result;
-  if (!session.started()) {
-    result = sum_in_grain_order(grains, values, components);
-  } else {
-
-    std::vector<int> grain_counts(root ? session.size() : 0);
-    MPI_Gather(&count, 1, MPI_INT, grain_counts.data(), 1, MPI_INT, kRoot, MPI_COMM_WORLD);
-    std::vector<int> value_counts(grain_counts.size());
-    std::transform(grain_counts.begin(), grain_counts.end(), value_counts.begin(),
-                   [&](int n) { return checked_count(static_cast<std::size_t>(n) * components, "values"); });
-    const std::size_t total = std::accumulate(grain_counts.begin(), grain_counts.end(), std::size_t{0});
-    std::vector<std::uint32_t> all_grains(total);
-    std::vector<double> all_values(total * components);
-    MPI_Gatherv(grains.data(), count, MPI_UINT32_T, all_grains.data(), grain_counts.data(),
-                offsets_of(grain_counts).data(), MPI_UINT32_T, kRoot, MPI_COMM_WORLD);
-    MPI_Gatherv(values.data(), static_cast<int>(values.size()), MPI_DOUBLE, all_values.data(), value_counts.data(),
-                offsets_of(value_counts).data(), MPI_DOUBLE, kRoot, MPI_COMM_WORLD);
-    // Broadcast as [twice-contributed grain or -1, sums...]: every rank learns of a refusal alike.
-    result = root ? sum_in_grain_order(all_grains, all_values, components) : std::vector<double>(1 + components, 0.0);
-    MPI_Bcast(result.data(), static_cast<int>(result.size()), MPI_DOUBLE, kRoot, MPI_COMM_WORLD);
-  }
-  if (result[0] >= 0)
-    throw DataError(fmt::format("grain {} was summed twice by the ranks: each grain must be contributed by its owner "
-                                "alone",
-                                static_cast<std::uint32_t>(result[0])));
-  return {result.begin() + 1, result.end()};
-}
-
 void sum_over_ranks(const Session& session, std::span<double> values) {
   if (!session.started() || values.empty()) return;
   MPI_Allreduce(MPI_IN_PLACE, values.data(), checked_count(values.size(), "values"), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+}
+
+void sum_over_ranks(const Session& session, std::span<std::int64_t> words) {
+  if (!session.started() || words.empty()) return;
+  MPI_Allreduce(MPI_IN_PLACE, words.data(), checked_count(words.size(), "words"), MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+}
+
+double max_over_ranks(const Session& session, double value) {
+  if (!session.started()) return value;
+  double largest = value;
+  MPI_Allreduce(&value, &largest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return largest;
+}
+
+void sum_over_ranks(const Session& session, std::span<ExactSum* const> sums) {
+  std::vector<std::int64_t> words;
+  words.reserve(sums.size() * ExactSum::kWords);
+  for (const ExactSum* s : sums) {
+    const auto w = s->state();
+    words.insert(words.end(), w.begin(), w.end());
+  }
+  sum_over_ranks(session, words);
+  for (std::size_t i = 0; i < sums.size(); ++i)
+    *sums[i] = ExactSum::from_state(std::span<const std::int64_t>(words).subspan(i * ExactSum::kWords, ExactSum::kWords));
 }
 
 std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count) {

@@ -296,9 +296,9 @@ class ContactModel {
   /// owners have them whole). A change of roles rebuilds the broad phase. UsageError unless empty
   /// or one per grain.
   void set_grain_roles(std::span<const GrainRole> roles);
-  /// With roles: the last step's sums of the candidates with node contacts whose grain a is
-  /// owned, in candidate order, (a, b); each candidate of the run is owned by exactly one rank.
-  /// Empty without roles.
+  /// The last step's sums of the candidates with node contacts whose grain a is owned (every grain
+  /// without roles), in candidate order, (a, b); each candidate of the run is owned by exactly one
+  /// rank.
   std::span<const PairStepSum> owned_pair_sums() const;
   /// The friction history of the pairs with one of `grains` in them, sorted by (a, b, node).
   std::vector<ContactHistoryEntry> history_of(std::span<const std::uint32_t> grains) const;

@@ -23,11 +23,6 @@ struct GrainBody {
   RigidBodyState state;
 };
 
-// Columns of a row of a step's terms (StepRows, kTermColumns): a grain's strain, kinetic, damped,
-// gravity work and bad (0 or 1), J; a contact candidate's elastic energy and dissipated (J),
-// deepest overlap (m), node contacts and 0; a platen candidate's force (3) and stiffness; then
-// the boundary's rows (Boundary::add_contact_forces).
-
 /// A rigid grain's last-step load as it travels to rank 0 for output.
 struct GrainLoad {
   std::uint32_t grain = 0;
@@ -46,8 +41,8 @@ struct GrainNodes {
 
 /// What one rank sends another after a step: the states of the grains the receiver owns or ghosts
 /// from now on (rigid grains' bodies, deformable grains' nodes), the friction history of the pairs
-/// of those among them that change owner, and the sender's terms of the step (the same rows to
-/// every rank). For output (a frame or a checkpoint written by rank 0) a rank sends rank 0 instead
+/// of those among them that change owner, and the sender's contacts with the wall or the membrane
+/// (its boundary rows, the same to every rank). For output (a frame or a checkpoint written by rank 0) a rank sends rank 0 instead
 /// the states of the grains it owns, and for the grains it advanced in the last step their loads,
 /// the records of the candidates it owned and their pairs' history.
 struct RankMessage {
@@ -135,35 +130,8 @@ std::vector<double> element_work(const Model& model);
 /// bisect_domain until measured weights replace it (contact cost grows with the surface nodes).
 std::vector<double> surface_node_work(const Model& model);
 
-// The step's sums across ranks: each rank sends every other its rows for what it owns, with the
-// exchange of states, and every rank rebuilds the one-rank sums from all ranks' rows.
-
-/// This rank's rows: each owned grain g's terms under key g, then each owned candidate (a, b)'s
-/// sums under grains + a x (grains + platens) + b (b as in ContactRecord), then each owned
-/// candidate of grain a and platen p its force (3) and stiffness under grains + grains x (grains +
-/// platens) + a x platens + p, so that key order is grain order, then candidate order, then the
-/// platen candidates' order.
-/// Then the boundary's rows (Boundary::add_contact_forces), each under first_boundary_key + its key.
-StepRows step_rows(const GrainStepSums& sums, std::span<const std::uint32_t> owned, std::span<const PairStepSum> pairs,
-                   std::size_t platens, const StepRows& boundary);
-
-/// The key after every grain's, candidate's and platen candidate's: where the boundary's rows begin.
-std::uint64_t first_boundary_key(std::size_t grains, std::size_t platens);
-
-/// Moves the boundary's rows (keys from first_key on, the last ones of sorted rows) out of `rows`,
-/// with their own keys again (minus first_key).
-StepRows take_boundary_rows(StepRows& rows, std::uint64_t first_key);
-
-/// Every rank's rows as one set in increasing key order. DataError when a key comes twice (two
-/// ranks owning one grain or candidate).
+/// Every rank's boundary rows (Boundary::add_contact_forces) as one set in increasing key order.
+/// DataError when a key comes twice (two ranks owning one grain).
 StepRows sorted_rows(std::span<const StepRows> parts);
-
-/// From every rank's rows in increasing key order (sorted_rows): every grain's terms into `sums` (whose size is
-/// the grain count), contact's elastic_energy, dissipated, node_contacts and max_overlap, and each
-/// platen's force and stiffness (`platen_force` and `platen_stiffness`, one per platen) added from
-/// zero in candidate order, as the one-rank contact step adds them. DataError unless every grain
-/// has exactly one row.
-void set_step_terms(std::span<const std::uint64_t> keys, std::span<const double> values, GrainStepSums& sums,
-                    ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness);
 
 }  // namespace graintwin::fdem

@@ -19,10 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "graintwin/fdem/step_times.hpp"
+#include "graintwin/core/exact_sum.hpp"
 #include "graintwin/fdem/contact.hpp"
 #include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/step_times.hpp"
 
 namespace graintwin::io {
 class H5File;
@@ -163,34 +164,44 @@ class Boundary {
   virtual void load(const io::H5File& file, const std::string& group) = 0;
 };
 
-/// Per grain, a step's energy terms before their ordered sum, J; `bad`: the grain's state became
+/// Per grain, a step's energy terms, J, found in parallel; `bad`: the grain's state became
 /// non-finite in the step.
 struct GrainStepSums {
   std::vector<double> strain, kinetic, damped, gravity_work;
   std::vector<char> bad;
 };
 
+/// A step's sums over the grains and the contact candidates, exact and so the same whatever their
+/// order (core/exact_sum): on a run split over ranks each rank adds the grains and candidates it
+/// owns, and RankShare::finish_step adds the ranks' accumulators, so every rank count has the
+/// one-rank bits.
+struct StepTotals {
+  ExactSum strain, kinetic, damped, gravity_work;  ///< J
+  ExactSum energy_input;                          ///< J, the positive terms of gravity's work
+  ExactSum grains, bad;                           ///< grains advanced; those whose state became non-finite
+  ExactSum contact_elastic, contact_dissipated;   ///< J
+  ExactSum node_contacts;
+  std::vector<ExactSum> platens;  ///< per platen: its force's x, y and z (N), then its contacts' normal stiffness (N/m)
+  double max_overlap = 0;         ///< m, the deepest of any candidate
+  /// Every accumulator, in one fixed order (for adding them across ranks).
+  std::vector<ExactSum*> accumulators();
+};
+
 /// A run split over ranks (docs/fdemrun.md, across machines; mpi/distributed_run implements it
 /// over MPI): the solver advances only the grains this rank owns and finishes each step through
-/// this, which completes the step's sums so that every rank adds every grain's and every
-/// contact's terms in the one-rank order, and hands the solver the states of the grains it holds
-/// next (set_rigid_state) with their friction history (ContactModel::merge_history).
+/// this, which completes the step's sums and hands the solver the states of the grains it holds
+/// next (set_rigid_state, set_node_state) with their friction history
+/// (ContactModel::merge_history).
 class RankShare {
  public:
   virtual ~RankShare() = default;
   /// Per grain, its role on this rank in the step about to be taken.
   virtual std::span<const GrainRole> roles() const = 0;
   /// Called by Solver::step once this rank's owned grains have moved, before the energies are
-  /// summed. On entry `grains` holds the terms of the owned grains (the others' are zero) and
-  /// `owned_pairs` the sums of the contact candidates this rank owns; on return `grains` holds
-  /// every grain's terms, contact's elastic_energy, dissipated, node_contacts and max_overlap are
-  /// the whole run's, and so are the platens' forces and stiffnesses (one each per platen), all
-  /// added in candidate order as one rank adds them.
-  /// `boundary_rows`: on entry this rank's rows of Boundary::add_contact_forces, on return every
-  /// rank's, in key order.
-  virtual void finish_step(GrainStepSums& grains, std::span<const PairStepSum> owned_pairs, ContactStepStats& contact,
-                           std::span<Eigen::Vector3d> platen_force, std::span<double> platen_stiffness,
-                           StepRows& boundary_rows) = 0;
+  /// taken. On entry `totals` holds the sums of this rank's grains and candidates, on return the
+  /// whole run's. `boundary_rows`: on entry this rank's rows of Boundary::add_contact_forces, on
+  /// return every rank's, in key order.
+  virtual void finish_step(StepTotals& totals, StepRows& boundary_rows) = 0;
 };
 
 class Solver {
@@ -378,6 +389,8 @@ class Solver {
   StepTimes times_;
   /// Per grain, the step's energy terms before their ordered sum (scratch of step()).
   GrainStepSums step_sums_;
+  /// This step's totals of the owned grains' terms and the owned candidates' sums.
+  StepTotals step_totals(std::span<const GrainRole> roles) const;
   RankShare* share_ = nullptr;  ///< set_rank_share: this rank's part of a run split over ranks
   /// Mutable: state() places rigid grains' nodes on demand (rigid_nodes_stale_).
   mutable SolverState state_;

@@ -6,8 +6,8 @@
 // the force on its own grain); then, in one exchange, each owner sends its grains' states to the
 // ranks that ghost them (a rigid grain's body, a deformable grain's surface nodes), a grain whose
 // centroid left its owner's box goes to the new owner (a deformable grain with all its nodes) with
-// its pairs' friction history, and every rank sends every other its terms of the step, which each
-// adds in the one-rank order. The ghost lists are refreshed every step. A triaxial test's wall or
+// its pairs' friction history, and the ranks add their exact sums of the step (core/exact_sum:
+// the same bits in any order). The ghost lists are refreshed every step. A triaxial test's wall or
 // membrane is held whole by every rank: each rank's contacts of its grains with it travel as terms
 // of the step, and every rank moves the wall or the balls alike from all of them, so the servo
 // reads the same stresses everywhere. The plain-data side is fdem/rank_state.
@@ -31,7 +31,7 @@ struct RankTraffic {
   std::uint64_t bodies = 0;      ///< grain states sent (ghost updates and migrations; a deformable grain's nodes count one)
   std::uint64_t history = 0;     ///< friction history entries sent with migrating grains
   std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
-  std::uint64_t doubles = 0;     ///< doubles sent in the exchanges (8 bytes each), the step's terms included
+  std::uint64_t doubles = 0;     ///< 8-byte values sent: the exchanges' doubles and the step sums' words
   double exchange_seconds = 0;   ///< s, planning, packing, exchanging and unpacking
 };
 
@@ -83,12 +83,11 @@ class DistributedRun final : public fdem::RankShare {
 
   /// The exchange, from within the solver's step once the owned grains moved: sends the owned
   /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
-  /// and this rank's terms of the step (platen forces and the wall's or membrane's contacts included) to every rank, takes the others',
-  /// completes the step's sums and sets the roles for the next step. Two collectives (MPI_Alltoall of the counts,
-  /// MPI_Alltoallv of the doubles).
-  void finish_step(fdem::GrainStepSums& grains, std::span<const fdem::PairStepSum> owned_pairs,
-                   fdem::ContactStepStats& contact, std::span<Eigen::Vector3d> platen_force,
-                   std::span<double> platen_stiffness, fdem::StepRows& boundary_rows) override;
+  /// and this rank's contacts with the wall or the membrane to every rank, takes the others', adds
+  /// the ranks' exact sums of the step (energies, contact sums, platen forces) and sets the roles
+  /// for the next step. Four collectives: MPI_Alltoall of the counts, MPI_Alltoallv of the
+  /// doubles, MPI_Allreduce of the sums' words and of the deepest overlap.
+  void finish_step(fdem::StepTotals& totals, fdem::StepRows& boundary_rows) override;
 
  private:
 

@@ -10,6 +10,8 @@
 #include <span>
 #include <vector>
 
+#include "graintwin/core/exact_sum.hpp"
+
 namespace graintwin::mpi {
 
 class Session {
@@ -47,32 +49,18 @@ class Session {
   int uncaught_at_start_ = 0;  ///< std::uncaught_exceptions() when made: more at the end means unwinding
 };
 
-/// Sums per-grain contributions over all ranks in global grain order: the same bits on every rank
-/// and on every rank count, so a run on R ranks reproduces the one-rank run's sums exactly.
-///
-/// Inputs (each rank its own):
-///   grains      the grains this rank contributes for, any order; each grain by one rank at most
-///   values      grains.size() x components doubles, row-major: grain grains[i]'s at
-///               [i * components, (i + 1) * components)
-///   components  >= 1, the same on every rank (3 for a force)
-/// Returns `components` sums, on every rank: per component, 0.0 + v(g0) + v(g1) + ... over the
-/// contributed grains g0 < g1 < ..., added left to right: what one rank's loop over the grains in
-/// index order computes (a grain that contributes nothing is one that adds 0.0, which changes no
-/// sum but turns -0.0 into +0.0).
-/// How: the contributions are gathered to rank 0 (MPI_Gatherv), sorted by grain there, summed in
-/// that order and the sums broadcast (MPI_Bcast); three collectives. Rank 0 receives
-/// 4 + 8 x components bytes per contribution: cheap for the few grains touching a platen each
-/// step, a cost to measure for sums over every grain on many ranks (docs/fdemrun.md).
-/// Throws DataError on every rank alike when a grain is contributed twice; UsageError on the
-/// calling rank when values' length is not grains' times components.
-std::vector<double> ordered_sum(const Session& session, std::span<const std::uint32_t> grains,
-                                std::span<const double> values, std::size_t components);
-
 /// The sum of one count per rank, on every rank (integers: exact in any order).
 std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count);
 /// Element-wise sums of `values` over the ranks, in place on every rank (MPI_Allreduce). Exact, so
 /// the same bits on every rank and count, when the values are whole numbers whose sums stay below
 /// 2^53 (counts of work), or when one rank alone contributes each element.
 void sum_over_ranks(const Session& session, std::span<double> values);
+/// Element-wise sums of whole numbers over the ranks, in place on every rank (MPI_Allreduce).
+void sum_over_ranks(const Session& session, std::span<std::int64_t> words);
+/// Exact sums (core/exact_sum) added over the ranks, in place on every rank: the same bits on any
+/// rank count, one collective for all of them. At most ExactSum::kMaxMerged ranks.
+void sum_over_ranks(const Session& session, std::span<ExactSum* const> sums);
+/// The largest of one value per rank, on every rank.
+double max_over_ranks(const Session& session, double value);
 
 }  // namespace graintwin::mpi
