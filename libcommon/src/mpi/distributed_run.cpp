@@ -4,6 +4,7 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 #include <tuple>
@@ -221,16 +222,22 @@ void DistributedRun::gather_output() {
 
 bool DistributedRun::rebalance(bool force) {
   fdem::ContactModel& contact = *solver_.contact_model();
-  std::vector<double> work = contact.take_grain_work();
-  sum_over_ranks(session_, work);  // each grain's checks from the ranks that owned it: whole numbers
-  for (std::size_t g = 0; g < work.size(); ++g)  // its elements each step; out of contact it still costs its motion
-    work[g] += element_work_[g] * static_cast<double>(steps_measured_) + 1;
+  std::vector<double> work = contact.take_grain_work();  // this rank's checks, per grain it owned
+  // Its elements each step, and out of contact a grain still costs its motion (counted for the
+  // grains owned now: close enough for a decision taken every kBalanceCheckSteps). Whole numbers,
+  // so that the sums over the ranks below are exact in any order.
+  for (std::uint32_t g : owned_) work[g] += std::round(element_work_[g] * static_cast<double>(steps_measured_)) + 1;
   steps_measured_ = 0;
+  // The decision needs only each rank's load: one number per rank, not every grain's work and state.
+  std::vector<double> loads(session_.size(), 0.0);
+  for (double w : work) loads[session_.rank()] += w;
+  sum_over_ranks(session_, loads);  // one rank contributes each entry: exact
+  if (!force && !fdem::needs_rebalance(loads)) return false;
+  sum_over_ranks(session_, work);  // each grain's work from the ranks that held it: whole numbers
+  for (double& w : work) w = std::max(w, 1.0);  // a grain never weighs nothing
   const std::vector<fdem::RigidBodyState> all = gather_states();
   std::vector<Eigen::Vector3d> centroids;
   for (const fdem::RigidBodyState& s : all) centroids.push_back(s.position), domain_.grow(s.position);
-  const std::vector<double> loads = fdem::rank_loads(fdem::owner_ranks(subdomains_, centroids), work, session_.size());
-  if (!force && !fdem::needs_rebalance(loads)) return false;
   fdem::Subdomains next;
   try {
     next = fdem::bisect_domain(centroids, radii_, work, domain_, session_.size(), contact.skin());

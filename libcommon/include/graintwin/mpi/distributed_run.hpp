@@ -65,7 +65,7 @@ class DistributedRun final : public fdem::RankShare {
   std::vector<fdem::RigidBodyState> gather_states() const;
   /// Weighs every grain by the work measured since the last call (the node and triangle checks of
   /// its contact candidates on the rank that owned it, its elements' work each step, plus one) and,
-  /// when the ranks' loads under
+  /// when the ranks' loads (one number per rank: the check itself sends nothing per grain) under
   /// those weights differ by more than kRebalanceImbalance (or `force`), cuts the sample again with
   /// them (collective; the same decision and cut on every rank). Each rank then holds every
   /// grain's state and the whole friction history, and takes the grains its new box holds; the
