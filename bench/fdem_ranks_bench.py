@@ -61,8 +61,11 @@ platens = {{ top = [0, 0, {speed!r}] }}
 RUNS = [("1 rank, 1 thread", 1, 1), ("2 ranks, 1 thread each", 2, 1), ("1 rank, 2 threads", 1, 2)]
 
 
-def run(build, scene, model, out, steps, ranks, threads):
-    cmd = [f"{build}/bin/fdemrun", scene, out, "--model", model, "--force", "-j", str(threads), "--stop-step", str(steps)]
+def run(build, scene, model, out, steps, ranks, threads, fdemrun=None):
+    """One fdemrun run (under mpirun for ranks > 1) and its accounts; `fdemrun` overrides build/bin/fdemrun, and
+    a model of None runs the scene's own grains."""
+    model_args = ["--model", model] if model else []
+    cmd = [fdemrun or f"{build}/bin/fdemrun", scene, out, *model_args, "--force", "-j", str(threads), "--stop-step", str(steps)]
     if ranks > 1:
         cmd = MPIRUN + ["-np", str(ranks)] + cmd
     started = time.time()
@@ -72,11 +75,13 @@ def run(build, scene, model, out, steps, ranks, threads):
         sys.exit(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr[-3000:]}")
     m = re.search(r"time: (\d+) steps in ([0-9.e+-]+) s \(([0-9.e+-]+) ms a step\)", r.stderr)
     exchange = re.search(r"spent ([0-9.e+-]+) s in the exchanges", r.stderr)
+    owned = re.search(r"rank 0 owns (\d+) grains", r.stderr)
     with h5py.File(out, "r") as f:
         moved = json.loads(f["run/parameters"][0])["ranks"]
         grains = len(f["grains/label"])
     return {"steps": int(m.group(1)), "seconds": float(m.group(2)), "ms_per_step": float(m.group(3)), "wall": wall,
-            "exchange_seconds": float(exchange.group(1)) if exchange else 0.0, "ranks": moved, "grains": grains}
+            "exchange_seconds": float(exchange.group(1)) if exchange else 0.0, "ranks": moved, "grains": grains,
+            "rank0_owned": int(owned.group(1)) if owned else grains}
 
 
 def elastic_model(build, model, out):
