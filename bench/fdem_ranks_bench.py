@@ -3,10 +3,10 @@
 (docs/benchmarks.md, section fdem_ranks; docs/fdemrun.md, across machines).
 
 Each --model (kind=fdem_model files of shapes2mesh; default: sand_small's, made first when missing)
-runs the same scene for each of --kinds: rigid (the default), or tet4 (the same grains meshed again
-with 4-node elements: shapes2mesh --order 1 with the pipeline's parameters, from the shapes and
-labels of scan_000/ beside the model, its smallest grains rigid), its grains between the model's
-own platens, settling under gravity and damping
+runs the same scene with its grains rigid, and each --elastic model (sand_small's by default) with
+its grains meshed again as elastic 4-node grains (shapes2mesh --order 1 with the pipeline's
+parameters, from the shapes and labels of scan_000/ beside the model, its smallest grains rigid;
+--elastic-steps steps, pressed), the grains between the model's own platens, settling under gravity and damping
 while the top platen comes down, for --steps steps:
 - one rank, one thread (the reference);
 - `mpirun -np 2`, one thread per rank (strong scaling on the same cores: target 1.7 x);
@@ -17,8 +17,8 @@ and the seconds rank 0 spent in the exchange. The results of every run are compa
 with the reference's. A paper-sized model: `bench/paper_scale.py --diameters 5.2 --stages inspect
 segment contacts shapes track mesh --no-publish` leaves its 1 989-grain model.h5 in its folder.
 
-    /usr/bin/python3 bench/fdem_ranks_bench.py [--model PATH ...] [--kinds rigid tet4] [--steps 2000]
-        [--build build] [--scratch /tmp/graintwin_ranks] [--no-publish]
+    /usr/bin/python3 bench/fdem_ranks_bench.py [--model PATH ...] [--elastic [PATH ...]] [--steps 2000]
+        [--elastic-steps 300] [--build build] [--scratch /tmp/graintwin_ranks] [--no-publish]
 """
 import argparse
 import itertools
@@ -122,8 +122,9 @@ def main():
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--platen-speeds", nargs="+", type=float, default=[0.05, 2.0],
                     help="m/s, the top platen's speed down: slow, the packing settles; fast, it is pressed and flows")
-    ap.add_argument("--kinds", nargs="+", default=["rigid"], choices=["rigid", "tet4"],
-                    help="rigid grains, or the grains meshed again as elastic 4-node ones")
+    ap.add_argument("--elastic", nargs="*", default=None,
+                    help="models also run as elastic 4-node grains (default: sand_small's; none: --elastic alone)")
+    ap.add_argument("--elastic-steps", type=int, default=300, help="steps of the 4-node runs (far shorter steps, far costlier)")
     ap.add_argument("--build", default=os.path.join(SOURCE, "build"))
     ap.add_argument("--scratch", default="/tmp/graintwin_ranks")
     ap.add_argument("--no-publish", action="store_true")
@@ -136,7 +137,10 @@ def main():
     run_dir = tempfile.mkdtemp(prefix="ranks-", dir=a.scratch)
     print(f"outputs in {run_dir}", flush=True)
     results, rows = [], []
-    for (k, given), kind, speed in itertools.product(enumerate(a.model), a.kinds, a.platen_speeds):
+    elastic = [default] if a.elastic is None else a.elastic
+    plan = [(k, given, "rigid", speed, a.steps) for (k, given), speed in itertools.product(enumerate(a.model), a.platen_speeds)]
+    plan += [(len(a.model) + k, given, "tet4", max(a.platen_speeds), a.elastic_steps) for k, given in enumerate(elastic)]
+    for k, given, kind, speed, steps in plan:
         model = given if kind == "rigid" else elastic_model(build, given, os.path.join(run_dir, f"model{k}_tet4.h5"))
         scene = os.path.join(run_dir, f"scene_{kind}_{speed:g}.toml")
         with open(scene, "w") as f:  # a 4-node model keeps its own kinds
@@ -144,7 +148,7 @@ def main():
         runs = []
         for label, ranks, threads in RUNS:
             out = os.path.join(run_dir, f"model{k}_{kind}_v{speed:g}_r{ranks}_t{threads}.h5")
-            r = run(build, scene, model, out, a.steps, ranks, threads)
+            r = run(build, scene, model, out, steps, ranks, threads)
             r.update(label=label, ranks_count=ranks, threads=threads, out=out)
             runs.append(r)
             print(label, {key: r[key] for key in ("grains", "steps", "ms_per_step", "exchange_seconds", "ranks")}, flush=True)
@@ -172,7 +176,8 @@ def main():
             "Strong scaling of fdemrun across MPI ranks (`/usr/bin/python3 bench/fdem_ranks_bench.py "
             f"{' '.join(sys.argv[1:])}`; {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}): each model's grains, rigid "
             "or elastic 4-node, between its own platens, under gravity and damping (2000 /s) while the top platen comes down at the speed "
-            f"given (slow: the packing settles; fast: the platen presses it and grains flow across the ranks), {a.steps} steps; fdemrun's own accounts on rank 0 (a step's time includes the exchange); across ranks fdemrun checks the balance of the work measured per grain every 200 steps and cuts the sample again beyond 10 %. Speedup "
+            f"given (slow: the packing settles; fast: the platen presses it and grains flow across the ranks), {a.steps} steps "
+            f"({a.elastic_steps} for the elastic grains, whose element step is far shorter); fdemrun's own accounts on rank 0 (a step's time includes the exchange); across ranks fdemrun checks the balance of the work measured per grain every 200 steps and cuts the sample again beyond 10 %. Speedup "
             "against one rank with one thread; the target for 2 ranks is 1.7 x. Same bits: every dataset of the results "
             "equal to the one-rank run's.\n\n"
             "| model | platen m/s | run | steps | ms a step | speedup | grain-steps/s per core | what travelled | same bits |\n"
