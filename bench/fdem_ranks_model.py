@@ -243,7 +243,7 @@ def published_pairs():
     on one and on two ranks, kB a rank sent a step."""
     doc = open(os.path.join(SOURCE, "docs", "benchmarks.md")).read()
     doc = doc[doc.find("<!-- bench:fdem_ranks -->"):doc.find("<!-- /bench:fdem_ranks -->")]
-    row = r"\| (\S+) \((\d+) grains\) \| ([0-9.]+) \| {} \| \d+ \| ([0-9.e+-]+) \|(.*)"
+    row = r"\| (\S+) \((\d+) rigid grains\) \| ([0-9.]+) \| {} \| \d+ \| ([0-9.e+-]+) \|(.*)"
     ones = {(n, v): float(ms) for n, _, v, ms, _ in re.findall(row.format("1 rank, 1 thread"), doc)}
     return [(f"{n} at {v} m/s", int(g), ones[n, v], float(ms), float(re.search(r"\| ([0-9.e+-]+) kB", rest).group(1)))
             for n, g, v, ms, rest in re.findall(row.format("2 ranks, 1 thread each"), doc) if (n, v) in ones]
@@ -272,8 +272,9 @@ def measured_tables(found):
     rows = [f"| {c['name']} | {t['ranks']} | {t['kB']:.3g} | {t['messages']} | {t['ghosts']:.4g} | {t['rows_per_grain']:.3g} | "
             f"{1e3 * t['migrations']:.3g} | {t['history']:.2g} | {100 * t['owned_spread']:.1f} % |"
             for c in found["cases"] for t in c["traffic"]]
-    text += ("What travelled, per rank and step (counts: the same on any machine; messages: one MPI_Alltoall and one "
-             "MPI_Alltoallv, each a message to every other rank):\n\n"
+    text += ("What travelled, per rank and step (counts: the same on any machine; messages: those of the exchange, one "
+             "MPI_Alltoall and one MPI_Alltoallv, each a message to every other rank; the step's sums take two MPI_Allreduce "
+             "besides):\n\n"
              "| scene | ranks | kB sent | messages | ghost grain states sent | rows per owned grain | migrations per 1 000 grain-steps "
              "| history entries per migration | rank 0's grains off the even share |\n|---|---|---|---|---|---|---|---|---|\n"
              + "\n".join(rows) + "\n\n")
