@@ -43,9 +43,6 @@ from fdem_ranks_bench import MPIRUN, SCENE, run  # noqa: E402
 # fdemrun's step message (fdem/rank_state): per message 6 counts; a grain state is its index and 13
 # doubles, a history entry 7, a row (a boundary's contact) its key and 5 values.
 HEADER, STATE, HISTORY, ROW = 6, 14, 7, 6
-# The step's exact sums (fdem::StepTotals: 10 accumulators and 4 per platen, two platens here, of 45
-# words each) and the deepest overlap, added over the ranks by MPI_Allreduce: words a rank sends a step.
-SUM_WORDS = (10 + 4 * 2) * 45 + 1
 CHECK_STEPS = 200  # mpi::kBalanceCheckSteps: each check sends one load per rank
 IMBALANCE = 0.10  # fdem::kRebalanceImbalance: fdemrun cuts again beyond it, so the most its loads keep
 LSDEM = {"grains": 42684, "one": 753.0, "ranks": 216, "many": 16363.0, "migration_share": 0.94}
@@ -99,12 +96,13 @@ def traffic(r):
     sent to every other rank) are what the states, history entries, counts and sums leave of the doubles."""
     t, ranks, steps, grains = r["ranks"], r["ranks"]["count"], r["steps"], r["grains"]
     doubles = t["bytes_sent"] / 8
-    rows = (doubles - HEADER * ranks * (ranks - 1) * steps - SUM_WORDS * ranks * steps - STATE * t["grain_states_sent"]
-            - HISTORY * t["history_entries"]) / ROW
+    sums = t["sum_bytes_sent"] / 8
+    rows = (doubles - sums - HEADER * ranks * (ranks - 1) * steps - STATE * t["grain_states_sent"] - HISTORY * t["history_entries"]) / ROW
     return {"ranks": ranks, "kB": t["bytes_sent"] / 1e3 / (ranks * steps), "doubles": doubles / (ranks * steps),
             "ghosts": t["grain_states_sent"] / (ranks * steps), "rows_per_grain": rows / ((ranks - 1) * steps * grains),
             "migrations": t["migrations"] / (steps * grains), "history": t["history_entries"] / max(t["migrations"], 1),
-            "owned_spread": abs(r["rank0_owned"] * ranks / grains - 1), "messages": 2 * (ranks - 1)}
+            "owned_spread": abs(r["rank0_owned"] * ranks / grains - 1), "messages": 2 * (ranks - 1),
+            "sum_words": sums / (ranks * steps)}
 
 
 def thinnest_box(a, case, run_dir):
@@ -164,7 +162,7 @@ def step(m, design, ranks, grains, sides):
     # migrating grains' states ride with the ghosts, their friction history with them
     ghost = STATE * (ghosts(sides, cut, m["reach"]) + m["migrations"] * n) + HISTORY * m["migrations"] * n * m["history"]
     # the sums: two Allreduces (recursive doubling, the words each round); any rows (a boundary's) from every other rank
-    rows = SUM_WORDS * rounds + ROW * m["rows_per_grain"] * (grains - n)
+    rows = m["sum_words"] * rounds + ROW * m["rows_per_grain"] * (grains - n)
     if design == "current":  # Alltoall of the counts (log rounds, Bruck) and Alltoallv, a message to every rank
         messages, headers = 3 * rounds + ranks - 1, HEADER * (ranks - 1)
     else:  # point to point with the neighbouring boxes only
@@ -224,6 +222,7 @@ def inputs(a, found):
     probe = found["probe"]
     return {"c": min(c["one"]["seconds"] / c["one"]["steps"] / grains for c in sand),
             "rows_per_grain": max(t["rows_per_grain"] for t in every), "migrations": max(t["migrations"] for t in every),
+            "sum_words": max(t["sum_words"] for t in every),
             "history": max(t["history"] for t in every), "owned_spread": max(t["owned_spread"] for t in every),
             "reach": max(c["traffic"][0]["ghosts"] for c in sand) / layer, "spacing": spacing,
             "h": min(t / d for t, d in zip(y, x)), "exchange": (x, y),
@@ -382,7 +381,8 @@ def header(a, found, m, measured):
             "the sample cylinder's volume per grain), the ghost states of 2 ranks over the grains of a spacing's layer across the cut; a "
             "box then sends face area x reach, pi reach^2 / 4 per edge length, pi reach^3 / 6 per corner (its shell): about n^(2/3). "
             f"Checked on the largest lattice, reach {reach_lattice:.2f} at 2 ranks: {'; '.join(checks)} ghost states per rank (measured against the shell).\n"
-            f"- The step's sums: {SUM_WORDS} words a rank sends a step (exact accumulators, MPI_Allreduce); rows sent to every rank "
+            f"- The step's sums: {m['sum_words']:.3g} words a rank sends a step, measured (exact accumulators: the span of chunks "
+            "each sets, then those chunks, by two MPI_Allreduce); rows sent to every rank "
             f"(a wall's or membrane's contacts, none in these scenes): {m['rows_per_grain']:.3g} per owned grain, measured; migrations "
             f"{1e3 * m['migrations']:.3g} per 1 000 grain-steps with {m['history']:.2g} history entries each.\n"
             f"- Imbalance: {100 * IMBALANCE:.0f} %, the load gap beyond which fdemrun cuts the sample again (rank 0's grains were up to "

@@ -419,6 +419,7 @@ int main(int argc, char** argv) {
                     {"history_entries", mpi::sum_over_ranks(session, t.history)},
                     {"grain_states_sent", mpi::sum_over_ranks(session, t.bodies)},
                     {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)},
+                    {"sum_bytes_sent", 8 * mpi::sum_over_ranks(session, t.sum_words)},
                     {"rebalances", ranks->rebalances()}};
     }
     if (writer) writer->set_parameters(p.dump());

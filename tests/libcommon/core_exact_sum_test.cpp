@@ -102,6 +102,30 @@ TEST(ExactSum, TheOrderAndTheSplitDoNotChangeABit) {
   EXPECT_NE(bits(plain), bits(reversed)) << "the terms must be hard enough to tell the methods apart";
 }
 
+TEST(ExactSum, AWindowOfTheChunksASumSetsIsEnoughToAddItAcrossProcesses) {
+  // Sums of either sign set only the chunks their bits span (a negative one is not a long run of
+  // borrowed chunks), so processes add the chunks within the union of their spans alone.
+  ExactSum negative, positive, far;
+  negative.add(-1.0), negative.add(-1e-3);
+  positive.add(2.5), positive.add(1e-12);
+  far.add(1e-200);
+  const ExactSum::ChunkSpan n = negative.chunk_span(), p = positive.chunk_span(), f = far.chunk_span();
+  EXPECT_LE(n.highest - n.lowest, 2) << "a negative sum stays compact";
+  EXPECT_LE(p.highest - p.lowest, 2);
+  EXPECT_EQ(ExactSum().chunk_span().highest, -1) << "nothing set";
+  const ExactSum::ChunkSpan all{std::min({n.lowest, p.lowest, f.lowest}), std::max({n.highest, p.highest, f.highest})};
+  std::vector<std::int64_t> words(static_cast<std::size_t>(all.highest - all.lowest + 1) + 3, 0);
+  ExactSum whole;
+  for (const ExactSum* part : {&negative, &positive, &far}) {
+    const std::vector<std::int64_t> w = part->window(all);
+    ASSERT_EQ(w.size(), words.size());
+    for (std::size_t k = 0; k < w.size(); ++k) words[k] += w[k];
+    whole.add(*part);
+  }
+  EXPECT_EQ(bits(ExactSum::from_window(all, words).value()), bits(whole.value()));
+  EXPECT_EQ(ExactSum::from_window(all, words).value(), sum_of({-1.0, -1e-3, 2.5, 1e-12, 1e-200}));
+}
+
 TEST(ExactSum, NanAndInfinitiesFollowIeee) {
   const double inf = std::numeric_limits<double>::infinity(), max = std::numeric_limits<double>::max();
   EXPECT_TRUE(std::isnan(sum_of({1.0, std::nan(""), 2.0})));

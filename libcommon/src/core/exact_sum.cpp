@@ -1,5 +1,6 @@
 #include "graintwin/core/exact_sum.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -59,9 +60,43 @@ void ExactSum::normalize() {
   since_normalized_ = 0;
 }
 
+void ExactSum::balance() {
+  constexpr std::int64_t half = std::int64_t{1} << (kChunkBits - 1);
+  for (std::size_t k = 0; k + 1 < kChunks; ++k) {
+    const std::int64_t carry = (chunk_[k] + half) >> kChunkBits;  // to nearest: the chunk keeps [-2^49, 2^49)
+    chunk_[k] -= carry * (std::int64_t{1} << kChunkBits);
+    chunk_[k + 1] += carry;
+  }
+  since_normalized_ = 0;
+}
+
+ExactSum::ChunkSpan ExactSum::chunk_span() const {
+  const std::array<std::int64_t, kWords> words = state();
+  ChunkSpan span;
+  for (int k = 0; k < static_cast<int>(kChunks); ++k)
+    if (words[k] != 0) span.lowest = std::min(span.lowest, k), span.highest = k;
+  return span;
+}
+
+std::vector<std::int64_t> ExactSum::window(ChunkSpan span) const {
+  const std::array<std::int64_t, kWords> words = state();
+  std::vector<std::int64_t> out;
+  for (int k = span.lowest; k <= span.highest; ++k) out.push_back(words[k]);
+  out.insert(out.end(), words.begin() + kChunks, words.end());
+  return out;
+}
+
+ExactSum ExactSum::from_window(ChunkSpan span, std::span<const std::int64_t> words) {
+  std::array<std::int64_t, kWords> all{};
+  std::size_t at = 0;
+  for (int k = span.lowest; k <= span.highest && at < words.size(); ++k) all[k] = words[at++];
+  for (std::size_t k = kChunks; k < kWords && at < words.size(); ++k) all[k] = words[at++];
+  return from_state(all);
+}
+
 std::array<std::int64_t, ExactSum::kWords> ExactSum::state() const {
   ExactSum normal = *this;
-  normal.normalize();
+  normal.balance();
   std::array<std::int64_t, kWords> words{};
   for (std::size_t k = 0; k < kChunks; ++k) words[k] = normal.chunk_[k];
   words[kChunks] = nan_, words[kChunks + 1] = plus_infinity_, words[kChunks + 2] = minus_infinity_;

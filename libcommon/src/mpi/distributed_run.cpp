@@ -158,11 +158,10 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
   }
   traffic_.migrations += owned_.size() - plan.kept.size();
   const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
-  // The step's sums: every rank's exact accumulators added (one collective), the deepest overlap.
-  const std::vector<ExactSum*> sums = totals.accumulators();
-  sum_over_ranks(session_, sums);
-  totals.max_overlap = max_over_ranks(session_, totals.max_overlap);
-  traffic_.doubles += sums.size() * ExactSum::kWords + 1;
+  // The step's sums: every rank's exact accumulators added, and the deepest overlap.
+  const std::size_t words = sum_over_ranks(session_, totals.accumulators(), totals.max_overlap);
+  traffic_.doubles += words;
+  traffic_.sum_words += words;
   std::vector<fdem::RankMessage> received;
   std::vector<fdem::StepRows> parts{std::move(boundary_rows)};
   for (std::size_t r = 0; r < incoming.size(); ++r)

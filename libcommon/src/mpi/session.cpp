@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <mpi.h>
 
+#include <algorithm>
+#include <bit>
 #include <cstdlib>
 #include <exception>
 #include <limits>
@@ -72,23 +74,37 @@ void sum_over_ranks(const Session& session, std::span<std::int64_t> words) {
   MPI_Allreduce(MPI_IN_PLACE, words.data(), checked_count(words.size(), "words"), MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
 }
 
-double max_over_ranks(const Session& session, double value) {
-  if (!session.started()) return value;
-  double largest = value;
-  MPI_Allreduce(&value, &largest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  return largest;
-}
-
-void sum_over_ranks(const Session& session, std::span<ExactSum* const> sums) {
-  std::vector<std::int64_t> words;
-  words.reserve(sums.size() * ExactSum::kWords);
+std::size_t sum_over_ranks(const Session& session, std::span<ExactSum* const> sums, double& largest) {
+  if (session.size() > static_cast<int>(ExactSum::kMaxMerged))
+    throw UsageError(fmt::format("{} ranks: exact sums add at most {} ranks' accumulators; run on fewer ranks", session.size(),
+                                 ExactSum::kMaxMerged));
+  // First every sum's span of chunks over the ranks (the lowest as its negative, so that one maximum
+  // takes both) and the largest value, whose bits order as the values do when they are not negative.
+  std::vector<std::int64_t> bounds;
   for (const ExactSum* s : sums) {
-    const auto w = s->state();
+    const ExactSum::ChunkSpan span = s->chunk_span();
+    bounds.insert(bounds.end(), {-span.lowest, span.highest});
+  }
+  bounds.push_back(std::bit_cast<std::int64_t>(largest));
+  if (session.started())
+    MPI_Allreduce(MPI_IN_PLACE, bounds.data(), checked_count(bounds.size(), "bounds"), MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
+  largest = std::bit_cast<double>(bounds.back());
+  // Then the chunks within the spans, added.
+  std::vector<ExactSum::ChunkSpan> spans;
+  std::vector<std::int64_t> words;
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    spans.push_back({static_cast<int>(-bounds[2 * i]), static_cast<int>(bounds[2 * i + 1])});
+    const std::vector<std::int64_t> w = sums[i]->window(spans.back());
     words.insert(words.end(), w.begin(), w.end());
   }
   sum_over_ranks(session, words);
-  for (std::size_t i = 0; i < sums.size(); ++i)
-    *sums[i] = ExactSum::from_state(std::span<const std::int64_t>(words).subspan(i * ExactSum::kWords, ExactSum::kWords));
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    const std::size_t n = static_cast<std::size_t>(std::max(0, spans[i].highest - spans[i].lowest + 1)) + 3;
+    *sums[i] = ExactSum::from_window(spans[i], std::span<const std::int64_t>(words).subspan(at, n));
+    at += n;
+  }
+  return bounds.size() + words.size();
 }
 
 std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count) {

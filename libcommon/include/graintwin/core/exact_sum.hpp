@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace graintwin {
 
@@ -17,8 +18,8 @@ class ExactSum {
   static constexpr int kChunkBits = 50;
   static constexpr int kLowestExponent = -1074;
   static constexpr std::size_t kChunks = 42;
-  /// Accumulators that may be added chunk by chunk without carrying (2^13: each chunk holds less
-  /// than 2^50 in magnitude after normalize(), and int64 holds 2^63).
+  /// Accumulators that may be added chunk by chunk without carrying (2^13: each chunk of state()
+  /// holds at most 2^49 in magnitude, and int64 holds 2^63).
   static constexpr std::size_t kMaxMerged = 8192;
   /// Words of state(): the chunks, then the counts of NaN, +infinity and -infinity terms.
   static constexpr std::size_t kWords = kChunks + 3;
@@ -31,14 +32,28 @@ class ExactSum {
   /// infinities came, an infinity when one did, or when the sum is beyond the largest double.
   double value() const;
 
-  /// The accumulator's words, normalized (each chunk below 2^50 in magnitude), for adding
-  /// element-wise across processes (at most kMaxMerged of them), and its rebuilding from such a sum.
+  /// The accumulator's words, normalized (each chunk within 2^49 in magnitude, so a sum of
+  /// either sign sets only the chunks its bits span), for adding element-wise across processes (at
+  /// most kMaxMerged of them), and its rebuilding from such a sum.
   std::array<std::int64_t, kWords> state() const;
   static ExactSum from_state(std::span<const std::int64_t> words);
 
+  /// The chunks state() sets: [lowest, highest] nonzero (highest < lowest when none).
+  struct ChunkSpan {
+    int lowest = static_cast<int>(kChunks), highest = -1;
+  };
+  ChunkSpan chunk_span() const;
+  /// state()'s chunks lowest..highest, then its three counts: what a sum over processes needs when
+  /// every process's chunks lie within that span; from_window rebuilds the accumulator from a
+  /// word-by-word sum of such windows.
+  std::vector<std::int64_t> window(ChunkSpan span) const;
+  static ExactSum from_window(ChunkSpan span, std::span<const std::int64_t> words);
+
  private:
-  /// Carries each chunk's excess into the next, so that every chunk lies in (-2^50, 2^50).
+  /// Carries each chunk's excess into the next, so that every chunk but the last lies in [0, 2^50).
   void normalize();
+  /// Carries so that every chunk but the last lies in [-2^49, 2^49).
+  void balance();
 
   std::array<std::int64_t, kChunks> chunk_{};
   std::int64_t nan_ = 0, plus_infinity_ = 0, minus_infinity_ = 0;

@@ -32,6 +32,7 @@ struct RankTraffic {
   std::uint64_t history = 0;     ///< friction history entries sent with migrating grains
   std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
   std::uint64_t doubles = 0;     ///< 8-byte values sent: the exchanges' doubles and the step sums' words
+  std::uint64_t sum_words = 0;   ///< of them, the step sums' words
   double exchange_seconds = 0;   ///< s, planning, packing, exchanging and unpacking
 };
 

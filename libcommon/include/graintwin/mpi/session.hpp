@@ -57,10 +57,11 @@ std::uint64_t sum_over_ranks(const Session& session, std::uint64_t count);
 void sum_over_ranks(const Session& session, std::span<double> values);
 /// Element-wise sums of whole numbers over the ranks, in place on every rank (MPI_Allreduce).
 void sum_over_ranks(const Session& session, std::span<std::int64_t> words);
-/// Exact sums (core/exact_sum) added over the ranks, in place on every rank: the same bits on any
-/// rank count, one collective for all of them. At most ExactSum::kMaxMerged ranks.
-void sum_over_ranks(const Session& session, std::span<ExactSum* const> sums);
-/// The largest of one value per rank, on every rank.
-double max_over_ranks(const Session& session, double value);
+/// Exact sums (core/exact_sum) added over the ranks, in place on every rank (the same bits on any
+/// rank count), and the largest of one value per rank, not negative (`largest`, in place): two
+/// collectives whatever the count, the span of chunks each sum sets over the ranks with the
+/// largest value (MPI_Allreduce, maximum), then the sums' chunks within those spans (MPI_Allreduce,
+/// sum). Returns the 8-byte words this rank sent. UsageError beyond ExactSum::kMaxMerged ranks.
+std::size_t sum_over_ranks(const Session& session, std::span<ExactSum* const> sums, double& largest);
 
 }  // namespace graintwin::mpi
