@@ -160,8 +160,8 @@ def main():
             moved = r["ranks"]
             if r["ranks_count"] > 1:
                 per_rank_step = r["ranks_count"] * r["steps"]
-                travelled = (f"{moved['bytes_sent'] / per_rank_step / 1e3:.3g} kB in 4 collectives (Alltoall and Alltoallv of the "
-                             f"exchange, {r['ranks_count'] - 1} messages each; two Allreduce of the step's sums) per step per rank; {moved['grain_states_sent'] / per_rank_step:.3g} "
+                travelled = (f"{moved['bytes_sent'] / per_rank_step / 1e3:.3g} kB (the exchange point to point, at most "
+                             f"{r['ranks_count'] - 1} messages and a barrier; two Allreduce of the step's sums) per step per rank; {moved['grain_states_sent'] / per_rank_step:.3g} "
                              f"grain states, {moved['migrations']} migrations with {moved['history_entries']} history entries "
                              f"in all; the sample cut again {moved['rebalances']} times by measured work; rank 0 in the exchange "
                              f"{100 * r['exchange_seconds'] / r['seconds']:.2g} % of its step time")

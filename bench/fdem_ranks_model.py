@@ -1,9 +1,8 @@
 #!/usr/bin/env python3
 """fdemrun across MPI ranks: a performance model from this machine's measurements, to 1 024 ranks.
 
-Weak and strong scaling to 64 and 1 024 ranks, predicted for the current design and for the next step
-(the exchange with the neighbouring ranks only), beside LS-DEM's published figures (docs/benchmarks.md,
-section fdem_ranks_model).
+Weak and strong scaling to 64 and 1 024 ranks, predicted for the current design and for the former
+all-to-all exchange, beside LS-DEM's published figures (docs/benchmarks.md, section fdem_ranks_model).
 
 Measured, from fdemrun's own accounts (its "time:" and "ranks:" log lines and /run/parameters "ranks"), on
 sand_small's twin in the fdem_ranks bench's scene (settling, and pressed by its top platen) and on cubic
@@ -13,9 +12,9 @@ migrations, bytes: counts, the same on any machine, so oversubscribed ranks serv
 time on 2 ranks against the doubles it received; the thinnest subdomain fdemrun accepts (its refusal
 of sand_small on --probe-ranks ranks). Modelled: a step of the slowest of R ranks holding n grains each,
 T = c n (1 + imbalance) + handling + latency + bytes / bandwidth, for the current design (ghosts and
-migrants by MPI_Alltoall and MPI_Alltoallv over all ranks, the step's exact sums by MPI_Allreduce, the
-balance check one load per rank) and the next step (the exchange with the neighbouring ranks only),
-with the interconnect as stated assumptions (--latency-us, --link-gb-s, --ranks-per-node).
+migrants point to point to the neighbouring boxes, the step's exact sums by MPI_Allreduce, the balance
+check one load per rank) and the former exchange (MPI_Alltoall and MPI_Alltoallv over all ranks), with
+the interconnect as stated assumptions (--latency-us, --link-gb-s, --ranks-per-node).
 
     /usr/bin/python3 bench/fdem_ranks_model.py [--fdemrun build/bin/fdemrun] [--steps 400] [--repeats 3]
         [--idle] [--scratch /tmp/graintwin_ranks_model] [--no-publish]
@@ -48,7 +47,7 @@ IMBALANCE = 0.10  # fdem::kRebalanceImbalance: fdemrun cuts again beyond it, so 
 LSDEM = {"grains": 42684, "one": 753.0, "ranks": 216, "many": 16363.0, "migration_share": 0.94}
 WEAK_N, PAPER_GRAINS = 1000, 15961
 RANKS = [1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024]
-DESIGNS = ["current", "neighbours only"]
+DESIGNS = ["current", "all-to-all exchange"]
 
 
 def lattice_scene(path, side):
@@ -97,11 +96,13 @@ def traffic(r):
     t, ranks, steps, grains = r["ranks"], r["ranks"]["count"], r["steps"], r["grains"]
     doubles = t["bytes_sent"] / 8
     sums = t["sum_bytes_sent"] / 8
-    rows = (doubles - sums - HEADER * ranks * (ranks - 1) * steps - STATE * t["grain_states_sent"] - HISTORY * t["history_entries"]) / ROW
+    # (a rank with nothing for another sends it no message: the headers counted are the most, rows the least)
+    rows = max(0.0, (doubles - sums - HEADER * ranks * (ranks - 1) * steps - STATE * t["grain_states_sent"]
+                     - HISTORY * t["history_entries"]) / ROW)
     return {"ranks": ranks, "kB": t["bytes_sent"] / 1e3 / (ranks * steps), "doubles": doubles / (ranks * steps),
             "ghosts": t["grain_states_sent"] / (ranks * steps), "rows_per_grain": rows / ((ranks - 1) * steps * grains),
             "migrations": t["migrations"] / (steps * grains), "history": t["history_entries"] / max(t["migrations"], 1),
-            "owned_spread": abs(r["rank0_owned"] * ranks / grains - 1), "messages": 2 * (ranks - 1),
+            "owned_spread": abs(r["rank0_owned"] * ranks / grains - 1), "messages": ranks - 1,
             "sum_words": sums / (ranks * steps)}
 
 
@@ -163,10 +164,10 @@ def step(m, design, ranks, grains, sides):
     ghost = STATE * (ghosts(sides, cut, m["reach"]) + m["migrations"] * n) + HISTORY * m["migrations"] * n * m["history"]
     # the sums: two Allreduces (recursive doubling, the words each round); any rows (a boundary's) from every other rank
     rows = m["sum_words"] * rounds + ROW * m["rows_per_grain"] * (grains - n)
-    if design == "current":  # Alltoall of the counts (log rounds, Bruck) and Alltoallv, a message to every rank
+    if design == "current":  # point to point with the neighbouring boxes, then a barrier (log rounds)
+        messages, headers = 3 * rounds + neighbours, HEADER * neighbours
+    else:  # the code before: Alltoall of the counts (log rounds, Bruck) and Alltoallv, a message to every rank
         messages, headers = 3 * rounds + ranks - 1, HEADER * (ranks - 1)
-    else:  # point to point with the neighbouring boxes only
-        messages, headers = 2 * rounds + neighbours, HEADER * neighbours
     check = ranks / CHECK_STEPS  # the balance check: one load per rank (an Allreduce of R doubles), amortised
     local, per_node = ranks <= m["ranks_per_node"], min(ranks, m["ranks_per_node"])
     wire = 0 if local else 8 * m["ranks_per_node"] / m["link"]  # seconds a double, the node's link shared by its ranks
@@ -271,9 +272,8 @@ def measured_tables(found):
     rows = [f"| {c['name']} | {t['ranks']} | {t['kB']:.3g} | {t['messages']} | {t['ghosts']:.4g} | {t['rows_per_grain']:.3g} | "
             f"{1e3 * t['migrations']:.3g} | {t['history']:.2g} | {100 * t['owned_spread']:.1f} % |"
             for c in found["cases"] for t in c["traffic"]]
-    text += ("What travelled, per rank and step (counts: the same on any machine; messages: those of the exchange, one "
-             "MPI_Alltoall and one MPI_Alltoallv, each a message to every other rank; the step's sums take two MPI_Allreduce "
-             "besides):\n\n"
+    text += ("What travelled, per rank and step (counts: the same on any machine; messages: those of the exchange at most, "
+             "one to each other rank with something for it, then a barrier; the step's sums take two MPI_Allreduce besides):\n\n"
              "| scene | ranks | kB sent | messages | ghost grain states sent | rows per owned grain | migrations per 1 000 grain-steps "
              "| history entries per migration | rank 0's grains off the even share |\n|---|---|---|---|---|---|---|---|---|\n"
              + "\n".join(rows) + "\n\n")
@@ -294,7 +294,7 @@ def prediction_tables(m):
                     f"{1e3 * nbr['total']:.3g} | **{100 * e_nbr:.0f} %** |")
     text = (f"Weak scaling, {WEAK_N} grains per rank (efficiency T(1) / T(R); kB a rank receives a step; exchange: the step's "
             "time beyond the grains' own compute):\n\n| ranks | grains | current: kB | ms a step | exchange | efficiency | "
-            "neighbours only: ms a step | efficiency |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows) + "\n\n")
+            "all-to-all exchange: ms a step | efficiency |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows) + "\n\n")
     for grains in (PAPER_GRAINS, LSDEM["grains"]):
         rows = []
         for r in sorted(RANKS + [LSDEM["ranks"]]):
@@ -302,7 +302,7 @@ def prediction_tables(m):
             rows.append(f"| {r} | {grains / r:.4g} | {grains / cur['total']:.3g} | {100 * e_cur:.0f} % | {grains / nbr['total']:.3g} | "
                         f"{100 * e_nbr:.0f} % | {'yes' if fits else '**no**: boxes thinner than a grain'} |")
         text += (f"Strong scaling, {grains} grains (a cube of grains cut as recursive bisection would; grain-steps/s and efficiency "
-                 "T(1) / (R T(R))):\n\n| ranks | grains per rank | current: grain-steps/s | efficiency | neighbours only: "
+                 "T(1) / (R T(R))):\n\n| ranks | grains per rank | current: grain-steps/s | efficiency | all-to-all exchange: "
                  "grain-steps/s | efficiency | fdemrun accepts the cut |\n|---|---|---|---|---|---|---|\n" + "\n".join(rows) + "\n\n")
     return text
 
@@ -397,11 +397,12 @@ def header(a, found, m, measured):
             f"Assumed: an InfiniBand EDR class cluster (100 Gb/s: {a.link_gb_s:g} GB/s a link, {a.latency_us:g} us a message, the "
             "small-message MPI figures such networks are quoted at by vendors and the OSU micro-benchmarks; the same latency taken within "
             f"a node), {a.ranks_per_node} ranks a node sharing its link, a non-blocking fabric; a rank's bytes to ranks of its own node "
-            "cost only the handling. Alltoall of the counts: log2 R rounds (Bruck); Alltoallv: a message to every rank sent something. "
+            "cost only the handling. The exchange: a message to each neighbouring box that has something for it (MPI_Issend), then "
+            "a barrier (MPI_Ibarrier, log2 R rounds). "
             "Every box a cube of its grains (weak), or a share of a cube of them all (strong). The sums' two Allreduces: log2 R "
             f"rounds each, the words every round (recursive doubling). The balance check every {CHECK_STEPS} steps: one load per "
-            "rank (a cut again, rare once balanced, gathers every grain's state and is left out). 'Neighbours only': the ghosts and "
-            "migrants sent point to point to the neighbouring boxes instead of an Alltoall and Alltoallv over all ranks. Not modelled: a triaxial test's membrane, integrated whole by every rank (a serial share s caps the "
+            "rank (a cut again, rare once balanced, gathers every grain's state and is left out). 'All-to-all exchange': the code "
+            "before, an MPI_Alltoall of the counts (log2 R rounds, Bruck) and an MPI_Alltoallv with a message to every rank. Not modelled: a triaxial test's membrane, integrated whole by every rank (a serial share s caps the "
             "speedup at 1 / s), and memory: every rank holds the whole model.\n\n")
 
 
@@ -430,7 +431,7 @@ def main():
     found = measure(a, run_dir)
     m = inputs(a, found)
     text = header(a, found, m, measured_tables(found)) + validation(found, m) + prediction_tables(m) + lsdem_table(m) + verdict(m)
-    text += "\n![efficiency against ranks, the current design and the next step, LS-DEM's point](img/fdem_ranks_model.png)\n"
+    text += "\n![efficiency against ranks, the current design and the former all-to-all exchange, LS-DEM's point](img/fdem_ranks_model.png)\n"
     if not a.no_publish:
         chart(m, found, os.path.join(SOURCE, "docs", "img", "fdem_ranks_model.png"))
     m.pop("exchange")

@@ -22,23 +22,50 @@ int int_count(std::size_t n) {
 }
 
 /// Every rank's buffer for every other (outgoing[r]: to rank r), exchanged: returns, per rank r,
-/// what r sent this one. Two collectives: the counts (MPI_Alltoall), then the doubles (MPI_Alltoallv).
+/// what r sent this one (empty: nothing). Sparse, point to point: a rank sends only its non-empty
+/// buffers (MPI_Issend) and takes what comes until a barrier, which it enters once all its sends
+/// were received (MPI_Ibarrier), is complete on every rank (Hoefler, Siebert and Lumsdaine's
+/// NBX, 2010): no collective over all ranks for the counts, and a rank hears only from the ranks
+/// that have something for it. Consecutive exchanges take turns between two tags, so that a rank
+/// already in the next one cannot be heard in this one (it cannot be two ahead: every exchange
+/// waits for every rank's barrier).
 std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<double>>& outgoing) {
   const std::size_t ranks = outgoing.size();
   if (ranks == 1) return outgoing;  // one rank sends itself what it has, with or without MPI
-  std::vector<int> send_counts(ranks), receive_counts(ranks);
-  for (std::size_t r = 0; r < ranks; ++r) send_counts[r] = int_count(outgoing[r].size());
-  MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::vector<int> send_offsets(ranks, 0), receive_offsets(ranks, 0);
-  std::exclusive_scan(send_counts.begin(), send_counts.end(), send_offsets.begin(), 0);
-  std::exclusive_scan(receive_counts.begin(), receive_counts.end(), receive_offsets.begin(), 0);
-  std::vector<double> sent, received(static_cast<std::size_t>(receive_offsets.back()) + receive_counts.back());
-  for (const auto& buffer : outgoing) sent.insert(sent.end(), buffer.begin(), buffer.end());
-  MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_DOUBLE, received.data(), receive_counts.data(),
-                receive_offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  static int exchanges = 0;         // the same sequence on every rank
+  const int tag = 1 + (exchanges++ & 1);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   std::vector<std::vector<double>> incoming(ranks);
+  incoming[rank] = outgoing[rank];
+  std::vector<MPI_Request> sends;
   for (std::size_t r = 0; r < ranks; ++r)
-    incoming[r].assign(received.begin() + receive_offsets[r], received.begin() + receive_offsets[r] + receive_counts[r]);
+    if (static_cast<int>(r) != rank && !outgoing[r].empty()) {
+      sends.emplace_back();
+      MPI_Issend(outgoing[r].data(), int_count(outgoing[r].size()), MPI_DOUBLE, static_cast<int>(r), tag, MPI_COMM_WORLD,
+                 &sends.back());
+    }
+  MPI_Request barrier = MPI_REQUEST_NULL;
+  for (bool done = false; !done;) {
+    int arrived = 0;
+    MPI_Status status;
+    MPI_Iprobe(MPI_ANY_SOURCE, tag, MPI_COMM_WORLD, &arrived, &status);
+    if (arrived) {
+      int count = 0;
+      MPI_Get_count(&status, MPI_DOUBLE, &count);
+      std::vector<double>& into = incoming[status.MPI_SOURCE];
+      into.resize(static_cast<std::size_t>(count));
+      MPI_Recv(into.data(), count, MPI_DOUBLE, status.MPI_SOURCE, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    }
+    int finished = 0;
+    if (barrier == MPI_REQUEST_NULL) {
+      MPI_Testall(static_cast<int>(sends.size()), sends.data(), &finished, MPI_STATUSES_IGNORE);
+      if (finished) MPI_Ibarrier(MPI_COMM_WORLD, &barrier);
+    } else {
+      MPI_Test(&barrier, &finished, MPI_STATUS_IGNORE);
+      done = finished;
+    }
+  }
   return incoming;
 }
 
@@ -149,9 +176,12 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
   std::vector<std::vector<double>> outgoing(plan.to.size());
   for (std::size_t r = 0; r < plan.to.size(); ++r) {
     if (static_cast<int>(r) == rank) continue;
-    plan.to[r].rows = boundary_rows;
-    send_nodes(static_cast<int>(r), plan.to[r].bodies, plan.to[r].nodes);
-    fdem::pack_message(plan.to[r], outgoing[r]);
+    fdem::RankMessage& message = plan.to[r];
+    message.rows = boundary_rows;
+    send_nodes(static_cast<int>(r), message.bodies, message.nodes);
+    // A rank with nothing for r sends it nothing (the exchange is point to point).
+    if (message.bodies.empty() && message.nodes.empty() && message.history.empty() && message.rows.keys.empty()) continue;
+    fdem::pack_message(message, outgoing[r]);
     traffic_.bodies += plan.to[r].bodies.size() + plan.to[r].nodes.size();
     traffic_.history += plan.to[r].history.size();
     traffic_.doubles += outgoing[r].size();
@@ -165,7 +195,7 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
   std::vector<fdem::RankMessage> received;
   std::vector<fdem::StepRows> parts{std::move(boundary_rows)};
   for (std::size_t r = 0; r < incoming.size(); ++r)
-    if (static_cast<int>(r) != rank) {
+    if (static_cast<int>(r) != rank && !incoming[r].empty()) {
       received.push_back(fdem::unpack_message(incoming[r]));
       parts.push_back(std::move(received.back().rows));
     }
@@ -206,6 +236,7 @@ void DistributedRun::gather_output() {
   if (session_.rank() != 0) return;
   std::vector<fdem::ContactRecord> records = std::move(mine.records);
   for (std::size_t r = 1; r < incoming.size(); ++r) {
+    if (incoming[r].empty()) continue;
     const fdem::RankMessage m = fdem::unpack_message(incoming[r]);
     for (const fdem::GrainBody& b : m.bodies) solver_.set_rigid_state(b.grain, b.state);
     for (const fdem::GrainNodes& n : m.nodes) take_nodes(n);

@@ -86,8 +86,8 @@ class DistributedRun final : public fdem::RankShare {
   /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
   /// and this rank's contacts with the wall or the membrane to every rank, takes the others', adds
   /// the ranks' exact sums of the step (energies, contact sums, platen forces) and sets the roles
-  /// for the next step. Four collectives: MPI_Alltoall of the counts, MPI_Alltoallv of the
-  /// doubles, MPI_Allreduce of the sums' words and of the deepest overlap.
+  /// for the next step. Messages point to point to the ranks this one has something for and a
+  /// barrier (the exchange), and two MPI_Allreduce (the sums).
   void finish_step(fdem::StepTotals& totals, fdem::StepRows& boundary_rows) override;
 
  private:
