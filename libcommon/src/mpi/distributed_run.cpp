@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <thread>
 #include <tuple>
 
 #include "graintwin/core/error.hpp"
@@ -57,6 +58,8 @@ std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<
       into.resize(static_cast<std::size_t>(count));
       MPI_Recv(into.data(), count, MPI_DOUBLE, status.MPI_SOURCE, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     }
+    // Nothing yet: let a rank sharing this core run (oversubscribed ranks, as MPI's own waits do).
+    if (!arrived) std::this_thread::yield();
     int finished = 0;
     if (barrier == MPI_REQUEST_NULL) {
       MPI_Testall(static_cast<int>(sends.size()), sends.data(), &finished, MPI_STATUSES_IGNORE);
