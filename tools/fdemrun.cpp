@@ -279,10 +279,13 @@ std::optional<TriaxialRunSummary> run_triaxial_shown(cli::RunContext& ctx, Solve
 
 void log_ranks(const mpi::DistributedRun& run, int ranks) {
   const mpi::RankTraffic& t = run.traffic();
+  const double sent = static_cast<double>(t.doubles);
   spdlog::info("{} ranks: rank 0 owns {} grains at the end; it sent {} grain states ({} migrations, {} history entries), "
-               "{:.3g} MB in all, and spent {:.3g} s in the exchanges; the sample was cut again {} times by measured work",
-               ranks, run.owned().size(), t.bodies, t.migrations, t.history, 8e-6 * static_cast<double>(t.doubles),
-               t.exchange_seconds, run.rebalances());
+               "{:.3g} MB in all ({:.2g} % migrating grains, {:.2g} % the step's sums, the rest ghosts), and spent {:.3g} s "
+               "in the exchanges; the sample was cut again {} times by measured work",
+               ranks, run.owned().size(), t.bodies, t.migrations, t.history, 8e-6 * sent,
+               sent > 0 ? 100.0 * static_cast<double>(t.migration_doubles) / sent : 0.0,
+               sent > 0 ? 100.0 * static_cast<double>(t.sum_words) / sent : 0.0, t.exchange_seconds, run.rebalances());
 }
 
 void log_end(const ResultsWriter& writer, const Solver& solver, int threads, double vtk_seconds, const Checkpoints& checkpoints) {
@@ -420,6 +423,7 @@ int main(int argc, char** argv) {
                     {"grain_states_sent", mpi::sum_over_ranks(session, t.bodies)},
                     {"bytes_sent", 8 * mpi::sum_over_ranks(session, t.doubles)},
                     {"sum_bytes_sent", 8 * mpi::sum_over_ranks(session, t.sum_words)},
+                    {"migration_bytes_sent", 8 * mpi::sum_over_ranks(session, t.migration_doubles)},
                     {"rebalances", ranks->rebalances()}};
     }
     if (writer) writer->set_parameters(p.dump());

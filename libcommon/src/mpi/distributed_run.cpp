@@ -162,6 +162,15 @@ void DistributedRun::take_nodes(const fdem::GrainNodes& nodes) {
     for (std::uint32_t n : surface_[nodes.grain]) set(n);
 }
 
+std::uint64_t DistributedRun::migration_doubles(int rank, const fdem::RankMessage& message) const {
+  std::uint64_t doubles = fdem::kHistoryDoubles * message.history.size();
+  for (const fdem::GrainBody& b : message.bodies)
+    if (fdem::owner_rank(subdomains_, b.state.position) == rank) doubles += fdem::kBodyDoubles;
+  for (const fdem::GrainNodes& n : message.nodes)
+    if (n.whole) doubles += 3 + n.values.size();
+  return doubles;
+}
+
 void DistributedRun::send_nodes(int rank, std::vector<fdem::GrainBody>& bodies, std::vector<fdem::GrainNodes>& nodes) const {
   const fdem::Model& m = solver_.model();
   std::erase_if(bodies, [&](const fdem::GrainBody& b) {
@@ -185,6 +194,7 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
     // A rank with nothing for r sends it nothing (the exchange is point to point).
     if (message.bodies.empty() && message.nodes.empty() && message.history.empty() && message.rows.keys.empty()) continue;
     fdem::pack_message(message, outgoing[r]);
+    traffic_.migration_doubles += migration_doubles(static_cast<int>(r), message);
     traffic_.bodies += plan.to[r].bodies.size() + plan.to[r].nodes.size();
     traffic_.history += plan.to[r].history.size();
     traffic_.doubles += outgoing[r].size();

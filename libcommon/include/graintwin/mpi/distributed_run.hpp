@@ -33,6 +33,7 @@ struct RankTraffic {
   std::uint64_t migrations = 0;  ///< grains that left this rank for another owner
   std::uint64_t doubles = 0;     ///< 8-byte values sent: the exchanges' doubles and the step sums' words
   std::uint64_t sum_words = 0;   ///< of them, the step sums' words
+  std::uint64_t migration_doubles = 0;  ///< of them, the migrating grains' states and friction history
   double exchange_seconds = 0;   ///< s, planning, packing, exchanging and unpacking
 };
 
@@ -99,6 +100,9 @@ class DistributedRun final : public fdem::RankShare {
   fdem::GrainNodes nodes_of(std::uint32_t grain, bool whole, bool forces) const;
   /// Sets the nodes a message brought. DataError when they do not fit the grain.
   void take_nodes(const fdem::GrainNodes& nodes);
+  /// The doubles of `message` (to `rank`) that carry grains changing owner to it: their states and
+  /// the friction history of their pairs.
+  std::uint64_t migration_doubles(int rank, const fdem::RankMessage& message) const;
   /// Moves each deformable grain of `bodies` (a plan's states for `rank`) into `nodes`: all its
   /// nodes when `rank` owns it from now on, else its surface.
   void send_nodes(int rank, std::vector<fdem::GrainBody>& bodies, std::vector<fdem::GrainNodes>& nodes) const;
