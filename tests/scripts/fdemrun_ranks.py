@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """fdemrun across ranks: 48 rigid boxes thrown at each other between a bottom platen and a top one
 pressing down, the same boxes elastic (4-node), and a triaxial test of 72 boxes (servo wall,
-membrane, shearing), run alone and by
+membrane, shearing), rigid and elastic, run alone and by
 `mpirun -np N`, give the same results bit for bit (every dataset but the run's parameters and
 provenance, and every --vtk file), and checkpoints move between rank counts: one written on N ranks
 continues alone, and one written alone continues on N ranks, to the same last frame. Run by ctest
@@ -190,6 +190,16 @@ with tempfile.TemporaryDirectory() as tmp:
     with h5py.File(tmp / "triaxial_many.h5", "r") as f:
         triaxial_ranks = json.loads(f["run/parameters"][0])["ranks"]
 
+    # The same test with the boxes elastic (4-node, a softer glass): the wall's and the membrane's
+    # contacts act on nodes whose owners step their elements.
+    elastic = tmp / "triaxial_tet4.toml"
+    elastic.write_text(triaxial_text().replace('kind = "rigid"', 'kind = "tet4"').replace("young = 60e9", "young = 1e8"))
+    elastic_test, found = same_runs(elastic, "triaxial_tet4")
+    failures += found
+    elastic_phases = [int(np.sum(elastic_test["series/stage"] == k)) for k in range(3)]
+    if min(elastic_phases) == 0:
+        failures.append(f"the elastic triaxial test left out a phase: rows per phase {elastic_phases}")
+
     # What runs on one rank only is refused on several, before any work, and nothing is written.
     elastostatic = tmp / "elastostatic.toml"
     elastostatic.write_text(scene_text().replace("[run]", '[run]\nrigid_stress = "elastostatic"', 1))
@@ -203,7 +213,8 @@ print(f"{ranks} ranks: {len(one)} datasets, {frames} frames, {contacts} node con
       f"{moved['bytes_sent'] / 1e6:.3g} MB sent")
 print(f"{ranks} ranks, tet4: {tet4_ranks['migrations']} migrations, {tet4_ranks['bytes_sent'] / 1e6:.3g} MB sent")
 print(f"{ranks} ranks, triaxial: series rows per phase (wall, membrane, shearing) {phases}; {triaxial_ranks['migrations']} "
-      f"migrations, {triaxial_ranks['bytes_sent'] / 1e6:.3g} MB sent, cut again {triaxial_ranks['rebalances']} times")
+      f"migrations, {triaxial_ranks['bytes_sent'] / 1e6:.3g} MB sent, cut again {triaxial_ranks['rebalances']} times; "
+      f"with 4-node boxes {elastic_phases}")
 for f in failures:
     print("FAILED:", f)
 sys.exit(1 if failures else 0)

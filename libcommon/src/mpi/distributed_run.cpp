@@ -93,7 +93,7 @@ DistributedRun::DistributedRun(const Session& session, fdem::Solver& solver, con
     surface_ = fdem::grain_surface_nodes(m);
     for (std::size_t g = 0; g < m.grains.size(); ++g) {
       if (m.grains[g].kind == fdem::GrainKind::rigid) surface_[g].clear();  // a body travels
-      else radii_[g] *= 1 + kStrainReach;
+      else radii_[g] *= 1 + kStrainReach, deformable_ = true;
     }
     element_work_ = fdem::element_work(m);
     std::vector<std::uint32_t> every(m.grains.size());
@@ -116,7 +116,7 @@ DistributedRun::~DistributedRun() { solver_.set_rank_share(nullptr); }
 std::span<const fdem::RigidBodyState> DistributedRun::places(std::span<const std::uint32_t> grains) {
   const fdem::Model& m = solver_.model();
   const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
-  if (std::all_of(surface_.begin(), surface_.end(), [](const auto& s) { return s.empty(); })) return states;
+  if (!deformable_) return states;
   places_.assign(states.begin(), states.end());
   for (std::uint32_t g : grains)
     if (m.grains[g].kind != fdem::GrainKind::rigid) places_[g].position = solver_.grain_centroid(g);

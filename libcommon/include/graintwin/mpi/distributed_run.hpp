@@ -110,6 +110,7 @@ class DistributedRun final : public fdem::RankShare {
   const Session& session_;
   fdem::Solver& solver_;
   std::vector<std::vector<std::uint32_t>> surface_;  ///< per deformable grain, its surface nodes
+  bool deformable_ = false;                          ///< the model has deformable grains
   std::vector<double> element_work_;                 ///< per grain, its elements' work a step
   std::vector<fdem::RigidBodyState> places_;         ///< scratch of places()
   std::uint64_t steps_measured_ = 0;                 ///< steps since the work was last taken
