@@ -177,7 +177,7 @@ def main():
             f"{' '.join(sys.argv[1:])}`; {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}): each model's grains, rigid "
             "or elastic 4-node, between its own platens, under gravity and damping (2000 /s) while the top platen comes down at the speed "
             f"given (slow: the packing settles; fast: the platen presses it and grains flow across the ranks), {a.steps} steps "
-            f"({a.elastic_steps} for the elastic grains, whose element step is far shorter); fdemrun's own accounts on rank 0 (a step's time includes the exchange); across ranks fdemrun checks the balance of the work measured per grain every 200 steps and cuts the sample again beyond 10 %. Speedup "
+            f"({a.elastic_steps} for the elastic grains, whose element step is far shorter); fdemrun's own accounts on rank 0 (a step's time includes the exchange); across ranks fdemrun checks the balance of the work measured per grain every 100 steps (its counts, each rank's sharing its measured time) and cuts the sample again beyond 10 %. Speedup "
             "against one rank with one thread; the target for 2 ranks is 1.7 x. Same bits: every dataset of the results "
             "equal to the one-rank run's.\n\n"
             "| model | platen m/s | run | steps | ms a step | speedup | grain-steps/s per core | what travelled | same bits |\n"

@@ -42,7 +42,7 @@ from fdem_ranks_bench import MPIRUN, SCENE, run  # noqa: E402
 # fdemrun's step message (fdem/rank_state): per message 6 counts; a grain state is its index and 13
 # doubles, a history entry 7, a row (a boundary's contact) its key and 5 values.
 HEADER, STATE, HISTORY, ROW = 6, 14, 7, 6
-CHECK_STEPS = 200  # mpi::kBalanceCheckSteps: each check sends one load per rank
+CHECK_STEPS = 100  # mpi::kBalanceCheckSteps: each check sends one load per rank
 IMBALANCE = 0.10  # fdem::kRebalanceImbalance: fdemrun cuts again beyond it, so the most its loads keep
 LSDEM = {"grains": 42684, "one": 753.0, "ranks": 216, "many": 16363.0, "migration_share": 0.94}
 WEAK_N, PAPER_GRAINS = 1000, 15961

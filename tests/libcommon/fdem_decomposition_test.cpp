@@ -251,3 +251,35 @@ TEST(Decomposition, ImbalanceAndTheRebalanceRule) {
   EXPECT_NE(test::message_of([&] { rank_loads(owners, work, 2); }).find("grain 3's owner rank 2 is not one of the 2 ranks"),
             std::string::npos);
 }
+
+TEST(Decomposition, WorkCrowdedAtOneSideStopsTheCutAtTheThinnestBoxAllowed) {
+  // A platen pressing the top: the top 0.4 mm of grains carry nearly all the work, so the balanced
+  // cut would leave the top box 0.3 mm thick, less than a grain plus the skin (0.62 mm). The cut
+  // stops at that thickness instead of refusing, and the owners follow the cut.
+  Grains g = random_grains(400, 8);
+  g.radii.assign(g.radii.size(), 0.3e-3);
+  for (std::size_t i = 0; i < g.work.size(); ++i) g.work[i] = g.centroids[i].z() > 7.6e-3 ? 1000.0 : 1.0;
+  const Subdomains s = bisect(g, 2);
+  const double min_thickness = 0.6e-3 + kSkin;
+  ASSERT_EQ(s.cuts.size(), 1u);
+  EXPECT_EQ(s.cuts[0].axis, 2);
+  EXPECT_GE(s.boxes[1].hi.z() - s.boxes[1].lo.z(), min_thickness);
+  EXPECT_LT(s.boxes[1].hi.z() - s.boxes[1].lo.z(), 1.001 * min_thickness) << "no thicker than it must be";
+  for (std::size_t i = 0; i < g.centroids.size(); ++i)
+    EXPECT_EQ(owner_rank(s, g.centroids[i]), g.centroids[i].z() < s.cuts[0].cut ? 0 : 1) << "grain " << i;
+}
+
+TEST(Decomposition, WorkWeighedByTimeSharesTheRanksSeconds) {
+  std::vector<double> work{1, 3, 0, 4};
+  weigh_by_time(work, 16e-9);  // 8 counts in 16 ns: 2 ns a count
+  EXPECT_EQ(work, (std::vector<double>{2, 6, 0, 8}));
+  std::vector<double> thirds{1, 1, 1};
+  weigh_by_time(thirds, 1e-9);  // whole nanoseconds, so sums over ranks are exact in any order
+  EXPECT_EQ(thirds, (std::vector<double>{0, 0, 0}));
+  std::vector<double> counts{1, 2};
+  weigh_by_time(counts, 0.0);
+  EXPECT_EQ(counts, (std::vector<double>{1, 2})) << "no time measured: the counts stay";
+  std::vector<double> idle{0, 0};
+  weigh_by_time(idle, 1.0);
+  EXPECT_EQ(idle, (std::vector<double>{0, 0})) << "no work counted: nothing to share";
+}

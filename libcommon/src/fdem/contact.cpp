@@ -219,7 +219,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
 #pragma omp parallel for schedule(dynamic, 1) if (stale.size() >= kParallelCandidates)
   for (std::int64_t k = 0; k < static_cast<std::int64_t>(stale.size()); ++k) {
     const std::uint32_t i = stale[k];
-    s.build_pair_lists(s.candidates[i].pair, x);
+    s.checks[i].list_nodes = s.build_pair_lists(s.candidates[i].pair, x);
     s.checks[i].lists_built = true;
     s.candidate_motion[i] = s.pair_motion(s.candidates[i].pair);
   }
@@ -257,12 +257,7 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.node_checks += s.checks[i].nodes;
     stats.triangle_checks += s.checks[i].triangles;
     stats.pair_lists_built += s.checks[i].lists_built;
-    if (!s.roles.empty()) {  // the work each owned grain brought this rank
-      const double work = static_cast<double>(s.checks[i].nodes + s.checks[i].triangles);
-      if (s.grain_work.empty()) s.grain_work.assign(grain_count, 0.0);
-      if (s.roles[c.a] == GrainRole::owned) s.grain_work[c.a] += work;
-      if (c.b < grain_count && s.roles[c.b] == GrainRole::owned) s.grain_work[c.b] += work;
-    }
+    s.add_grain_work(c.a, c.b, static_cast<double>(s.checks[i].nodes + s.checks[i].triangles + s.checks[i].list_nodes));
     if (s.hits[i].empty()) continue;
     // Forces on deformable grains' nodes, in candidate order; rigid grains get their sums.
     const bool platen = c.b >= grain_count;

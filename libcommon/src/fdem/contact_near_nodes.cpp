@@ -44,13 +44,14 @@ std::array<double, 2> ContactModel::State::pair_motion(std::size_t k) const {
   return {relative_motion(a, b, list_pose[k][0], list_pose[k][1]), relative_motion(b, a, list_pose[k][1], list_pose[k][0])};
 }
 
-void ContactModel::State::build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x) {
+std::size_t ContactModel::State::build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x) {
   const auto [a, b] = grain_pairs[k];
   const double reach = (search_depth(a, b) + skin) * (1 + kReachRoundOff);
   collect_near_nodes(a, b, reach, x, near_nodes[k][0]);
   collect_near_nodes(b, a, reach, x, near_nodes[k][1]);
   for (int side : {0, 1}) memos[k][side].assign(near_nodes[k][side].size(), SearchMemo{});
   list_pose[k] = {pose[a], pose[b]};
+  return surface(a).size() + surface(b).size();
 }
 
 void ContactModel::State::rebuild_pairs(std::vector<BoxPair> pairs, std::span<const Eigen::Vector3d> x) {
@@ -70,9 +71,12 @@ void ContactModel::State::rebuild_pairs(std::vector<BoxPair> pairs, std::span<co
   near_nodes = std::move(kept_nodes);
   memos = std::move(kept_memos);
   list_pose = std::move(kept_pose);
+  std::vector<std::size_t> visited(grain_pairs.size(), 0);
 #pragma omp parallel for schedule(dynamic, 4) if (grain_pairs.size() >= kParallelCandidates)
   for (std::int64_t k = 0; k < static_cast<std::int64_t>(grain_pairs.size()); ++k)
-    if (fresh[k]) build_pair_lists(static_cast<std::size_t>(k), x);
+    if (fresh[k]) visited[k] = build_pair_lists(static_cast<std::size_t>(k), x);
+  for (std::size_t k = 0; k < grain_pairs.size(); ++k)
+    if (visited[k] > 0) add_grain_work(grain_pairs[k].first, grain_pairs[k].second, kListNodeWork * static_cast<double>(visited[k]));
 }
 
 }  // namespace graintwin::fdem

@@ -42,6 +42,13 @@ std::span<const PairStepSum> ContactModel::owned_pair_sums() const { return stat
 
 std::span<const GrainRole> ContactModel::grain_roles() const { return state_->roles; }
 
+void ContactModel::State::add_grain_work(std::uint32_t a, std::uint32_t b, double work) {
+  if (roles.empty()) return;
+  if (grain_work.empty()) grain_work.assign(grains.size(), 0.0);
+  if (roles[a] == GrainRole::owned) grain_work[a] += work;
+  if (b < grains.size() && roles[b] == GrainRole::owned) grain_work[b] += work;
+}
+
 std::vector<double> ContactModel::take_grain_work() {
   State& s = *state_;
   std::vector<double> work(s.grains.size(), 0.0);

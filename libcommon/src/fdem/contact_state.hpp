@@ -120,11 +120,20 @@ struct SearchMemo {
 struct Candidate {
   std::uint32_t a = 0, b = 0, pair = 0;
 };
-/// Work done on one candidate (for the benchmark's throughput figures).
+/// Work done on one candidate (for the benchmark's throughput figures and the ranks' balance).
 struct Checks {
   std::size_t nodes = 0, triangles = 0;
   bool lists_built = false;  ///< the pair's near-node lists were built again this step
+  std::size_t list_nodes = 0;  ///< surface nodes the lists' building visited
 };
+
+// What a rank's balance weighs (ContactModel::take_grain_work), in checks of a node against
+// another grain's surface (220 ns each with its closest-triangle searches): a node against a
+// platen's plane costs 11 ns, a node visited building a pair's near-node lists 54 ns (timed in
+// the pressed 1 989-grain twin of the fdem_ranks bench, where a step checks twice as many nodes
+// against the platen as against grains, and building lists takes a quarter of the step).
+inline constexpr double kPlatenNodeWork = 0.05;
+inline constexpr double kListNodeWork = 0.25;
 
 /// A grain pair (a < b) whose search looks deeper than max_penetration, to `depth` (m): pairs that
 /// started overlapping, with their overlaps kept (ContactModel::keep_initial_overlaps).
@@ -272,9 +281,12 @@ struct ContactModel::State {
   // A rank's share of the grains (contact_ranks.cpp); empty roles: every grain owned.
   std::vector<GrainRole> roles;
   std::vector<PairStepSum> owned_pair_sums;  ///< with roles: this step's, of candidates with an owned a
-  /// Per grain, the node and triangle checks of the candidates it was in, owned grains only, since
-  /// the last take_grain_work (the measured work a rank balances)
+  /// Per grain, the checks of the candidates it was in and the nodes its pairs' lists visited
+  /// (kPlatenNodeWork, kListNodeWork), owned grains only, since the last take_grain_work (the
+  /// measured work a rank balances)
   std::vector<double> grain_work;
+  /// Adds `work` to grain a's and grain b's (b < grains) grain_work, those owned; nothing without roles.
+  void add_grain_work(std::uint32_t a, std::uint32_t b, double work);
   bool present(std::uint32_t g) const { return roles.empty() || roles[g] != GrainRole::absent; }
   bool owned(std::uint32_t g) const { return roles.empty() || roles[g] == GrainRole::owned; }
   /// The broad phase's `pairs` a rank evaluates: those with an owned grain (all without roles).
@@ -509,8 +521,8 @@ struct ContactModel::State {
   /// other grain ([0]: a's nodes in b's frame, [1]: b's nodes in a's frame).
   std::array<double, 2> pair_motion(std::size_t k) const;
 
-  /// Builds pair k's lists at positions x and this step's poses.
-  void build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x);
+  /// Builds pair k's lists at positions x and this step's poses; the surface nodes it visited.
+  std::size_t build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x);
 
   /// Lists whose pair moved `motion` (pair_motion) since they were built still hold: both grains
   /// rigid and moved less than the skin relative to each other.

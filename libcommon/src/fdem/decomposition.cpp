@@ -41,8 +41,8 @@ std::size_t cut_index(std::span<const double> coordinates, std::span<const doubl
 
 class Bisector {
  public:
-  Bisector(std::span<const Eigen::Vector3d> centroids, std::span<const double> work, Subdomains& out)
-      : centroids_(centroids), work_(work), out_(out) {}
+  Bisector(std::span<const Eigen::Vector3d> centroids, std::span<const double> work, double min_thickness, Subdomains& out)
+      : centroids_(centroids), work_(work), min_thickness_(min_thickness), out_(out) {}
 
   // Splits the grains of `grains` (their indices) in `box` over ranks [first_rank, first_rank +
   // ranks); returns the child reference of the subtree (a cut index or a leaf).
@@ -71,6 +71,14 @@ class Bisector {
       const double above = k == m ? box.hi[axis] : coordinates[k];
       cut = below + 0.5 * (above - below);
       if (!(cut > below)) cut = above;  // adjacent doubles: the upper one, still above every low grain
+      // Work crowded at one side of the box (a platen pressing) would leave that side's box thinner
+      // than a grain: the cut stops at the thinnest allowed, the best balance it permits.
+      const double margin = min_thickness_ * (1 + 1e-9);  // the boxes' sides, differences of cuts, round off
+      const double lowest = box.lo[axis] + margin, highest = box.hi[axis] - margin;
+      if (lowest <= highest && (cut < lowest || cut > highest)) {
+        cut = std::clamp(cut, lowest, highest);
+        k = static_cast<std::size_t>(std::lower_bound(coordinates.begin(), coordinates.end(), cut) - coordinates.begin());
+      }
     }
     const int node = static_cast<int>(out_.cuts.size());
     out_.cuts.push_back({axis, cut, 0, 0});
@@ -87,11 +95,12 @@ class Bisector {
  private:
   std::span<const Eigen::Vector3d> centroids_;
   std::span<const double> work_;
+  double min_thickness_;  ///< m, the thinnest a box may be across a cut
   Subdomains& out_;
 };
 
 Subdomains bisect_unchecked(std::span<const Eigen::Vector3d> centroids, std::span<const double> work,
-                            const Aabb& domain, int ranks, double reach) {
+                            const Aabb& domain, int ranks, double reach, double min_thickness) {
   Subdomains out;
   out.domain = domain;
   out.reach = reach;
@@ -99,7 +108,7 @@ Subdomains bisect_unchecked(std::span<const Eigen::Vector3d> centroids, std::spa
   out.cuts.reserve(ranks - 1);
   std::vector<std::uint32_t> grains(centroids.size());
   std::iota(grains.begin(), grains.end(), 0u);
-  Bisector(centroids, work, out).bisect(grains, domain, 0, ranks);
+  Bisector(centroids, work, min_thickness, out).bisect(grains, domain, 0, ranks);
   return out;
 }
 
@@ -163,12 +172,12 @@ Subdomains bisect_domain(std::span<const Eigen::Vector3d> centroids, std::span<c
       bounding_radii.empty() ? 0.0 : *std::max_element(bounding_radii.begin(), bounding_radii.end());
   const double reach = largest_radius + skin;
   const double min_thickness = 2.0 * largest_radius + skin;
-  Subdomains subdomains = bisect_unchecked(centroids, work, domain, ranks, reach);
+  Subdomains subdomains = bisect_unchecked(centroids, work, domain, ranks, reach, min_thickness);
   const std::optional<ThinSide> thin = thinnest_cut_side(subdomains, min_thickness);
   if (!thin) return subdomains;
   // One rank never cuts, so the search ends; it is short, since too thin means few grains per rank.
   int fitting = ranks - 1;
-  while (fitting > 1 && thinnest_cut_side(bisect_unchecked(centroids, work, domain, fitting, reach), min_thickness))
+  while (fitting > 1 && thinnest_cut_side(bisect_unchecked(centroids, work, domain, fitting, reach, min_thickness), min_thickness))
     --fitting;
   throw UsageError(fmt::format(
       "{} ranks cut the sample into subdomains as thin as {:.4g} m along {} (rank {}), less than the largest grain's "
@@ -231,5 +240,12 @@ double load_imbalance(std::span<const double> loads) {
 }
 
 bool needs_rebalance(std::span<const double> loads) { return load_imbalance(loads) > kRebalanceImbalance; }
+
+void weigh_by_time(std::span<double> work, double seconds) {
+  const double counted = std::accumulate(work.begin(), work.end(), 0.0);
+  if (!(counted > 0) || !(seconds > 0)) return;
+  const double nanoseconds_per_count = 1e9 * seconds / counted;
+  for (double& w : work) w = std::round(w * nanoseconds_per_count);
+}
 
 }  // namespace graintwin::fdem

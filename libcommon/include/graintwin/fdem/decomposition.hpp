@@ -49,7 +49,9 @@ struct Subdomains {
 /// Returns the R boxes, the cut tree and the reach. Each cut is across the box's longest side, at
 /// the gap between two centroids that comes closest to the proportional share of the work, so
 /// every rank's work is within about one grain's work of the mean (w_max / 2 per level above it,
-/// shared by the ranks below that level).
+/// shared by the ranks below that level); but no nearer a side of the box than the largest grain's
+/// diameter plus the skin, when the box is twice that thick (work crowded at one side then stays
+/// out of balance).
 /// Throws UsageError when ranks < 1, the inputs differ in length or hold a non-finite or
 /// negative value, the domain is empty, a centroid lies outside it, or a subdomain comes out
 /// thinner along a cut axis than the largest grain's diameter plus the skin (the message names
@@ -78,5 +80,12 @@ double load_imbalance(std::span<const double> loads);
 
 /// Whether the imbalance exceeds kRebalanceImbalance, so the grains should be bisected again.
 bool needs_rebalance(std::span<const double> loads);
+
+/// Spreads `seconds` (s, the time one rank spent on its grains since the last balance check) over
+/// `work` (per grain, the work that rank counted for it: contact checks, element work) in
+/// proportion, as whole nanoseconds, so that sums over ranks are exact in any order. Counts alone
+/// miss costs that differ from rank to rank (near-node lists built again where grains move fast, a
+/// crowd at a platen); the time does not. No counted work, or no time: `work` unchanged.
+void weigh_by_time(std::span<double> work, double seconds);
 
 }  // namespace graintwin::fdem

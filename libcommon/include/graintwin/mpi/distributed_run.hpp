@@ -66,9 +66,10 @@ class DistributedRun final : public fdem::RankShare {
   /// deformable grain's is its centroid (position) alone.
   std::vector<fdem::RigidBodyState> gather_states() const;
   /// Weighs every grain by the work measured since the last call (the node and triangle checks of
-  /// its contact candidates on the rank that owned it, its elements' work each step, plus one) and,
-  /// when the ranks' loads (one number per rank: the check itself sends nothing per grain) under
-  /// those weights differ by more than kRebalanceImbalance (or `force`), cuts the sample again with
+  /// its contact candidates on the rank that owned it, its elements' work and one check for its
+  /// motion each step), each rank's counts sharing the seconds it spent on its grains since
+  /// (fdem::weigh_by_time), and, when the ranks' loads (one number per rank: the check itself
+  /// sends nothing per grain) differ by more than kRebalanceImbalance (or `force`), cuts the sample again with
   /// them (collective; the same decision and cut on every rank). Each rank then holds every
   /// grain's state and the whole friction history, and takes the grains its new box holds; the
   /// run goes on with the same bits. Returns whether it cut again.
@@ -93,6 +94,9 @@ class DistributedRun final : public fdem::RankShare {
 
  private:
 
+  /// s this rank's solver spent stepping (its step phases but the boundary's, which every rank
+  /// does whole) outside the exchange, since the start.
+  double busy_seconds() const;
   /// Every grain's state as a body for the exchange's plan: `grains`' (the owned ones) current,
   /// a deformable grain's centroid as its position.
   std::span<const fdem::RigidBodyState> places(std::span<const std::uint32_t> grains);
@@ -114,6 +118,7 @@ class DistributedRun final : public fdem::RankShare {
   std::vector<double> element_work_;                 ///< per grain, its elements' work a step
   std::vector<fdem::RigidBodyState> places_;         ///< scratch of places()
   std::uint64_t steps_measured_ = 0;                 ///< steps since the work was last taken
+  double busy_mark_ = 0;                             ///< busy_seconds() when the work was last taken
   std::vector<double> radii_;  ///< per grain, m (grain_bounding_radii)
   fdem::Aabb domain_;          ///< the box cut at the start, grown by the grains that left it
   std::size_t rebalances_ = 0;
@@ -134,6 +139,6 @@ std::unique_ptr<DistributedRun> split_over_ranks(const Session& session, fdem::S
 
 /// Steps between two checks of the ranks' balance (DistributedRun::rebalance): a check gathers every
 /// grain's state, so it is not done every step.
-inline constexpr std::uint64_t kBalanceCheckSteps = 200;
+inline constexpr std::uint64_t kBalanceCheckSteps = 100;
 
 }  // namespace graintwin::mpi
