@@ -270,6 +270,14 @@ void DistributedRun::gather_output() {
 }
 
 bool DistributedRun::rebalance(bool force) {
+  // The ranks' loads are the seconds each spent on its grains since the last decision: one number
+  // per rank, not every grain's work and state.
+  const double busy = busy_seconds();
+  std::vector<double> loads(session_.size(), 0.0);
+  loads[session_.rank()] = busy - busy_mark_;
+  sum_over_ranks(session_, loads);  // one rank contributes each entry: exact
+  // A short window cannot tell imbalance from the machine's jitter: measure on.
+  if (!force && *std::max_element(loads.begin(), loads.end()) < kBalanceWindowSeconds) return false;
   fdem::ContactModel& contact = *solver_.contact_model();
   std::vector<double> work = contact.take_grain_work();  // this rank's checks, per grain it owned
   // Its elements each step, and its motion, about one check a step (the motion's share of a
@@ -278,15 +286,13 @@ bool DistributedRun::rebalance(bool force) {
   const double steps = static_cast<double>(steps_measured_);
   for (std::uint32_t g : owned_) work[g] += std::round(element_work_[g] * steps) + steps;
   steps_measured_ = 0;
-  // The counts then share the time this rank spent on its grains, so the loads are seconds.
-  const double busy = busy_seconds();
-  fdem::weigh_by_time(work, busy - busy_mark_);
   busy_mark_ = busy;
-  // The decision needs only each rank's load: one number per rank, not every grain's work and state.
-  std::vector<double> loads(session_.size(), 0.0);
-  for (double w : work) loads[session_.rank()] += w;
-  sum_over_ranks(session_, loads);  // one rank contributes each entry: exact
-  if (!force && !fdem::needs_rebalance(loads)) return false;
+  // The window after a cut holds the one-off cost of the grains taken over (their pairs' lists
+  // built): not the balance to judge the cut by.
+  const bool settling = just_cut_;
+  just_cut_ = false;
+  if (!force && (settling || !fdem::needs_rebalance(loads))) return false;
+  fdem::weigh_by_time(work, loads[session_.rank()]);  // the counts share the rank's seconds
   sum_over_ranks(session_, work);  // each grain's work from the ranks that held it: whole numbers
   for (double& w : work) w = std::max(w, 1.0);  // a grain never weighs nothing
   const std::vector<fdem::RigidBodyState> all = gather_states();
@@ -323,6 +329,7 @@ bool DistributedRun::rebalance(bool force) {
   roles_ = fdem::initial_roles(subdomains_, session_.rank(), all, radii_);
   owned_ = fdem::grains_with_role(roles_, fdem::GrainRole::owned);
   ++rebalances_;
+  just_cut_ = true;
   return true;
 }
 

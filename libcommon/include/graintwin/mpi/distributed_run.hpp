@@ -65,12 +65,15 @@ class DistributedRun final : public fdem::RankShare {
   /// Every grain's state from its owner, on every rank (collective): for output and checks. A
   /// deformable grain's is its centroid (position) alone.
   std::vector<fdem::RigidBodyState> gather_states() const;
-  /// Weighs every grain by the work measured since the last call (the node and triangle checks of
-  /// its contact candidates on the rank that owned it, its elements' work and one check for its
-  /// motion each step), each rank's counts sharing the seconds it spent on its grains since
-  /// (fdem::weigh_by_time), and, when the ranks' loads (one number per rank: the check itself
-  /// sends nothing per grain) differ by more than kRebalanceImbalance (or `force`), cuts the sample again with
-  /// them (collective; the same decision and cut on every rank). Each rank then holds every
+  /// Checks the ranks' balance (collective; the same decision and cut on every rank). The load of a
+  /// rank is the seconds it spent on its grains (its step phases outside the exchange, the
+  /// boundary's aside) since the last decision: the check sends one number per rank. It decides
+  /// once the longest load reaches kBalanceWindowSeconds, and not on the window right after a cut
+  /// (the grains taken over build their pairs' lists then). When the loads differ by more than
+  /// kRebalanceImbalance (or `force`), it weighs every grain by the work counted since (the checks
+  /// of its contact candidates on the rank that owned it, the nodes its pairs' lists visited, its
+  /// elements' work and one check for its motion each step), each rank's counts sharing its
+  /// seconds (fdem::weigh_by_time), and cuts the sample again with them. Each rank then holds every
   /// grain's state and the whole friction history, and takes the grains its new box holds; the
   /// run goes on with the same bits. Returns whether it cut again.
   bool rebalance(bool force = false);
@@ -119,6 +122,7 @@ class DistributedRun final : public fdem::RankShare {
   std::vector<fdem::RigidBodyState> places_;         ///< scratch of places()
   std::uint64_t steps_measured_ = 0;                 ///< steps since the work was last taken
   double busy_mark_ = 0;                             ///< busy_seconds() when the work was last taken
+  bool just_cut_ = false;                            ///< the last decision cut the sample again
   std::vector<double> radii_;  ///< per grain, m (grain_bounding_radii)
   fdem::Aabb domain_;          ///< the box cut at the start, grown by the grains that left it
   std::size_t rebalances_ = 0;
@@ -137,8 +141,12 @@ void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, c
 /// sample's box is that of every node where it is now (after a restart, where the grains are then).
 std::unique_ptr<DistributedRun> split_over_ranks(const Session& session, fdem::Solver& solver);
 
-/// Steps between two checks of the ranks' balance (DistributedRun::rebalance): a check gathers every
-/// grain's state, so it is not done every step.
+/// Steps between two checks of the ranks' balance (DistributedRun::rebalance): an MPI_Allreduce of
+/// one number per rank.
 inline constexpr std::uint64_t kBalanceCheckSteps = 100;
+/// s, the least a rank's measured load spans before the balance is judged: the machine's jitter
+/// (ms) stays a few per cent of it, and a cut again (every grain's state gathered, lists built
+/// again) costs tens of ms at 2 000 grains.
+inline constexpr double kBalanceWindowSeconds = 0.25;
 
 }  // namespace graintwin::mpi
