@@ -283,3 +283,30 @@ TEST(Decomposition, WorkWeighedByTimeSharesTheRanksSeconds) {
   weigh_by_time(idle, 1.0);
   EXPECT_EQ(idle, (std::vector<double>{0, 0})) << "no work counted: nothing to share";
 }
+
+TEST(Decomposition, GhostsReachPartnersOfGrainsThatLeftTheDomain) {
+  // Thrown grains leave the sample's box; their owner is the nearest box (owner_rank), so a pair
+  // that may touch out there must still be seen by both owners. Measured on fdemrun's 48 thrown
+  // boxes on 4 ranks: a pair beyond the box's face was missed, and the run left the one-rank bits.
+  const Grains g = random_grains(1200, 9);
+  const Aabb box = sample_box();
+  std::mt19937_64 rng(10);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int ranks = 2; ranks <= 7; ++ranks) {
+    const Subdomains s = bisect(g, ranks);
+    // Pairs of grains 0.2 mm apart in a shell up to 2 mm outside the box.
+    std::size_t outside_pairs = 0;
+    for (int i = 0; i < 4000; ++i) {
+      const Eigen::Vector3d p = box.lo - Eigen::Vector3d::Constant(2e-3) +
+                                (box.hi - box.lo + Eigen::Vector3d::Constant(4e-3)).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+      const Eigen::Vector3d q = p + 0.2e-3 * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
+      const int a = owner_rank(s, p), b = owner_rank(s, q);
+      if (box.contains(p) || a == b) continue;
+      ++outside_pairs;
+      const std::vector<int> ghosts_a = ghost_ranks(s, p, 0.15e-3, a), ghosts_b = ghost_ranks(s, q, 0.15e-3, b);
+      EXPECT_TRUE(std::binary_search(ghosts_a.begin(), ghosts_a.end(), b)) << ranks << " ranks, outside pair " << i;
+      EXPECT_TRUE(std::binary_search(ghosts_b.begin(), ghosts_b.end(), a)) << ranks << " ranks, outside pair " << i;
+    }
+    EXPECT_GT(outside_pairs, 20u) << ranks << " ranks: the test needs pairs across owners outside the box";
+  }
+}

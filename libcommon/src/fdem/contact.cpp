@@ -257,7 +257,9 @@ ContactStepStats ContactModel::add_forces(std::span<const Eigen::Vector3d> x, st
     stats.node_checks += s.checks[i].nodes;
     stats.triangle_checks += s.checks[i].triangles;
     stats.pair_lists_built += s.checks[i].lists_built;
-    s.add_grain_work(c.a, c.b, static_cast<double>(s.checks[i].nodes + s.checks[i].triangles + s.checks[i].list_nodes));
+    const Checks& done = s.checks[i];
+    s.add_grain_work(c.a, c.b, static_cast<double>(done.nodes) * (c.b >= grain_count ? kPlatenNodeWork : 1.0) +
+                                   static_cast<double>(done.triangles) + kListNodeWork * static_cast<double>(done.list_nodes));
     if (s.hits[i].empty()) continue;
     // Forces on deformable grains' nodes, in candidate order; rigid grains get their sums.
     const bool platen = c.b >= grain_count;

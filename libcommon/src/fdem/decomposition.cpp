@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <optional>
 
@@ -202,13 +203,23 @@ std::vector<int> owner_ranks(const Subdomains& subdomains, std::span<const Eigen
   return owners;
 }
 
+Aabb reach_box(const Subdomains& subdomains, int rank) {
+  Aabb box = subdomains.boxes.at(rank);
+  constexpr double kFar = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    if (box.lo[k] == subdomains.domain.lo[k]) box.lo[k] = -kFar;
+    if (box.hi[k] == subdomains.domain.hi[k]) box.hi[k] = kFar;
+  }
+  return box;
+}
+
 std::vector<int> ghost_ranks(const Subdomains& subdomains, const Eigen::Vector3d& centre, double radius, int owner) {
   const double range = radius + subdomains.reach;
   std::vector<int> ranks;
   auto visit = [&](auto&& self, int child) -> void {
     if (child < 0) {
       const int rank = -child - 1;
-      if (rank != owner && subdomains.boxes[rank].squared_distance(centre) <= range * range) ranks.push_back(rank);
+      if (rank != owner && reach_box(subdomains, rank).squared_distance(centre) <= range * range) ranks.push_back(rank);
       return;
     }
     const BisectionCut& c = subdomains.cuts[child];

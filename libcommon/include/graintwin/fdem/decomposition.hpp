@@ -66,10 +66,15 @@ int owner_rank(const Subdomains& subdomains, const Eigen::Vector3d& point);
 /// The owner rank of each centroid.
 std::vector<int> owner_ranks(const Subdomains& subdomains, std::span<const Eigen::Vector3d> centroids);
 
+/// Rank r's box as far as ownership goes: its faces on the domain's boundary pushed out to
+/// infinity, since a centroid that left the domain belongs to the nearest box (owner_rank).
+Aabb reach_box(const Subdomains& subdomains, int rank);
+
 /// The ranks other than `owner` that must hold a ghost copy of a grain with bounding sphere
-/// (centre, radius), sorted: those whose box lies within radius + reach of the centre. Every
-/// grain a rank owns has its centroid in the rank's box and a radius <= reach - skin, so any
-/// partner within the skin of touching it is ghosted there, as the broad phase needs.
+/// (centre, radius), sorted: those whose reach_box lies within radius + reach of the centre. Every
+/// grain a rank owns has its centroid in the rank's reach_box (also after it left the domain) and
+/// a radius <= reach - skin, so any partner within the skin of touching it is ghosted there, as
+/// the broad phase needs.
 std::vector<int> ghost_ranks(const Subdomains& subdomains, const Eigen::Vector3d& centre, double radius, int owner);
 
 /// Per-rank sums of `work` over the grains each rank owns (owners[i] in [0, ranks)).
