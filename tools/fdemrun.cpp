@@ -65,8 +65,9 @@ constexpr const char* kDescription =
     "Before the first step it refuses grains started inside each other or behind a platen deeper than [run] "
     "overlap_tolerance (or pushes them apart with relax_overlaps = true) and a run of more estimated steps than [run] "
     "max_steps. Under mpirun -np N a scene, with [[stages]] or a triaxial test, of rigid or deformable grains runs "
-    "across N ranks with the one-rank results bit for bit (rank 0 writes every output; the sample is cut again when the "
-    "work measured per grain is out of balance; checkpoints continue on any rank count; [run] rigid_stress = "
+    "across N ranks with the one-rank results bit for bit (rank 0 writes the results and --vtk; the sample is cut again "
+    "when the time measured per rank is out of balance; every rank writes its part of a checkpoint at once, beside "
+    "the --checkpoint file as <stem>.rank<k>-a.h5 or -b.h5, and it continues on any rank count; [run] rigid_stress = "
     "\"elastostatic\" runs on one rank so far). The scene format is in docs/fdemrun.md.";
 
 /// The command line: the scene, the results and the run's own files.
@@ -117,22 +118,32 @@ std::string file_bytes(const fs::path& path) {
   return bytes.str();
 }
 
-/// --checkpoint: the solver's state, written over the last one as the run goes (for --restart).
+/// --checkpoint: the solver's state, written over the last one as the run goes (for --restart);
+/// split over ranks, by every rank at once (its main file and a part per other rank).
 struct Checkpoints {
   const fs::path& path;
   const Solver& solver;
   const std::string& digest;
+  const std::unique_ptr<mpi::DistributedRun>& ranks;
+  bool writes;  ///< this process writes a checkpoint alone (rank 0, or the only rank)
+  mutable char set = 'a';  ///< the ranks' part set the next checkpoint takes
   mutable std::size_t written = 0;
   mutable double seconds = 0;
 
   void save(const TriaxialRunProgress* triaxial) const {
     if (path.empty()) return;
     const double start = monotonic_seconds();
-    io::AtomicOutput ckpt(path, true);
-    write_checkpoint(ckpt.temp_path(), solver, digest, [&](io::H5File& f) {
+    const auto also = [&](io::H5File& f) {
       if (triaxial) save_progress(f, *triaxial);
-    });
-    ckpt.replace_now();
+    };
+    if (ranks) {
+      ranks->write_checkpoint(path, digest, set, also);
+      set = set == 'a' ? 'b' : 'a';
+    } else if (writes) {
+      io::AtomicOutput ckpt(path, true);
+      write_checkpoint(ckpt.temp_path(), solver, digest, also);
+      ckpt.replace_now();
+    }
     ++written;
     seconds += monotonic_seconds() - start;
   }
@@ -330,6 +341,7 @@ int main(int argc, char** argv) {
       return micro::d2min_by_label(micro::read_micro_tables(micro), micro.string(), state, increment);
     });
     mpi::check_runs_across_ranks(session, scene, o.scene.string());
+    if (!o.checkpoint.empty()) check_checkpoint_parts_allowed(o.checkpoint, session.size(), ctx.force());
     if (scene.model) io::declare_input(scene.model->path);
     const std::string scene_text = file_bytes(o.scene);
     const std::string model_bytes = scene.model ? file_bytes(scene.model->path) : std::string();  // a restart needs the same model file too
@@ -360,8 +372,7 @@ int main(int argc, char** argv) {
     if (writes) writer.emplace(out->temp_path(), solver, p.dump());
     std::optional<VtkFrameWriter> frames;
     if (vtk_out) frames.emplace(vtk_out->temp_path());
-    const fs::path checkpoint_path = writes ? o.checkpoint : fs::path();
-    const Checkpoints checkpoints{checkpoint_path, solver, digest};
+    const Checkpoints checkpoints{o.checkpoint, solver, digest, ranks, writes};
     double vtk_seconds = 0;
     const auto add_vtk_frame = [&] {
       if (!frames) return;
@@ -385,11 +396,7 @@ int main(int argc, char** argv) {
       std::optional<TriaxialRunSummary> summary;
       try {
         summary = run_triaxial_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks,
-                                     [&](const TriaxialRunProgress& at) {
-                                       if (o.checkpoint.empty()) return;
-                                       gather();
-                                       checkpoints.save(&at);
-                                     });
+                                     [&](const TriaxialRunProgress& at) { checkpoints.save(&at); });
       } catch (Error& e) {
         checkpoints.add_context(e);
         throw;
@@ -406,11 +413,7 @@ int main(int argc, char** argv) {
       StagesRunHooks hooks;
       hooks.before_frame = gather;
       hooks.frame = add_vtk_frame;
-      hooks.checkpoint = [&] {
-        if (o.checkpoint.empty()) return;
-        gather();
-        checkpoints.save(nullptr);
-      };
+      hooks.checkpoint = [&] { checkpoints.save(nullptr); };
       hooks.step_failed = [&](Error& e) { checkpoints.add_context(e); };
       hooks.step = rebalance;
       run_stages_shown(ctx, solver, scene, schedule, o.stop_step, writer ? &*writer : nullptr, hooks);

@@ -140,6 +140,49 @@ def across_checkpoints(scene, tag, stop):
     return found
 
 
+def refused(cmd, code, says, tag):
+    """Failures unless `cmd` exits with `code` and its stderr holds `says`."""
+    r = subprocess.run([*map(str, cmd)], capture_output=True, text=True)
+    if r.returncode != code or says not in r.stderr:
+        return [f"{tag}: exit {r.returncode} (expected {code}), stderr {r.stderr[-600:]!r}"]
+    return []
+
+
+def checkpoint_parts(scene, stop):
+    """A checkpoint of several ranks is its main file and one part per other rank, written by every rank
+    at once; the parts' two sets take turns and the older goes; a missing part, a part as the checkpoint
+    and part files in the way without --force are refused."""
+    found = []
+    every = scene.with_name("every_ckpt.toml")
+    every.write_text(scene.read_text().replace("[run]", "[run]\ncheckpoint_interval = 2e-5", 1))
+    fdemrun([every, tmp / "parts.h5", "--stop-step", stop, "--checkpoint", tmp / "parts.ckpt.h5"], ranks)
+    parts = sorted(p.name for p in tmp.glob("parts.ckpt.rank*"))
+    with h5py.File(tmp / "parts.ckpt.h5", "r") as f:
+        named = sorted(n.decode() for n in f["part_files"][...])
+        held = len(f["state/grains"])
+    for name in parts:
+        with h5py.File(tmp / name, "r") as f:
+            held += len(f["state/grains"])
+    if parts != named or len(parts) != int(ranks) - 1:
+        found.append(f"the checkpoint names parts {named}, beside it are {parts}: one set of {int(ranks) - 1} expected")
+    with h5py.File(tmp / "parts.h5", "r") as f:
+        grains = len(f["grains/label"])
+    if held != grains:
+        found.append(f"the checkpoint's files hold {held} grains' rows, the model has {grains}")
+    lost = tmp / parts[-1]
+    lost.rename(tmp / "lost.h5")
+    found += refused([bin_dir / "fdemrun", every, tmp / "x.h5", "--restart", tmp / "parts.ckpt.h5", "-q"], 2,
+                     f"its part {lost} is missing", "a missing part")
+    (tmp / "lost.h5").rename(lost)
+    found += refused([bin_dir / "fdemrun", every, tmp / "x.h5", "--restart", lost, "-q"], 2,
+                     "not a rank's part", "a part as the checkpoint")
+    found += refused([*mpirun, ranks, bin_dir / "fdemrun", every, tmp / "y.h5", "--checkpoint", tmp / "parts.ckpt.h5", "-q"], 2,
+                     "already exists; use --force", "a checkpoint over existing files without --force")
+    if (tmp / "y.h5").exists():
+        found.append("the refused run wrote its results")
+    return found
+
+
 failures = []
 with tempfile.TemporaryDirectory() as tmp:
     tmp = Path(tmp)
@@ -159,6 +202,7 @@ with tempfile.TemporaryDirectory() as tmp:
     if contacts < 100 or not pressed > 0:
         failures.append(f"the boxes barely touch ({contacts} node contacts over the rows, platen force {pressed:g} N)")
     failures += across_checkpoints(scene, "stages", half)
+    failures += checkpoint_parts(scene, half)
 
     # The same packing of elastic 4-node boxes (a softer glass): owners send surface nodes to the ranks
     # that ghost a grain and all its nodes to its next owner.

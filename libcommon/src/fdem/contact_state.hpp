@@ -521,6 +521,11 @@ struct ContactModel::State {
   /// other grain ([0]: a's nodes in b's frame, [1]: b's nodes in a's frame).
   std::array<double, 2> pair_motion(std::size_t k) const;
 
+  /// A checkpoint file's friction history and contact records under `group` (ContactModel::save),
+  /// checked against this model; DataError naming the file otherwise.
+  std::vector<HistoryEntry> read_history(const io::H5File& file, const std::string& group) const;
+  std::vector<ContactRecord> read_records(const io::H5File& file, const std::string& group) const;
+
   /// Builds pair k's lists at positions x and this step's poses; the surface nodes it visited.
   std::size_t build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x);
 

@@ -9,6 +9,7 @@
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interval.hpp"
 #include "graintwin/core/statistics.hpp"
+#include "graintwin/io/atomic_output.hpp"
 #include "graintwin/io/provenance.hpp"
 #include "graintwin/io/schema.hpp"
 #include "graintwin/io/table_checks.hpp"
@@ -357,12 +358,76 @@ void write_checkpoint(const std::filesystem::path& path, const Solver& solver, c
   if (also) also(f);
 }
 
+std::filesystem::path checkpoint_part_path(const std::filesystem::path& path, int rank, char set) {
+  return path.parent_path() / fmt::format("{}.rank{}-{}{}", path.stem().string(), rank, set, path.extension().string());
+}
+
+CheckpointPartFile::CheckpointPartFile(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest,
+                                       const std::vector<std::uint32_t>& grains, int rank, int ranks, char set,
+                                       const std::function<void(io::H5File&)>& also)
+    : path_(path), rank_(rank), set_(set),
+      out_(std::make_unique<io::AtomicOutput>(rank == 0 ? path : checkpoint_part_path(path, rank, set), true)) {
+  io::H5File f = io::H5File::create(out_->temp_path());
+  io::write_root_attrs(f, rank == 0 ? schema::kind::fdem_checkpoint : schema::kind::fdem_checkpoint_part);
+  f.set_attr(schema::path::root, ck::scene_digest, scene_digest);
+  f.set_attr(schema::path::root, ck::parts, static_cast<long long>(ranks));
+  if (rank == 0) {
+    std::vector<std::string> names;
+    for (int k = 1; k < ranks; ++k) names.push_back(checkpoint_part_path(path, k, set).filename().string());
+    f.write_strings(ck::part_files, names);
+  } else {
+    f.set_attr(schema::path::root, ck::part, static_cast<long long>(rank));
+    f.set_attr(schema::path::root, ck::part_step, static_cast<long long>(solver.step_count()));
+  }
+  solver.save(f, ck::state, {&grains, rank == 0});
+  if (rank == 0 && also) also(f);
+}
+
+CheckpointPartFile::~CheckpointPartFile() = default;
+
+void CheckpointPartFile::place() { out_->replace_now(); }
+
+void CheckpointPartFile::drop_other_set() const {
+  if (rank_ == 0) return;
+  std::error_code ignored;  // absent before a second checkpoint
+  std::filesystem::remove(checkpoint_part_path(path_, rank_, set_ == 'a' ? 'b' : 'a'), ignored);
+}
+
+void check_checkpoint_parts_allowed(const std::filesystem::path& path, int ranks, bool force) {
+  for (int k = 1; k < ranks; ++k)
+    for (char set : {'a', 'b'}) io::check_output_allowed(checkpoint_part_path(path, k, set), force);
+}
+
 void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest,
                      const std::function<void(const io::H5File&)>& also) {
-  const io::H5File f = io::open_kind(path, schema::kind::fdem_checkpoint, "pass a checkpoint written by fdemrun --checkpoint");
+  const io::H5File f = io::open_kind(path, schema::kind::fdem_checkpoint, "pass a checkpoint written by fdemrun --checkpoint (its main file, not a rank's part)");
   if (f.attr_string(schema::path::root, ck::scene_digest).value_or("") != scene_digest)
     throw UsageError("checkpoint " + path.string() + " was written for another scene or model; restart with the scene that wrote it");
-  solver.load(f, ck::state);
+  // Written by several ranks: its parts beside it, each of this checkpoint.
+  std::vector<io::H5File> parts;
+  const long long ranks = f.attr_int(schema::path::root, ck::parts).value_or(1);
+  const std::vector<std::string> names = ranks > 1 ? f.read_strings(ck::part_files) : std::vector<std::string>();
+  if (ranks < 1 || names.size() != static_cast<std::size_t>(ranks - 1))
+    throw DataError(fmt::format("{}: checkpoint written by {} ranks names {} part files; write it again", path.string(), ranks, names.size()));
+  const auto step = f.attr_int(ck::state, ck::step).value_or(0);
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const std::filesystem::path part = path.parent_path() / names[k];
+    if (!std::filesystem::exists(part))
+      throw UsageError(fmt::format("checkpoint {} was written by {} ranks and its part {} is missing; keep every part file "
+                                   "beside the checkpoint",
+                                   path.string(), ranks, part.string()));
+    io::H5File p = io::open_kind(part, schema::kind::fdem_checkpoint_part, "keep the part files fdemrun wrote beside the checkpoint");
+    if (p.attr_string(schema::path::root, ck::scene_digest).value_or("") != scene_digest ||
+        p.attr_int(schema::path::root, ck::part).value_or(-1) != static_cast<long long>(k + 1) ||
+        p.attr_int(schema::path::root, ck::parts).value_or(-1) != ranks ||
+        p.attr_int(schema::path::root, ck::part_step).value_or(-1) != step)
+      throw DataError(fmt::format("{} is not rank {}'s part of checkpoint {} (step {}); keep the part files fdemrun wrote with it",
+                                  part.string(), k + 1, path.string(), step));
+    parts.push_back(std::move(p));
+  }
+  std::vector<const io::H5File*> files{&f};
+  for (const io::H5File& p : parts) files.push_back(&p);
+  solver.load(files, ck::state);
   if (also) also(f);
 }
 

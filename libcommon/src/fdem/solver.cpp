@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
 
 #include <fmt/format.h>
@@ -639,73 +640,148 @@ void Solver::sum_platen_contacts() {
   }
 }
 
-void Solver::save(io::H5File& f, const std::string& group) const {
+namespace {
+
+/// The grains a checkpoint file holds the rows of: those it names, or every grain.
+std::vector<std::uint32_t> part_grains(const io::H5File& f, const std::string& group, std::size_t grains) {
+  if (!f.exists(group + "/" + ck::grains)) {
+    std::vector<std::uint32_t> every(grains);
+    std::iota(every.begin(), every.end(), 0u);
+    return every;
+  }
+  return f.read<std::uint32_t>(group + "/" + ck::grains);
+}
+
+}  // namespace
+
+void Solver::save(io::H5File& f, const std::string& group, const CheckpointPart& part) const {
   place_rigid_nodes();  // the file's node positions are the placed ones
   f.ensure_group(group);
-  f.set_attr(group, ck::step, static_cast<long long>(state_.step));
-  f.set_attr(group, ck::time, state_.time);
-  f.set_attr(group, ck::dissipated, state_.dissipated);
-  f.set_attr(group, ck::external_work, state_.external_work);
-  f.set_attr(group, ck::energy_input, state_.energy_input);
+  std::vector<std::uint32_t> every;
+  if (!part.grains) every.resize(state_.bodies.size()), std::iota(every.begin(), every.end(), 0u);
+  const std::vector<std::uint32_t>& grains = part.grains ? *part.grains : every;
+  if (part.grains) f.write(group + "/" + ck::grains, grains);
   io::DatasetOptions exact;
   exact.compress = false;
-  write_vectors(f, group + "/" + ck::node_position, state_.x);
-  write_vectors(f, group + "/" + ck::node_velocity, state_.v);
-  std::vector<double> bodies;
-  for (const RigidBodyState& b : state_.bodies) {
+  // The rows of the part's grains: their nodes (grain by grain), bodies and loads.
+  const auto& model_grains = model_->grains;
+  const bool deformable = std::any_of(model_grains.begin(), model_grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; });
+  // A whole checkpoint's nodes are in model order; a part's, grain by grain.
+  std::vector<Eigen::Vector3d> x, v, node_force;
+  if (!part.grains) x = state_.x, v = state_.v, node_force = deformable ? force_ : node_force;
+  std::vector<double> bodies, loads;
+  for (std::uint32_t g : grains) {
+    const Grain& grain = model_grains.at(g);
+    if (part.grains) {
+      x.insert(x.end(), state_.x.begin() + grain.node_begin, state_.x.begin() + grain.node_end);
+      v.insert(v.end(), state_.v.begin() + grain.node_begin, state_.v.begin() + grain.node_end);
+      if (deformable) node_force.insert(node_force.end(), force_.begin() + grain.node_begin, force_.begin() + grain.node_end);
+    }
+    const RigidBodyState& b = state_.bodies[g];
     const auto& q = b.orientation.coeffs();  // x, y, z, w
     bodies.insert(bodies.end(), {b.position[0], b.position[1], b.position[2], q[3], q[0], q[1], q[2], b.velocity[0],
                                  b.velocity[1], b.velocity[2], b.angular_momentum[0], b.angular_momentum[1],
                                  b.angular_momentum[2]});
-  }
-  f.write(group + "/" + ck::bodies, bodies.data(), {state_.bodies.size(), 13}, exact);
-  std::vector<double> platens;
-  for (const PlatenState& p : state_.platens)
-    platens.insert(platens.end(), {p.point[0], p.point[1], p.point[2], p.normal[0], p.normal[1], p.normal[2], p.velocity[0],
-                                   p.velocity[1], p.velocity[2], p.friction});
-  f.write(group + "/" + ck::platens, platens.data(), {state_.platens.size(), 10}, exact);
-  // A servo reads the last step's platen forces before the next step, and a frame written then
-  // reads the rigid grains' loads (their Love-Weber stress).
-  write_vectors(f, group + "/" + ck::platen_force, platen_force_);
-  std::vector<double> loads;
-  for (const RigidLoad& l : rigid_loads_) {
+    // A frame written before the next step reads the rigid grains' loads (their Love-Weber stress).
+    const RigidLoad& l = rigid_loads_[g];
     loads.insert(loads.end(), {l.force[0], l.force[1], l.force[2]});
     for (int r = 0; r < 3; ++r) loads.insert(loads.end(), {l.moment(r, 0), l.moment(r, 1), l.moment(r, 2)});
   }
-  f.write(group + "/" + ck::rigid_loads, loads.data(), {rigid_loads_.size(), 12}, exact);
+  write_vectors(f, group + "/" + ck::node_position, x);
+  write_vectors(f, group + "/" + ck::node_velocity, v);
+  f.write(group + "/" + ck::bodies, bodies.data(), {grains.size(), 13}, exact);
+  f.write(group + "/" + ck::rigid_loads, loads.data(), {grains.size(), 12}, exact);
   // Deformable grains' Love-Weber stress reads the last step's node forces (love_weber_stresses).
-  const auto& grains = model_->grains;
-  if (std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; })) {
-    f.set_attr(group, ck::last_time_step, last_dt_);
-    write_vectors(f, group + "/" + ck::node_force, force_);
+  if (deformable) write_vectors(f, group + "/" + ck::node_force, node_force);
+  if (part.shared) {
+    f.set_attr(group, ck::step, static_cast<long long>(state_.step));
+    f.set_attr(group, ck::time, state_.time);
+    f.set_attr(group, ck::dissipated, state_.dissipated);
+    f.set_attr(group, ck::external_work, state_.external_work);
+    f.set_attr(group, ck::energy_input, state_.energy_input);
+    std::vector<double> platens;
+    for (const PlatenState& p : state_.platens)
+      platens.insert(platens.end(), {p.point[0], p.point[1], p.point[2], p.normal[0], p.normal[1], p.normal[2], p.velocity[0],
+                                     p.velocity[1], p.velocity[2], p.friction});
+    f.write(group + "/" + ck::platens, platens.data(), {state_.platens.size(), 10}, exact);
+    // A servo reads the last step's platen forces before the next step.
+    write_vectors(f, group + "/" + ck::platen_force, platen_force_);
+    if (deformable) f.set_attr(group, ck::last_time_step, last_dt_);
+    if (boundary_) boundary_->save(f, group + "/" + ck::boundary);
   }
-  if (contact_) contact_->save(f, group + "/" + ck::contact);
-  if (boundary_) boundary_->save(f, group + "/" + ck::boundary);
+  if (contact_) contact_->save(f, group + "/" + ck::contact, part);
 }
 
 void Solver::load(const io::H5File& f, const std::string& group) {
-  const auto need = [&](const std::string& name, std::size_t size) {
-    auto v = f.read<double>(group + "/" + name);
-    if (v.size() != size)
-      throw DataError(f.path().string() + ": checkpoint " + group + "/" + name +
-                      " does not fit this model; restart with the scene that wrote it");
+  const io::H5File* one[] = {&f};
+  load(one, group);
+}
+
+void Solver::load(std::span<const io::H5File* const> files, const std::string& group) {
+  const io::H5File& f = *files.front();  // the shared state's
+  const auto misfit = [&](const io::H5File& file, const std::string& name) {
+    return DataError(file.path().string() + ": checkpoint " + group + "/" + name + " does not fit this model; restart with the scene that wrote it");
+  };
+  const auto need = [&](const io::H5File& file, const std::string& name, std::size_t size) {
+    auto v = file.read<double>(group + "/" + name);
+    if (v.size() != size) throw misfit(file, name);
     return v;
   };
+  const auto& model_grains = model_->grains;
+  const bool deformable = std::any_of(model_grains.begin(), model_grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; });
   SolverState s;
   s.step = static_cast<std::uint64_t>(f.attr_int(group, ck::step).value_or(0));
   s.time = f.attr_double(group, ck::time);
   s.dissipated = f.attr_double(group, ck::dissipated);
   s.external_work = f.attr_double(group, ck::external_work);
   s.energy_input = f.attr_double(group, ck::energy_input);
-  s.x = read_vectors(f, group + "/" + ck::node_position, state_.x.size());
-  s.v = read_vectors(f, group + "/" + ck::node_velocity, state_.v.size());
-  const auto bodies = need(ck::bodies, 13 * state_.bodies.size());
-  for (std::size_t g = 0; g < state_.bodies.size(); ++g) {
-    const double* d = bodies.data() + 13 * g;
-    s.bodies.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Quaterniond(d[3], d[4], d[5], d[6]),
-                        Eigen::Vector3d(d[7], d[8], d[9]), Eigen::Vector3d(d[10], d[11], d[12])});
+  s.x = state_.x;
+  s.v = state_.v;
+  s.bodies = state_.bodies;
+  std::vector<RigidLoad> rigid_loads(rigid_loads_.size());
+  const bool has_forces = f.exists(group + "/" + ck::node_force);
+  std::vector<Eigen::Vector3d> node_force(force_.size(), Eigen::Vector3d::Zero());
+  // Every grain's rows from the one file that holds them.
+  std::vector<char> seen(model_grains.size(), 0);
+  for (const io::H5File* part : files) {
+    const bool whole = !part->exists(group + "/" + ck::grains);
+    const std::vector<std::uint32_t> grains = part_grains(*part, group, model_grains.size());
+    std::size_t nodes = 0;
+    for (std::uint32_t g : grains) {
+      if (g >= model_grains.size() || seen[g]++)
+        throw DataError(fmt::format("{}: checkpoint {} names grain {} {}; restart with the checkpoint's own files", part->path().string(),
+                                    group, g, g >= model_grains.size() ? "of a model of " + std::to_string(model_grains.size()) + " grains" : "that another of its files holds"));
+      nodes += model_grains[g].node_end - model_grains[g].node_begin;
+    }
+    if (whole) nodes = state_.x.size();
+    const auto x = read_vectors(*part, group + "/" + ck::node_position, nodes);
+    const auto v = read_vectors(*part, group + "/" + ck::node_velocity, nodes);
+    const auto forces = has_forces ? read_vectors(*part, group + "/" + ck::node_force, nodes) : std::vector<Eigen::Vector3d>();
+    const auto bodies = need(*part, ck::bodies, 13 * grains.size());
+    // Checkpoints written before the loads were kept have none (zero loads).
+    const auto loads = part->exists(group + "/" + ck::rigid_loads) ? need(*part, ck::rigid_loads, 12 * grains.size())
+                                                                    : std::vector<double>(12 * grains.size(), 0.0);
+    std::size_t row = 0;
+    for (std::size_t k = 0; k < grains.size(); ++k) {
+      const Grain& grain = model_grains[grains[k]];
+      for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i, ++row) {
+        const std::size_t from = whole ? i : row;
+        s.x[i] = x[from];
+        s.v[i] = v[from];
+        if (has_forces) node_force[i] = forces[from];
+      }
+      const double* d = bodies.data() + 13 * k;
+      s.bodies[grains[k]] = {Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Quaterniond(d[3], d[4], d[5], d[6]),
+                             Eigen::Vector3d(d[7], d[8], d[9]), Eigen::Vector3d(d[10], d[11], d[12])};
+      const double* l = loads.data() + 12 * k;
+      rigid_loads[grains[k]].force = Eigen::Vector3d(l[0], l[1], l[2]);
+      rigid_loads[grains[k]].moment = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(l + 3);
+    }
   }
-  const auto platens = need(ck::platens, 10 * state_.platens.size());
+  if (const auto missing = std::find(seen.begin(), seen.end(), 0); missing != seen.end())
+    throw DataError(fmt::format("{}: checkpoint {} holds no state of grain {} in any of its files; restart with all of the checkpoint's files",
+                                f.path().string(), group, missing - seen.begin()));
+  const auto platens = need(f, ck::platens, 10 * state_.platens.size());
   for (std::size_t p = 0; p < state_.platens.size(); ++p) {
     const double* d = platens.data() + 10 * p;
     s.platens.push_back({Eigen::Vector3d(d[0], d[1], d[2]), Eigen::Vector3d(d[3], d[4], d[5]), Eigen::Vector3d(d[6], d[7], d[8]), d[9]});
@@ -718,23 +794,11 @@ void Solver::load(const io::H5File& f, const std::string& group) {
   const auto platen_force = f.exists(group + "/" + ck::platen_force)
                                 ? read_vectors(f, group + "/" + ck::platen_force, platen_force_.size())
                                 : std::vector<Eigen::Vector3d>(platen_force_.size(), Eigen::Vector3d::Zero());
-  std::vector<RigidLoad> rigid_loads(rigid_loads_.size());
-  if (f.exists(group + "/" + ck::rigid_loads)) {
-    const auto loads = need(ck::rigid_loads, 12 * rigid_loads_.size());
-    for (std::size_t g = 0; g < rigid_loads.size(); ++g) {
-      const double* d = loads.data() + 12 * g;
-      rigid_loads[g].force = Eigen::Vector3d(d[0], d[1], d[2]);
-      rigid_loads[g].moment = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d + 3);
-    }
-  }
-  const bool has_forces = f.exists(group + "/" + ck::node_force);
-  auto node_force = has_forces ? read_vectors(f, group + "/" + ck::node_force, force_.size())
-                               : std::vector<Eigen::Vector3d>(force_.size(), Eigen::Vector3d::Zero());
-  if (contact_) contact_->load(f, group + "/" + ck::contact);
+  if (contact_) contact_->load(files, group + "/" + ck::contact);
   if (boundary_) boundary_->load(f, group + "/" + ck::boundary);
   state_ = std::move(s);
   force_ = std::move(node_force);
-  last_dt_ = has_forces ? f.attr_double(group, ck::last_time_step) : 0.0;
+  last_dt_ = has_forces && deformable ? f.attr_double(group, ck::last_time_step) : 0.0;
   sum_platen_contacts();          // the stiffness, from the restored records
   platen_force_ = platen_force;  // as saved: checkpoints of older runs hold no records
   rigid_loads_ = std::move(rigid_loads);

@@ -12,6 +12,7 @@
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/core/interval.hpp"
+#include "graintwin/fdem/results_file.hpp"
 
 namespace graintwin::mpi {
 namespace {
@@ -229,13 +230,41 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
   traffic_.exchange_seconds += monotonic_seconds() - start;
 }
 
+std::vector<std::uint32_t> DistributedRun::advanced() const {
+  // Their owners may have changed since the step; before the first step they are the owned ones.
+  const fdem::ContactModel& contact = *solver_.contact_model();
+  return fdem::grains_with_role(contact.grain_roles().empty() ? std::span<const fdem::GrainRole>(roles_) : contact.grain_roles(),
+                                fdem::GrainRole::owned);
+}
+
+void DistributedRun::write_checkpoint(const std::filesystem::path& path, const std::string& scene_digest, char set,
+                                      const std::function<void(io::H5File&)>& also) {
+  const int rank = session_.rank();
+  std::unique_ptr<fdem::CheckpointPartFile> file;
+  std::string failure;
+  try {
+    file = std::make_unique<fdem::CheckpointPartFile>(path, solver_, scene_digest, advanced(), rank, session_.size(), set, also);
+    if (rank != 0) file->place();  // the main file names it only once every part is whole
+  } catch (const Error& e) {
+    failure = e.message();
+  }
+  const std::uint64_t failed = sum_over_ranks(session_, std::uint64_t{failure.empty() ? 0u : 1u});
+  if (failed > 0)
+    throw DataError(failure.empty() ? fmt::format("{} other rank(s) could not write their part of checkpoint {}; the last "
+                                                  "checkpoint stays as it was",
+                                                  failed, path.string())
+                                    : failure);
+  if (rank == 0) file->place();
+  sum_over_ranks(session_, std::uint64_t{0});  // the main file names this set now: the other set's parts can go
+  file->drop_other_set();
+}
+
 void DistributedRun::gather_output() {
   fdem::ContactModel& contact = *solver_.contact_model();
-  // The grains advanced in the last step hold its loads and records (their owners may have changed
-  // since); before the first step they are the owned ones.
+  // The grains advanced in the last step hold its loads and records.
   const std::span<const fdem::GrainRole> stepped = contact.grain_roles().empty() ? std::span<const fdem::GrainRole>(roles_)
                                                                                    : contact.grain_roles();
-  const std::vector<std::uint32_t> advanced = fdem::grains_with_role(stepped, fdem::GrainRole::owned);
+  const std::vector<std::uint32_t> advanced = this->advanced();
   fdem::RankMessage mine;
   const fdem::Model& model = solver_.model();
   const std::span<const fdem::RigidBodyState> states = solver_.rigid_states();
@@ -292,7 +321,7 @@ bool DistributedRun::rebalance(bool force) {
   const bool settling = just_cut_;
   just_cut_ = false;
   if (!force && (settling || !fdem::needs_rebalance(loads))) return false;
-  fdem::weigh_by_time(work, loads[session_.rank()]);  // the counts share the rank's seconds
+  if (!force) fdem::weigh_by_time(work, loads[session_.rank()]);  // the counts share the rank's seconds
   sum_over_ranks(session_, work);  // each grain's work from the ranks that held it: whole numbers
   for (double& w : work) w = std::max(w, 1.0);  // a grain never weighs nothing
   const std::vector<fdem::RigidBodyState> all = gather_states();

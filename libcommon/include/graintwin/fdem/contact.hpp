@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "graintwin/fdem/checkpoint_part.hpp"
 #include "graintwin/fdem/model.hpp"
 
 namespace graintwin::io {
@@ -283,9 +284,15 @@ class ContactModel {
   std::size_t rebuild_count() const;
   /// The skin in use, m (options.skin or the automatic value).
   double skin() const;
-  /// Writes / reads the friction history under `group`, for checkpoints: a restart continues
-  /// exactly like the uninterrupted run.
-  void save(io::H5File& file, const std::string& group) const;
+  /// Writes the friction history and the last step's records under `group`, for checkpoints (a
+  /// restart continues exactly like the uninterrupted run): of `part`'s grains (entries and records
+  /// of pairs whose first grain is one), and the membrane balls' friction and the deep pairs when
+  /// it holds the shared state.
+  void save(io::H5File& file, const std::string& group, const CheckpointPart& part = {}) const;
+  /// Reads what save() wrote into `files` (one file, or every part of a checkpoint of several
+  /// ranks, the first holding the shared state): their entries and records together, in the
+  /// one-rank order. DataError naming the file when a table is damaged or out of this model.
+  void load(std::span<const io::H5File* const> files, const std::string& group);
   void load(const io::H5File& file, const std::string& group);
 
   // A run shared by ranks (docs/fdemrun.md, across machines; contact_ranks.cpp).

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -16,6 +17,10 @@
 #include "graintwin/fdem/solver.hpp"
 #include "graintwin/fdem/triaxial.hpp"
 #include "graintwin/io/h5file.hpp"
+
+namespace graintwin::io {
+class AtomicOutput;
+}
 
 namespace graintwin::fdem {
 
@@ -152,8 +157,45 @@ FrameElementStress read_frame_element_stress(const std::filesystem::path& path, 
 void write_checkpoint(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest,
                       const std::function<void(io::H5File&)>& also = {});
 /// Restores a checkpoint into `solver` and hands the file to `also`; UsageError when it was written
-/// for another scene.
+/// for another scene. A checkpoint written by several ranks is its main file at `path` and its
+/// parts beside it (checkpoint_part_path): all are read, on any rank count. UsageError when a part
+/// is missing, DataError when one belongs to another checkpoint.
 void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest,
                      const std::function<void(const io::H5File&)>& also = {});
+
+// A checkpoint written by R ranks at once (docs/formats.md, fdem_checkpoint): rank 0 writes the
+// main file at the checkpoint's path, what every rank holds alike and the rows of its own grains;
+// every other rank k the rows of its grains to a part beside it. Parts come in two sets, a and b,
+// that take turns, so that the last whole checkpoint stays whole while the next is written.
+
+/// Rank k's part (1 <= k) in `set` ('a' or 'b') of the checkpoint at `path`: run.ckpt.h5 ->
+/// run.ckpt.rank1-a.h5.
+std::filesystem::path checkpoint_part_path(const std::filesystem::path& path, int rank, char set);
+/// Rank `rank`'s file of a checkpoint of `ranks` ranks at `path`, written under a temporary name
+/// beside its place (rank 0's the main file, naming the parts of `set`; rank k's its part of
+/// `set`): the rows of `grains` (the grains this rank advanced in the last step, sorted), and on
+/// rank 0 the shared state and `also`'s. place() puts it where it belongs (a rank places its part
+/// before rank 0 places the main file that names it); unplaced, it is removed.
+class CheckpointPartFile {
+ public:
+  CheckpointPartFile(const std::filesystem::path& path, const Solver& solver, const std::string& scene_digest,
+                     const std::vector<std::uint32_t>& grains, int rank, int ranks, char set,
+                     const std::function<void(io::H5File&)>& also = {});
+  ~CheckpointPartFile();
+  CheckpointPartFile(const CheckpointPartFile&) = delete;
+  CheckpointPartFile& operator=(const CheckpointPartFile&) = delete;
+  void place();
+  /// Removes this rank's part of the other set (k > 0), once the main file names this one.
+  void drop_other_set() const;
+
+ private:
+  std::filesystem::path path_;
+  int rank_;
+  char set_;
+  std::unique_ptr<io::AtomicOutput> out_;
+};
+/// UsageError unless every part file a checkpoint of `ranks` ranks at `path` may write is allowed
+/// as an output (io::check_output_allowed).
+void check_checkpoint_parts_allowed(const std::filesystem::path& path, int ranks, bool force);
 
 }  // namespace graintwin::fdem

@@ -342,11 +342,16 @@ class Solver {
   void set_rigid_load(std::size_t grain, const RigidLoad& load) { rigid_loads_.at(grain) = load; }
 
   /// Checkpoint: the state, the last step's platen forces, the contact history (membrane balls'
-  /// included) and the boundary's state when one is set, under `group`.
-  void save(io::H5File& file, const std::string& group) const;
+  /// included) and the boundary's state when one is set, under `group`; of `part`'s grains only,
+  /// and without what every rank holds alike unless part.shared (one file of a checkpoint written
+  /// by several ranks at once).
+  void save(io::H5File& file, const std::string& group, const CheckpointPart& part = {}) const;
   /// Restores what save() wrote for the same model (and a boundary built the same way, set before);
   /// DataError when sizes disagree or the checkpoint's boundary does not match the one set.
   void load(const io::H5File& file, const std::string& group);
+  /// The same from the files of a checkpoint written by several ranks (the first holding the
+  /// shared state): DataError naming a file when two hold a grain or none holds one.
+  void load(std::span<const io::H5File* const> files, const std::string& group);
 
  private:
   /// Rigid grain g's pose and motion now, as contact places its nodes.

@@ -15,6 +15,7 @@ inline constexpr const char* tracks = "tracks";
 inline constexpr const char* fdem_model = "fdem_model";
 inline constexpr const char* fdem_results = "fdem_results";
 inline constexpr const char* fdem_checkpoint = "fdem_checkpoint";  ///< fdemrun --checkpoint
+inline constexpr const char* fdem_checkpoint_part = "fdem_checkpoint_part";  ///< fdemrun --checkpoint on several ranks: rank k's file
 inline constexpr const char* ground_truth = "ground_truth";
 inline constexpr const char* micro = "micro";
 inline constexpr const char* forces = "forces";
@@ -326,6 +327,11 @@ inline constexpr const char* contact_overlap = "contacts/overlap";    ///< (M) m
 // triaxial test's progress under /triaxial. Member names are relative to their group.
 namespace graintwin::schema::fdem_checkpoint {
 inline constexpr const char* scene_digest = "scene_digest";  ///< root attribute: the scene and model it was written for
+// Root attributes of a checkpoint written by several ranks (its main file and each part).
+inline constexpr const char* parts = "parts";                ///< the ranks that wrote it, one file each (1 or absent: one file)
+inline constexpr const char* part = "part";                  ///< a part's rank, 1 .. parts - 1 (the main file is rank 0's)
+inline constexpr const char* part_files = "/part_files";     ///< main file: the parts' file names (strings), beside it, rank 1 first
+inline constexpr const char* part_step = "step";             ///< a part's solver step: the same as the main file's /state step
 inline constexpr const char* state = "/state";               ///< group: the solver's state
 // Attributes of /state.
 inline constexpr const char* step = "step";
@@ -335,6 +341,7 @@ inline constexpr const char* external_work = "external_work";      ///< J
 inline constexpr const char* energy_input = "energy_input";        ///< J
 inline constexpr const char* last_time_step = "last_time_step";    ///< s, the step node_force belongs to (models with deformable grains)
 // Members of /state.
+inline constexpr const char* grains = "grains";                    ///< uint32 (n): in a part, the grains whose rows it holds (below: their nodes grain by grain)
 inline constexpr const char* node_position = "x";                  ///< (nodes x 3) m
 inline constexpr const char* node_velocity = "v";                  ///< (nodes x 3) m/s, at the half step
 inline constexpr const char* bodies = "bodies";                    ///< (G x 13) rigid bodies

@@ -12,6 +12,8 @@
 // of the step, and every rank moves the wall or the balls alike from all of them, so the servo
 // reads the same stresses everywhere. The plain-data side is fdem/rank_state.
 #include <cstdint>
+#include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -73,7 +75,8 @@ class DistributedRun final : public fdem::RankShare {
   /// kRebalanceImbalance (or `force`), it weighs every grain by the work counted since (the checks
   /// of its contact candidates on the rank that owned it, the nodes its pairs' lists visited, its
   /// elements' work and one check for its motion each step), each rank's counts sharing its
-  /// seconds (fdem::weigh_by_time), and cuts the sample again with them. Each rank then holds every
+  /// seconds (fdem::weigh_by_time), and cuts the sample again with them. A forced cut weighs the
+  /// counts alone: the same cut on every run (timings are not). Each rank then holds every
   /// grain's state and the whole friction history, and takes the grains its new box holds; the
   /// run goes on with the same bits. Returns whether it cut again.
   bool rebalance(bool force = false);
@@ -87,6 +90,14 @@ class DistributedRun final : public fdem::RankShare {
   /// grains it ghosts is what their owners sent it, and its absent grains take no part in its steps.
   void gather_output();
 
+  /// Writes a checkpoint at `path` with every rank at once (collective; fdem::write_checkpoint_part):
+  /// each rank the rows of the grains it advanced in the last step, rank 0 the main file with the
+  /// shared state and `also`'s, the others their part of `set` beside it. The main file takes its
+  /// place once every part is whole, and the parts of the other set go then. DataError on every
+  /// rank when one could not write (the last checkpoint stays whole).
+  void write_checkpoint(const std::filesystem::path& path, const std::string& scene_digest, char set,
+                        const std::function<void(io::H5File&)>& also);
+
   /// The exchange, from within the solver's step once the owned grains moved: sends the owned
   /// grains' states to their ghost ranks, migrants with their pairs' history to their new owners
   /// and this rank's contacts with the wall or the membrane to every rank, takes the others', adds
@@ -97,6 +108,9 @@ class DistributedRun final : public fdem::RankShare {
 
  private:
 
+  /// The grains this rank advanced in the last step (before any step, those it owns), sorted: it
+  /// holds their loads, node forces, contact records and friction history.
+  std::vector<std::uint32_t> advanced() const;
   /// s this rank's solver spent stepping (its step phases but the boundary's, which every rank
   /// does whole) outside the exchange, since the start.
   double busy_seconds() const;
