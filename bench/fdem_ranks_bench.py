@@ -75,13 +75,18 @@ def run(build, scene, model, out, steps, ranks, threads, fdemrun=None):
         sys.exit(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr[-3000:]}")
     m = re.search(r"time: (\d+) steps in ([0-9.e+-]+) s \(([0-9.e+-]+) ms a step\)", r.stderr)
     exchange = re.search(r"spent ([0-9.e+-]+) s in the exchanges", r.stderr)
+    waited = re.search(r"\(([0-9.e+-]+) s waiting for messages", r.stderr)
     owned = re.search(r"rank 0 owns (\d+) grains", r.stderr)
+    migration = re.search(r"; (\d+) steps moved grains, their exchanges ([0-9.e+-]+) s beyond", r.stderr)
     with h5py.File(out, "r") as f:
         moved = json.loads(f["run/parameters"][0])["ranks"]
         grains = len(f["grains/label"])
     return {"steps": int(m.group(1)), "seconds": float(m.group(2)), "ms_per_step": float(m.group(3)), "wall": wall,
-            "exchange_seconds": float(exchange.group(1)) if exchange else 0.0, "ranks": moved, "grains": grains,
-            "rank0_owned": int(owned.group(1)) if owned else grains}
+            "exchange_seconds": float(exchange.group(1)) if exchange else 0.0,
+            "wait_seconds": float(waited.group(1)) if waited else 0.0, "ranks": moved, "grains": grains,
+            "rank0_owned": int(owned.group(1)) if owned else grains,
+            "migration_steps": int(migration.group(1)) if migration else 0,
+            "migration_seconds": float(migration.group(2)) if migration else 0.0}
 
 
 def elastic_model(build, model, out):
@@ -151,7 +156,7 @@ def main():
             r = run(build, scene, model, out, steps, ranks, threads)
             r.update(label=label, ranks_count=ranks, threads=threads, out=out)
             runs.append(r)
-            print(label, {key: r[key] for key in ("grains", "steps", "ms_per_step", "exchange_seconds", "ranks")}, flush=True)
+            print(label, {key: r[key] for key in ("grains", "steps", "ms_per_step", "exchange_seconds", "migration_seconds", "ranks")}, flush=True)
         reference = runs[0]
         grains = reference["grains"]
         for r in runs:
@@ -164,7 +169,9 @@ def main():
                              f"{r['ranks_count'] - 1} messages and a barrier; two Allreduce of the step's sums) per step per rank; {moved['grain_states_sent'] / per_rank_step:.3g} "
                              f"grain states, {moved['migrations']} migrations with {moved['history_entries']} history entries "
                              f"in all; the sample cut again {moved['rebalances']} times by measured work; rank 0 in the exchange "
-                             f"{100 * r['exchange_seconds'] / r['seconds']:.2g} % of its step time")
+                             f"{100 * r['exchange_seconds'] / r['seconds']:.2g} % of its step time, migrating grains "
+                             f"{100 * r['migration_seconds'] / r['seconds']:.2g} % (the exchange's excess in its "
+                             f"{r['migration_steps']} steps that moved grains)")
             else:
                 travelled = "-"
             rows.append(f"| {os.path.basename(os.path.dirname(given)) or given} ({grains} {kind} grains) | {speed:g} | {r['label']} | {r['steps']} | "

@@ -293,10 +293,13 @@ void log_ranks(const mpi::DistributedRun& run, int ranks) {
   const double sent = static_cast<double>(t.doubles);
   spdlog::info("{} ranks: rank 0 owns {} grains at the end; it sent {} grain states ({} migrations, {} history entries), "
                "{:.3g} MB in all ({:.2g} % migrating grains, {:.2g} % the step's sums, the rest ghosts), and spent {:.3g} s "
-               "in the exchanges; the sample was cut again {} times by measured work",
+               "in the exchanges ({:.3g} s waiting for messages; {} steps moved grains, their exchanges {:.3g} s beyond the "
+               "other steps' mean); the sample was cut again {} times by measured work",
                ranks, run.owned().size(), t.bodies, t.migrations, t.history, 8e-6 * sent,
                sent > 0 ? 100.0 * static_cast<double>(t.migration_doubles) / sent : 0.0,
-               sent > 0 ? 100.0 * static_cast<double>(t.sum_words) / sent : 0.0, t.exchange_seconds, run.rebalances());
+               sent > 0 ? 100.0 * static_cast<double>(t.sum_words) / sent : 0.0, t.exchange_seconds, t.wait_seconds,
+               t.migration_steps,
+               t.migration_seconds(), run.rebalances());
 }
 
 void log_end(const ResultsWriter& writer, const Solver& solver, int threads, double vtk_seconds, const Checkpoints& checkpoints) {

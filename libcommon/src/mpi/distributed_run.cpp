@@ -30,8 +30,9 @@ int int_count(std::size_t n) {
 /// NBX, 2010): no collective over all ranks for the counts, and a rank hears only from the ranks
 /// that have something for it. Consecutive exchanges take turns between two tags, so that a rank
 /// already in the next one cannot be heard in this one (it cannot be two ahead: every exchange
-/// waits for every rank's barrier).
-std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<double>>& outgoing) {
+/// waits for every rank's barrier). `waited` (s) gains the time spent polling while nothing
+/// arrived: the other ranks' lateness and the messages' latency, not this rank's handling.
+std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<double>>& outgoing, double* waited = nullptr) {
   const std::size_t ranks = outgoing.size();
   if (ranks == 1) return outgoing;  // one rank sends itself what it has, with or without MPI
   static int exchanges = 0;         // the same sequence on every rank
@@ -49,6 +50,7 @@ std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<
     }
   MPI_Request barrier = MPI_REQUEST_NULL;
   for (bool done = false; !done;) {
+    const double polled = waited ? monotonic_seconds() : 0.0;
     int arrived = 0;
     MPI_Status status;
     MPI_Iprobe(MPI_ANY_SOURCE, tag, MPI_COMM_WORLD, &arrived, &status);
@@ -69,6 +71,7 @@ std::vector<std::vector<double>> exchange_buffers(const std::vector<std::vector<
       MPI_Test(&barrier, &finished, MPI_STATUS_IGNORE);
       done = finished;
     }
+    if (waited && !arrived) *waited += monotonic_seconds() - polled;
   }
   return incoming;
 }
@@ -207,7 +210,8 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
     traffic_.doubles += outgoing[r].size();
   }
   traffic_.migrations += owned_.size() - plan.kept.size();
-  const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing);
+  bool migrating = owned_.size() != plan.kept.size();
+  const std::vector<std::vector<double>> incoming = exchange_buffers(outgoing, &traffic_.wait_seconds);
   // The step's sums: every rank's exact accumulators added, and the deepest overlap.
   const std::size_t words = sum_over_ranks(session_, totals.accumulators(), totals.max_overlap);
   traffic_.doubles += words;
@@ -227,7 +231,11 @@ void DistributedRun::finish_step(fdem::StepTotals& totals, fdem::StepRows& bound
     for (const fdem::GrainNodes& n : m.nodes) take_nodes(n);
     solver_.contact_model()->merge_history(m.history);
   }
-  traffic_.exchange_seconds += monotonic_seconds() - start;
+  migrating = migrating || owned_.size() != plan.kept.size();  // grains came
+  ++traffic_.steps;
+  const double seconds = monotonic_seconds() - start;
+  traffic_.exchange_seconds += seconds;
+  if (migrating) ++traffic_.migration_steps, traffic_.migration_step_seconds += seconds;
 }
 
 std::vector<std::uint32_t> DistributedRun::advanced() const {

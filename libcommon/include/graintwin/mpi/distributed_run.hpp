@@ -37,6 +37,21 @@ struct RankTraffic {
   std::uint64_t sum_words = 0;   ///< of them, the step sums' words
   std::uint64_t migration_doubles = 0;  ///< of them, the migrating grains' states and friction history
   double exchange_seconds = 0;   ///< s, planning, packing, exchanging and unpacking
+  /// s, of them, polling while nothing had arrived: waiting for later ranks and the messages'
+  /// latency (the rest is this rank's handling, and the sums' MPI_Allreduce)
+  double wait_seconds = 0;
+  std::uint64_t steps = 0;       ///< steps exchanged
+  /// Steps in which grains left or came to this rank, and the exchange's seconds in them: beside
+  /// the other steps' mean, what migrating costs (migration_seconds).
+  std::uint64_t migration_steps = 0;
+  double migration_step_seconds = 0;
+  /// s, the exchange's time in the steps that moved grains beyond the other steps' mean (0 when
+  /// no step or every step moved grains): the cost of migrating, packing to taking in.
+  double migration_seconds() const {
+    if (migration_steps == 0 || migration_steps == steps) return 0.0;
+    const double other = (exchange_seconds - migration_step_seconds) / static_cast<double>(steps - migration_steps);
+    return migration_step_seconds - other * static_cast<double>(migration_steps);
+  }
 };
 
 class DistributedRun final : public fdem::RankShare {
