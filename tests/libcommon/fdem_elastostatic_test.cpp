@@ -15,6 +15,7 @@
 #include "graintwin/fdem/elastostatic.hpp"
 #include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/primitives.hpp"
+#include "support/fdem_box.hpp"
 #include "graintwin/fdem/solver.hpp"
 
 using namespace graintwin;
@@ -23,13 +24,9 @@ using Eigen::Vector3d;
 
 namespace {
 
-constexpr double kSide = 1e-3, kLength = 2e-3;  // m: the box is kSide x kSide x kLength along z
+constexpr double kSide = test::kBoxSide, kLength = test::kBoxLength;  // m: the box is kSide x kSide x kLength along z
 
-fdem::Model box(fdem::GrainKind kind) {
-  fdem::Model model;
-  fdem::add_grain(model, fdem::box_mesh(Vector3d(kSide, kSide, kLength), 0.25e-3), Vector3d::Zero(), kind, 0, 1);
-  return model;
-}
+fdem::Model box(fdem::GrainKind kind) { return test::box_grain(kind); }
 
 /// Consistent nodal loads of a uniform traction t on the box's face z = z_face: a linear face's
 /// corners get A / 3 each; a quadratic face's corners nothing and its mid-edge nodes A / 3 each.

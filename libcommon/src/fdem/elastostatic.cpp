@@ -95,25 +95,7 @@ ElastostaticGrain::ElastostaticGrain(const Model& model, std::size_t grain, std:
 
   // The element stiffnesses assembled; only the lower triangle, which the factorisation reads. Held
   // components become identity rows and columns.
-  std::vector<Eigen::Triplet<double>> triplets;
-  ElementStiffness Ke;
-  for (std::size_t k = 0; k < elements_.size(); ++k) {
-    const Element& element = elements_[k];
-    const int n = element_stiffness(model, g.element_begin + k, lame_, Ke);
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b <= a; ++b)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            std::size_t row = 3 * element.nodes[static_cast<std::size_t>(a)] + static_cast<std::size_t>(i);
-            std::size_t col = 3 * element.nodes[static_cast<std::size_t>(b)] + static_cast<std::size_t>(j);
-            if (held[row] || held[col]) continue;
-            if (row < col) {
-              if (a == b) continue;  // the diagonal block's upper half: its lower half holds it
-              std::swap(row, col);
-            }
-            triplets.emplace_back(static_cast<int>(row), static_cast<int>(col), Ke(3 * a + i, 3 * b + j));
-          }
-  }
+  std::vector<Eigen::Triplet<double>> triplets = grain_stiffness_lower(model, grain, lame_, held);
   for (const std::size_t k : held_) triplets.emplace_back(static_cast<int>(k), static_cast<int>(k), 1.0);
   Eigen::SparseMatrix<double> K(static_cast<Eigen::Index>(3 * node_count_), static_cast<Eigen::Index>(3 * node_count_));
   K.setFromTriplets(triplets.begin(), triplets.end());

@@ -106,6 +106,32 @@ const TetRule& exact_rule() {
   return rule;
 }
 
+std::vector<Eigen::Triplet<double>> grain_stiffness_lower(const Model& model, std::size_t grain, const Lame& lame,
+                                                          std::span<const char> held) {
+  const Grain& g = model.grains.at(grain);
+  std::vector<Eigen::Triplet<double>> triplets;
+  ElementStiffness Ke;
+  const auto free = [&](std::size_t dof) { return held.empty() || !held[dof]; };
+  for (std::size_t e = g.element_begin; e < g.element_end; ++e) {
+    const int n = element_stiffness(model, e, lame, Ke);
+    const std::uint32_t* nodes = model.element_nodes.data() + model.element_offset[e];
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b <= a; ++b)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) {
+            std::size_t row = 3 * (nodes[a] - g.node_begin) + static_cast<std::size_t>(i);
+            std::size_t col = 3 * (nodes[b] - g.node_begin) + static_cast<std::size_t>(j);
+            if (!free(row) || !free(col)) continue;
+            if (row < col) {
+              if (a == b) continue;  // the diagonal block's upper half: its lower half holds it
+              std::swap(row, col);
+            }
+            triplets.emplace_back(static_cast<int>(row), static_cast<int>(col), Ke(3 * a + i, 3 * b + j));
+          }
+  }
+  return triplets;
+}
+
 void map_rule(const Model& model, std::size_t e, const TetRule& rule, std::vector<Eigen::Vector3d>& points,
               std::vector<double>& weights) {
   const int n = checked_node_count(model, e);

@@ -8,6 +8,7 @@
 // pass; a 10-node element gathers its nodes once for its 4 points. A rigid motion gives F = R, E = 0: no stress at
 // any rotation angle. Node order is gmsh's (model.hpp). Units: m, Pa, N, J.
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -64,6 +65,12 @@ using ElementStiffness = Eigen::Matrix<double, 30, 30>;
 /// K_ab,ij = sum_q w_q [lambda g_a,i g_b,j + mu g_a,j g_b,i + mu (g_a . g_b) delta_ij] over
 /// stiffness_rule's points, g the reference gradients. Writes the top-left corner of `K`; returns n.
 int element_stiffness(const Model& model, std::size_t element, const Lame& lame, ElementStiffness& K);
+
+/// Grain `grain`'s small-strain stiffness (element_stiffness of its elements at `lame`), its lower
+/// triangle (row >= col) as triplets over the grain's local degrees of freedom 3 (node -
+/// node_begin) + axis; those where `held` is set (empty: none) are left out.
+std::vector<Eigen::Triplet<double>> grain_stiffness_lower(const Model& model, std::size_t grain, const Lame& lame,
+                                                          std::span<const char> held = {});
 
 /// Physical points and weights (w |det J|) of `rule` mapped through element e's reference shape.
 void map_rule(const Model& model, std::size_t element, const TetRule& rule, std::vector<Eigen::Vector3d>& points,

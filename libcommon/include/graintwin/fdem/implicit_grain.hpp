@@ -1,0 +1,61 @@
+#pragma once
+// A deformable grain stepped implicitly in its corotated frame: the way past the element time step
+// (docs/fdemrun.md, implicit grains; a library piece, not yet a choice of fdemrun's scenes).
+//
+// Why: quartz grains of 10-node elements need a step some 340 times shorter than the rigid twin's
+// contact step (their element wave speed over their smallest altitude), while under quasi-static
+// loading their strains are ~1e-5 and their internal vibrations carry nothing of the test.
+//
+// How: the grain's best-fit rotation R about its mass centre c (shape matching: the polar factor of
+// sum_i m_i (x_i - c)(X_i - C)^T) carries its rigid motion; in that frame its strain is small, so its
+// elastic forces are the reference small-strain stiffness K on the displacement u = R^T (x - c) - (X - C).
+// One step of h, with R held over it (backward Euler in velocity, stiffness warping):
+//   (M + h^2 K) w' = M w + h (R^T f - K u),   w = R^T v,   v' = R w',   x' = x + h v'
+// M the lumped node masses (the same in any frame), f the node forces besides the elastic ones
+// (contact, gravity, damping). M + h^2 K is factored once for a step h. Unconditionally stable for
+// the elastic modes, which it damps where omega h >> 1 (the stiff ones a quasi-static test does not
+// resolve) and leaves nearly undamped where omega h << 1; a rigid motion (K u = 0) moves as it would
+// by x' = x + h v'. At rest under loads f it holds K u = R^T f: the small-strain static state.
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "graintwin/fdem/model.hpp"
+
+namespace graintwin::fdem {
+
+class ImplicitGrain {
+ public:
+  /// Grain `grain` of `model` (4- or 10-node elements, its material's E and nu) with the lumped
+  /// `node_mass` (kg, one per model node), for steps of `dt` (s, > 0). Throws DataError naming the
+  /// grain when it has no elements or mass, or M + dt^2 K is not positive definite.
+  ImplicitGrain(const Model& model, std::size_t grain, std::span<const double> node_mass, double dt);
+
+  /// The grain's best-fit rotation at node positions `x` (the model's node array).
+  Eigen::Matrix3d rotation(std::span<const Eigen::Vector3d> x) const;
+  /// One step of dt: the grain's nodes in `x` and `v` (the model's arrays; v at the half step) move
+  /// under the forces `f` on them (the model's array, N, without the elastic ones). Returns the
+  /// strain energy after the step, 1/2 u^T K u (J).
+  double step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const;
+  /// The body-frame displacement u = R^T (x - c) - (X - C) of each node of the grain, m.
+  std::vector<Eigen::Vector3d> displacement(std::span<const Eigen::Vector3d> x) const;
+
+  double time_step() const { return dt_; }
+  std::size_t node_count() const { return node_count_; }
+
+ private:
+  /// The mass centre of the grain's nodes in `x`.
+  Eigen::Vector3d centre(std::span<const Eigen::Vector3d> x) const;
+
+  std::size_t node_begin_ = 0, node_count_ = 0;
+  double dt_ = 0;
+  std::vector<double> mass_;                 ///< per local node, kg
+  std::vector<Eigen::Vector3d> reference_;   ///< X - C per local node, m
+  double total_mass_ = 0;
+  Eigen::SparseMatrix<double> stiffness_;    ///< K, full (both triangles), local dofs
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor_;  ///< M + dt^2 K
+};
+
+}  // namespace graintwin::fdem
