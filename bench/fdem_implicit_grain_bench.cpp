@@ -6,8 +6,8 @@
 // element limit, the implicit one at the step the rigid twin's contact allows (the same model with
 // its grains rigid); the cost per simulated microsecond is each one's time a grain-step over its
 // step. The grains' contact is left out of both (the same per step, and the implicit twin takes
-// far fewer steps). Whether explicit penalty contact stays stable on implicit grains at that step
-// is not measured here.
+// far fewer steps). Whether explicit penalty contact stays stable on implicit grains at that step is
+// fdem_implicit_grain_test's question (a box on a platen: stable at 70 element steps).
 //   fdem_implicit_grain_bench [--quick]   (--quick: 20 grains of sand_small)
 #include <algorithm>
 #include <filesystem>
@@ -49,8 +49,8 @@ int main(int argc, char** argv) try {
                                    "(once), one implicit step (best-fit rotation, K u, the LDL^T solve, each the best of 5) and one explicit "
                                    "element-force pass (the best of 5). Explicit twin: fdemrun's element step; implicit: the contact step of "
                                    "the same model with its grains rigid (the rigid twin's). Cost per simulated us: a grain-step's time over "
-                                   "its step, the median grain. Contact is left out of both, and so is whether explicit penalty contact stays "
-                                   "stable on implicit grains at that step (not measured yet).",
+                                   "its step, the median grain. Contact is left out of both (its stability on implicit grains at that step: a "
+                                   "10-node box resting on a platen at 70 element steps is stable, fdem_implicit_grain_test).",
                                    bench::machine_summary()));
   const std::vector<std::string> series = quick ? std::vector<std::string>{"sand_small"} : std::vector<std::string>{"sand_small", "soil_crop"};
   for (const std::string& name : series) {

@@ -56,11 +56,11 @@ Eigen::Matrix3d love_weber(const Eigen::Matrix3d& moment, double volume) { retur
 /// 1 / (1/M + |r|^2 / I_min), shared by the `rigid_contact_nodes` nodes assumed to touch at once
 /// (its element-lumped node masses mean nothing for a body that moves as one).
 std::vector<double> contact_masses(const Model& model, std::span<const double> lumped,
-                                   const std::vector<BodyProperties>& bodies, double rigid_contact_nodes) {
+                                   const std::vector<BodyProperties>& bodies, double rigid_contact_nodes, bool implicit_grains) {
   std::vector<double> mass(lumped.begin(), lumped.end());
   for (std::size_t g = 0; g < model.grains.size(); ++g) {
     const Grain& grain = model.grains[g];
-    if (grain.kind != GrainKind::rigid) continue;
+    if (grain.kind != GrainKind::rigid && !implicit_grains) continue;
     const BodyProperties& b = bodies[g];
     const double inertia = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(b.inertia, Eigen::EigenvaluesOnly).eigenvalues()[0];
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
@@ -107,7 +107,8 @@ Solver::Solver(const Model& model, const SolverOptions& options)
                                  options.stiffness_damping, options.local_damping));
   if (!(options.rigid_contact_nodes >= 1))
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
-  contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes);
+  contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes, options.implicit_grains);
+  if (options.implicit_grains) implicit_.resize(grains), implicit_strain_.assign(grains, 0.0);
   if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, contact_mass_, options.contact);
   if (contact_ && options.elastostatic_stress) contact_->record_node_forces(true);
 }
@@ -138,7 +139,7 @@ void Solver::refresh_masses(std::span<const std::uint32_t> grains) {
     bodies_[g] = body_properties(m, g);
     if (grain.kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
   }
-  contact_mass_ = contact_masses(m, mass_, bodies_, options_.rigid_contact_nodes);
+  contact_mass_ = contact_masses(m, mass_, bodies_, options_.rigid_contact_nodes, options_.implicit_grains);
   if (contact_) contact_->set_node_masses(contact_mass_);
 }
 
@@ -196,7 +197,8 @@ StepLimits Solver::time_step_limits(double stiffness_damping) const {
   if (guaranteed_critical_ > s.element_critical) s.element_critical = guaranteed_critical_, s.guaranteed = true;
   // The damped step grows with the undamped one, so the element with the shortest sets both.
   s.stiffness_damping = stiffness_damping;
-  s.element_stable = damped_critical_step(s.element_critical, stiffness_damping) * options_.element_safety;
+  s.element_stable = options_.implicit_grains ? kInfinity  // implicit grains: their elements limit nothing
+                                              : damped_critical_step(s.element_critical, stiffness_damping) * options_.element_safety;
   s.contact_stable = contact_ ? contact_->stable_time_step() : kInfinity;
   s.boundary_stable = boundary_ ? boundary_->stable_time_step(*contact_) : kInfinity;
   return s;
@@ -279,6 +281,10 @@ StepReport Solver::step(double dt) {
     const Grain& grain = m.grains[g];
     if (grain.kind == GrainKind::rigid || (!roles.empty() && roles[g] != GrainRole::owned)) continue;
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) force_[i].setZero();
+    if (options_.implicit_grains) {  // its elastic forces are inside its implicit step
+      if (!implicit_[g] || implicit_[g]->time_step() != dt) implicit_[g] = std::make_unique<ImplicitGrain>(m, g, mass_, dt);
+      continue;
+    }
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
     if (beta > 0) {  // from the velocities of the last half step: the stable step is damped_critical_step's
       for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) viscous_force_[i].setZero();
@@ -316,6 +322,10 @@ StepReport Solver::step(double dt) {
   for (std::size_t g = 0; g < grains; ++g) {
     if (!roles.empty() && roles[g] != GrainRole::owned) continue;  // another rank advances it
     const Grain& grain = m.grains[g];
+    if (grain.kind != GrainKind::rigid && options_.implicit_grains) {
+      step_implicit_grain(g, dt, g_acc, kinetic[g], damped[g], gravity_work[g], strain[g], bad[g]);
+      continue;
+    }
     if (grain.kind != GrainKind::rigid) {
       for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
         const double mi = mass_[i];
@@ -424,6 +434,40 @@ StepReport Solver::step(double dt) {
   times_.motion += seconds_since();
   ++times_.steps;
   return report;
+}
+
+void Solver::step_implicit_grain(std::size_t g, double dt, const Eigen::Vector3d& g_acc, double& kinetic, double& damped,
+                                 double& gravity_work, double& strain, char& bad) {
+  const Grain& grain = model_->grains[g];
+  // The forces besides the elastic ones: contact (in force_), gravity and mass-proportional damping
+  // from the last half step's velocity (explicit in the damping alone).
+  std::vector<Eigen::Vector3d> f(grain.node_end - grain.node_begin);
+  double kinetic_before = 0;
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+    const double mi = mass_[i];
+    f[i - grain.node_begin] = force_[i] + mi * g_acc - options_.damping * mi * state_.v[i];
+    kinetic_before += 0.5 * mi * state_.v[i].squaredNorm();
+  }
+  const std::vector<Eigen::Vector3d> x_before(state_.x.begin() + grain.node_begin, state_.x.begin() + grain.node_end);
+  const double strain_before = implicit_strain_[g];
+  strain = implicit_[g]->step(std::span<Eigen::Vector3d>(state_.x).subspan(grain.node_begin, f.size()),
+                              std::span<Eigen::Vector3d>(state_.v).subspan(grain.node_begin, f.size()), f);
+  implicit_strain_[g] = strain;
+  // The books: what entered the grain (the work of contact and gravity over the step) less what it
+  // gained (kinetic and strain energy) was lost, to the mass damping and to what backward Euler takes
+  // out of the stiff modes (dissipated). Contact books its side itself, gravity is external work.
+  double entered = 0;
+  kinetic = 0;
+  gravity_work = 0;
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
+    const double mi = mass_[i];
+    const Eigen::Vector3d dx = state_.x[i] - x_before[i - grain.node_begin];
+    entered += (force_[i] + mi * g_acc).dot(dx);
+    gravity_work += mi * g_acc.dot(dx);
+    kinetic += 0.5 * mi * state_.v[i].squaredNorm();
+    if (!finite(state_.x[i])) bad = 1;
+  }
+  damped = entered - (kinetic - kinetic_before) - (strain - strain_before);
 }
 
 void Solver::check_health(const Energies& e) const {

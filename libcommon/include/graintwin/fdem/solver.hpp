@@ -22,6 +22,7 @@
 #include "graintwin/core/exact_sum.hpp"
 #include "graintwin/fdem/contact.hpp"
 #include "graintwin/fdem/element.hpp"
+#include "graintwin/fdem/implicit_grain.hpp"
 #include "graintwin/fdem/model.hpp"
 #include "graintwin/fdem/step_times.hpp"
 
@@ -77,6 +78,11 @@ struct SolverOptions {
   /// element_stress(), the frames and the VTK frames. The contact model then keeps each step's
   /// node forces.
   bool elastostatic_stress = false;
+  /// Deformable grains are stepped implicitly in their corotated frame (fdem::ImplicitGrain): their
+  /// elements no longer limit the step, and contact sees each of their nodes as it sees a rigid
+  /// grain's (the body's effective mass over rigid_contact_nodes), since over such a step the stiff
+  /// grain answers a contact as a whole. An experiment so far: not a scene option.
+  bool implicit_grains = false;
 };
 
 /// Energies at the start of a step (time t_n), J.
@@ -364,6 +370,11 @@ class Solver {
   Eigen::Vector3d mass_mean(std::size_t grain, const std::vector<Eigen::Vector3d>& values) const;
   Eigen::Vector3d angular_velocity(std::size_t grain, const Eigen::Quaterniond& q, const Eigen::Vector3d& L) const;
   void check_health(const Energies& e) const;
+  /// Advances deformable grain g implicitly (options.implicit_grains) under this step's contact
+  /// forces (force_), gravity and mass damping, and sets its step terms: kinetic and strain energy
+  /// after the step, the energy lost (damping and the implicit step's own), gravity's work, bad.
+  void step_implicit_grain(std::size_t g, double dt, const Eigen::Vector3d& g_acc, double& kinetic, double& damped,
+                           double& gravity_work, double& strain, char& bad);
 
   const Model* model_;
   SolverOptions options_;
@@ -373,6 +384,10 @@ class Solver {
   std::vector<BodyProperties> bodies_;         ///< per grain, in the reference configuration
   std::vector<Eigen::Matrix3d> inverse_inertia_;  ///< per grain, reference axes
   std::unique_ptr<ContactModel> contact_;
+  /// Per deformable grain with options.implicit_grains, its implicit stepper for the last step's dt
+  /// (made again when dt changes), and its strain energy after the last step (J).
+  std::vector<std::unique_ptr<ImplicitGrain>> implicit_;
+  std::vector<double> implicit_strain_;
   Boundary* boundary_ = nullptr;
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
   /// Per node, the last step's forces on deformable grains (a rigid grain's nodes hold none).
