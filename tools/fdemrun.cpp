@@ -153,11 +153,17 @@ struct Checkpoints {
   }
 };
 
-/// Continues from --restart: the solver's state, and a triaxial test's progress into `triaxial`.
-void restart_from(const Options& o, Solver& solver, const std::string& digest, TriaxialRunProgress* triaxial) {
+/// Continues from --restart: the solver's state, and a triaxial test's progress into `triaxial`; refuses a
+/// --checkpoint that would replace one of the restart's part files.
+void restart_from(const Options& o, Solver& solver, const std::string& digest, TriaxialRunProgress* triaxial, int ranks) {
   read_checkpoint(o.restart, solver, digest, [&](const io::H5File& f) {
     if (triaxial) *triaxial = load_progress(f);
   });
+  // Its parts are inputs now: a --checkpoint that would write over one is refused before any step.
+  if (!o.checkpoint.empty()) {
+    io::check_output_allowed(o.checkpoint, true);
+    check_checkpoint_parts_allowed(o.checkpoint, ranks, true);
+  }
   // A --stop-step must lie beyond the step the restart begins at.
   if (o.stop_step > 0 && o.stop_step <= solver.step_count())
     throw UsageError("--stop-step " + std::to_string(o.stop_step) + " is not beyond step " +
@@ -360,7 +366,7 @@ int main(int argc, char** argv) {
     std::optional<io::AtomicOutput> out;
     if (writes) out.emplace(o.output, ctx.force());
     if (!o.restart.empty() && !scene.triaxial)
-      restart_from(o, solver, digest, nullptr);
+      restart_from(o, solver, digest, nullptr, session.size());
     else if (o.restart.empty())
       set_initial_velocities(solver, scene);
     // Split after a restart: the ranks cut the sample where its grains are now (a triaxial test's
@@ -393,7 +399,7 @@ int main(int argc, char** argv) {
       TriaxialRunHooks hooks;
       hooks.before_frame = gather;
       hooks.frame = add_vtk_frame;
-      if (!o.restart.empty()) hooks.restore = [&](TriaxialRunProgress& at) { restart_from(o, solver, digest, &at); };
+      if (!o.restart.empty()) hooks.restore = [&](TriaxialRunProgress& at) { restart_from(o, solver, digest, &at, session.size()); };
       hooks.ready = split;
       hooks.step = [&](const TriaxialMeasure&, const StepReport&, const TriaxialRunProgress&) { rebalance(); };
       std::optional<TriaxialRunSummary> summary;

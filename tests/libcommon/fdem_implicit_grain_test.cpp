@@ -138,6 +138,13 @@ TEST(ImplicitGrain, RefusesBadInputs) {
   EXPECT_THROW(fdem::ImplicitGrain(model, 0, std::vector<double>(3, 1.0), 1e-7), UsageError);
   std::vector<double> massless(mass.size(), 0.0);
   EXPECT_THROW(fdem::ImplicitGrain(model, 0, massless, 1e-7), DataError);
+  fdem::SolverOptions options;
+  options.implicit_grains = true;
+  options.stiffness_damping = 1e-8;
+  EXPECT_THROW(fdem::Solver(model, options), UsageError) << "stiffness damping is not in the implicit step";
+  options.stiffness_damping = 0;
+  options.local_damping = 0.1;
+  EXPECT_THROW(fdem::Solver(model, options), UsageError) << "nor local damping";
 }
 
 TEST(ImplicitGrain, ABoxPressedOnAPlatenByGravityRestsStablyAtTheRigidContactStep) {

@@ -180,6 +180,12 @@ def checkpoint_parts(scene, stop):
                      "already exists; use --force", "a checkpoint over existing files without --force")
     if (tmp / "y.h5").exists():
         found.append("the refused run wrote its results")
+    # A restart's parts are its inputs: a --checkpoint over one of them is refused before any step.
+    before = lost.read_bytes()
+    found += refused([bin_dir / "fdemrun", every, tmp / "z.h5", "--restart", tmp / "parts.ckpt.h5", "--checkpoint", lost,
+                      "--force", "-q"], 2, "is an input", "a checkpoint over a part of the restart")
+    if lost.read_bytes() != before or (tmp / "z.h5").exists():
+        found.append("the refused restart touched its part or wrote results")
     return found
 
 

@@ -424,6 +424,7 @@ void read_checkpoint(const std::filesystem::path& path, Solver& solver, const st
       throw DataError(fmt::format("{} is not rank {}'s part of checkpoint {} (step {}); keep the part files fdemrun wrote with it",
                                   part.string(), k + 1, path.string(), step));
     parts.push_back(std::move(p));
+    io::declare_input(part);  // no output of this run may be one of them
   }
   std::vector<const io::H5File*> files{&f};
   for (const io::H5File& p : parts) files.push_back(&p);

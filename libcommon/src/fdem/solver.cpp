@@ -107,6 +107,8 @@ Solver::Solver(const Model& model, const SolverOptions& options)
                                  options.stiffness_damping, options.local_damping));
   if (!(options.rigid_contact_nodes >= 1))
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
+  if (options.implicit_grains && (options.stiffness_damping > 0 || options.local_damping > 0))
+    throw UsageError("implicit grains take mass-proportional damping only so far; set stiffness and local damping to 0");
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes, options.implicit_grains);
   if (options.implicit_grains) implicit_.resize(grains), implicit_strain_.assign(grains, 0.0);
   if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, contact_mass_, options.contact);

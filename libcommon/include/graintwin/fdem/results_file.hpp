@@ -159,7 +159,8 @@ void write_checkpoint(const std::filesystem::path& path, const Solver& solver, c
 /// Restores a checkpoint into `solver` and hands the file to `also`; UsageError when it was written
 /// for another scene. A checkpoint written by several ranks is its main file at `path` and its
 /// parts beside it (checkpoint_part_path): all are read, on any rank count. UsageError when a part
-/// is missing, DataError when one belongs to another checkpoint.
+/// is missing, DataError when one belongs to another checkpoint. Its parts are declared inputs
+/// (io::declare_input), so no output may replace them.
 void read_checkpoint(const std::filesystem::path& path, Solver& solver, const std::string& scene_digest,
                      const std::function<void(const io::H5File&)>& also = {});
 
