@@ -79,7 +79,11 @@ int main(int argc, char** argv) try {
       sizes.push_back(static_cast<double>(grain.element_end - grain.element_begin));
       std::unique_ptr<fdem::ImplicitGrain> stepper;
       factor.push_back(bench::best_seconds(1, [&] { stepper = std::make_unique<fdem::ImplicitGrain>(deformable, g, mass, contact_step); }));
-      implicit.push_back(bench::best_seconds(5, [&] { stepper->step(x, v, f); }));
+      const std::size_t n = grain.node_end - grain.node_begin;
+      implicit.push_back(bench::best_seconds(5, [&] {
+        stepper->step(std::span(x).subspan(grain.node_begin, n), std::span(v).subspan(grain.node_begin, n),
+                      std::span<const Eigen::Vector3d>(f).subspan(grain.node_begin, n));
+      }));
       explicit_forces.push_back(bench::best_seconds(5, [&] { elements.add_internal_forces(x, grain.element_begin, grain.element_end, f); }));
       std::fill(f.begin() + grain.node_begin, f.begin() + grain.node_end, Eigen::Vector3d::Zero());
       if ((g + 1) % 50 == 0) std::cerr << fmt::format("{}: {} of {} grains\n", name, g + 1, grains);

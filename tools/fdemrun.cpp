@@ -216,11 +216,12 @@ nlohmann::json grain_kinds_json(const Scene& scene, const Model& model) {
 
 void log_schedule(const Scene& scene, const Model& model, const RunSchedule& s) {
   const std::array<std::size_t, 3> kinds = grain_kind_counts(model);
-  spdlog::info("grains: {} rigid, {} tet4, {} tet10{}", kinds[0], kinds[1], kinds[2],
+  spdlog::info("grains: {} rigid, {} tet4, {} tet10{}{}", kinds[0], kinds[1], kinds[2],
                scene.model && scene.model->deformable
                    ? fmt::format("; the model file's deformable ones ({}) picked by {}", scene.model->deformable->grains.size(),
                                  scene.model->deformable->rule)
-                   : std::string());
+                   : std::string(),
+               scene.implicit_grains && kinds[1] + kinds[2] > 0 ? "; the deformable ones implicit in their corotated frames" : "");
   spdlog::info("{} grains, {} nodes, {} elements, {} platens; time step {:.4g} s (elements {:.4g} s{}, contact {:.4g} s), {}",
                model.grains.size(), model.nodes.size(), model.element_count(), model.platens.size(), s.dt,
                s.limits.element_stable,

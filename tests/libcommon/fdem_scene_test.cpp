@@ -254,6 +254,33 @@ TEST(FdemScene, MaterialsAndRunKeysOutOfTheirRangeAreRefusedWithTheRange) {
   }
 }
 
+TEST(FdemScene, DeformableIntegrationIsExplicitOrImplicitWithWhatImplicitTakes) {
+  test::TempDir dir;
+  const std::string box = "[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\n";
+  const auto run = [&](const std::string& keys, const std::string& rest = "") {
+    return write_text(dir, "run.toml", "[run]\nduration = 1e-6\n" + keys + box + rest);
+  };
+  EXPECT_FALSE(read_scene(run("")).implicit_grains);
+  EXPECT_TRUE(read_scene(run("deformable_integration = \"implicit\"\n")).implicit_grains);
+  EXPECT_NE(error_of(run("deformable_integration = \"newmark\"\n"))
+                .find("run.toml: [run]: deformable_integration must be \"explicit\" (central differences at the element step) "
+                      "or \"implicit\""),
+            std::string::npos);
+  const std::string implicit = "deformable_integration = \"implicit\"\n";
+  EXPECT_NE(error_of(run(implicit + "local_damping = 0.7\n"))
+                .find("run.toml: [run] deformable_integration = \"implicit\" takes mass-proportional damping only so far, and "
+                      "[run] sets stiffness_damping or local_damping"),
+            std::string::npos);
+  EXPECT_NE(error_of(run(implicit + "stiffness_damping = 1e-9\n")).find("takes mass-proportional damping only"), std::string::npos);
+  EXPECT_NE(error_of(run(implicit + "element_step_target = 1e-7\ndamping = 100\n"))
+                .find("[run] element_step_target (selective mass scaling) lifts the element step, which implicit grains do not have"),
+            std::string::npos);
+  // A stage's own damping is checked too.
+  const std::string stages = "[[stages]]\nname = \"press\"\nduration = 1e-6\nlocal_damping = 0.5\n";
+  EXPECT_NE(error_of(write_text(dir, "stages.toml", "[run]\n" + implicit + box + stages)).find("stage 'press' sets stiffness_damping or local_damping"),
+            std::string::npos);
+}
+
 TEST(FdemScene, PenaltyPerSizeIsResolvedOnTheBuiltMeshes) {
   // Boxes meshed at h = 0.5 mm: two of a surface triangle's three edges are h, so the median edge
   // is h, for 4-node grains and (doubled quarter faces) for 10-node ones.

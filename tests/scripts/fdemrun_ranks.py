@@ -257,6 +257,12 @@ with tempfile.TemporaryDirectory() as tmp:
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 2 or 'rigid_stress = "elastostatic" runs on one rank so far' not in r.stderr or (tmp / "refused.h5").exists():
         failures.append(f"an elastostatic scene on {ranks} ranks: exit {r.returncode}, {r.stderr[-500:]!r}")
+    implicit = tmp / "implicit.toml"
+    implicit.write_text(scene_text().replace('kind = "rigid"', 'kind = "tet4"').replace("[run]", '[run]\ndeformable_integration = "implicit"', 1))
+    cmd = [*mpirun, ranks, str(bin_dir / "fdemrun"), str(implicit), str(tmp / "refused.h5"), "-q"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 2 or 'deformable_integration = "implicit" with deformable grains runs on one rank so far' not in r.stderr or (tmp / "refused.h5").exists():
+        failures.append(f"an implicit scene on {ranks} ranks: exit {r.returncode}, {r.stderr[-500:]!r}")
 
 print(f"{ranks} ranks: {len(one)} datasets, {frames} frames, {contacts} node contacts over the rows, largest platen "
       f"force component {pressed:.3g} N; {moved['migrations']} migrations with {moved['history_entries']} history entries, "

@@ -9,27 +9,28 @@
 
 namespace graintwin::fdem {
 
-ImplicitGrain::ImplicitGrain(const Model& model, std::size_t grain, std::span<const double> node_mass, double dt)
-    : dt_(dt) {
+ImplicitGrain::ImplicitGrain(const Model& model, std::size_t grain, std::span<const double> node_mass, double dt,
+                             double damping)
+    : dt_(dt), damping_(damping) {
   const Grain& g = model.grains.at(grain);
   const auto name = [&] { return fmt::format("grain {} (label {})", grain, g.label); };
   if (!(dt > 0)) throw UsageError(fmt::format("implicit grain: the time step must be > 0 (got {} s)", dt));
+  if (!(damping >= 0)) throw UsageError(fmt::format("implicit grain: the damping must be >= 0 (got {} /s)", damping));
   if (node_mass.size() != model.nodes.size())
     throw UsageError(fmt::format("implicit grain: {} node masses for a model of {} nodes; pass one per node", node_mass.size(),
                                  model.nodes.size()));
   if (g.element_end <= g.element_begin)
     throw DataError(fmt::format("implicit grain: {} has no elements; mesh it with shapes2mesh.", name()));
-  node_begin_ = g.node_begin;
   node_count_ = g.node_end - g.node_begin;
   Eigen::Vector3d first = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < node_count_; ++i) {
-    mass_.push_back(node_mass[node_begin_ + i]);
+    mass_.push_back(node_mass[g.node_begin + i]);
     total_mass_ += mass_.back();
-    first += mass_.back() * model.nodes[node_begin_ + i];
+    first += mass_.back() * model.nodes[g.node_begin + i];
   }
   if (!(total_mass_ > 0)) throw DataError(fmt::format("implicit grain: {} has no mass; check its material's density.", name()));
   const Eigen::Vector3d centre = first / total_mass_;
-  for (std::size_t i = 0; i < node_count_; ++i) reference_.push_back(model.nodes[node_begin_ + i] - centre);
+  for (std::size_t i = 0; i < node_count_; ++i) reference_.push_back(model.nodes[g.node_begin + i] - centre);
 
   const Lame lame = lame_constants(model.materials.at(g.material));
   const std::vector<Eigen::Triplet<double>> lower = grain_stiffness_lower(model, grain, lame);
@@ -43,26 +44,27 @@ ImplicitGrain::ImplicitGrain(const Model& model, std::size_t grain, std::span<co
   system.reserve(lower.size() + 3 * node_count_);
   for (const Eigen::Triplet<double>& t : lower) system.emplace_back(t.row(), t.col(), dt * dt * t.value());
   for (std::size_t i = 0; i < node_count_; ++i)
-    for (int k = 0; k < 3; ++k) system.emplace_back(static_cast<int>(3 * i + k), static_cast<int>(3 * i + k), mass_[i]);
+    for (int k = 0; k < 3; ++k)
+      system.emplace_back(static_cast<int>(3 * i + k), static_cast<int>(3 * i + k), (1 + damping * dt) * mass_[i]);
   Eigen::SparseMatrix<double> A(dofs, dofs);
   A.setFromTriplets(system.begin(), system.end());
   factor_.compute(A);  // reads the lower triangle
   if (factor_.info() != Eigen::Success || !(factor_.vectorD().minCoeff() > 0))
-    throw DataError(fmt::format("implicit grain: M + dt^2 K of {} is not positive definite (an inverted element or a "
+    throw DataError(fmt::format("implicit grain: (1 + damping dt) M + dt^2 K of {} is not positive definite (an inverted element or a "
                                 "node without mass); mesh the grain again.",
                                 name()));
 }
 
 Eigen::Vector3d ImplicitGrain::centre(std::span<const Eigen::Vector3d> x) const {
   Eigen::Vector3d first = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < node_count_; ++i) first += mass_[i] * x[node_begin_ + i];
+  for (std::size_t i = 0; i < node_count_; ++i) first += mass_[i] * x[i];
   return first / total_mass_;
 }
 
 Eigen::Matrix3d ImplicitGrain::rotation(std::span<const Eigen::Vector3d> x) const {
   const Eigen::Vector3d c = centre(x);
   Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < node_count_; ++i) moment += mass_[i] * (x[node_begin_ + i] - c) * reference_[i].transpose();
+  for (std::size_t i = 0; i < node_count_; ++i) moment += mass_[i] * (x[i] - c) * reference_[i].transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(moment, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();  // a proper rotation, also for a flattened grain
   flip(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
@@ -73,32 +75,35 @@ std::vector<Eigen::Vector3d> ImplicitGrain::displacement(std::span<const Eigen::
   const Eigen::Vector3d c = centre(x);
   const Eigen::Matrix3d R = rotation(x);
   std::vector<Eigen::Vector3d> u(node_count_);
-  for (std::size_t i = 0; i < node_count_; ++i) u[i] = R.transpose() * (x[node_begin_ + i] - c) - reference_[i];
+  for (std::size_t i = 0; i < node_count_; ++i) u[i] = R.transpose() * (x[i] - c) - reference_[i];
   return u;
 }
 
-double ImplicitGrain::step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const {
+ImplicitGrain::StrainEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const {
   const Eigen::Vector3d c = centre(x);
   const Eigen::Matrix3d R = rotation(x);
   const auto dofs = static_cast<Eigen::Index>(3 * node_count_);
   Eigen::VectorXd u(dofs), rhs(dofs);
   for (std::size_t i = 0; i < node_count_; ++i)
-    u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R.transpose() * (x[node_begin_ + i] - c) - reference_[i];
+    u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R.transpose() * (x[i] - c) - reference_[i];
   const Eigen::VectorXd Ku = stiffness_ * u;
+  StrainEnergies energies;
+  energies.start = 0.5 * u.dot(Ku);
   for (std::size_t i = 0; i < node_count_; ++i) {
     const auto k = static_cast<Eigen::Index>(3 * i);
-    rhs.segment<3>(k) = mass_[i] * (R.transpose() * v[node_begin_ + i]) + dt_ * (R.transpose() * f[node_begin_ + i] - Ku.segment<3>(k));
+    rhs.segment<3>(k) = mass_[i] * (R.transpose() * v[i]) + dt_ * (R.transpose() * f[i] - Ku.segment<3>(k));
   }
   const Eigen::VectorXd w = factor_.solve(rhs);
   for (std::size_t i = 0; i < node_count_; ++i) {
-    v[node_begin_ + i] = R * w.segment<3>(static_cast<Eigen::Index>(3 * i));
-    x[node_begin_ + i] += dt_ * v[node_begin_ + i];
+    v[i] = R * w.segment<3>(static_cast<Eigen::Index>(3 * i));
+    x[i] += dt_ * v[i];
   }
   const Eigen::Vector3d c_new = centre(x);
   const Eigen::Matrix3d R_new = rotation(x);
   for (std::size_t i = 0; i < node_count_; ++i)
-    u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R_new.transpose() * (x[node_begin_ + i] - c_new) - reference_[i];
-  return 0.5 * u.dot(stiffness_ * u);
+    u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R_new.transpose() * (x[i] - c_new) - reference_[i];
+  energies.end = 0.5 * u.dot(stiffness_ * u);
+  return energies;
 }
 
 }  // namespace graintwin::fdem

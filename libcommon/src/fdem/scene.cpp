@@ -256,7 +256,7 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
                   {"duration", "time_step", "time_step_fraction", "element_safety", "rigid_contact_nodes", "gravity", "damping",
                    "stiffness_damping", "local_damping", "contact", "frame_interval", "series_interval", "checkpoint_interval",
                    "overlap_tolerance", "relax_overlaps", "keep_initial_overlaps", "mass_scaled_share", "element_step_target",
-                   "max_added_mass_share", "max_steps", "rigid_stress"});
+                   "max_added_mass_share", "max_steps", "rigid_stress", "deformable_integration"});
     duration = r.non_negative("duration", 0);
     s.time_step = r.non_negative("time_step", 0);
     s.time_step_fraction = r.positive("time_step_fraction", 1.0);
@@ -276,6 +276,11 @@ double parse_run(const toml::table& root, const Table& top, const std::string& f
       r.fail("rigid_stress must be \"love_weber\" (each rigid grain's stress from its contact forces) or \"elastostatic\" "
              "(also its elements' static stresses), not \"" + rigid_stress + "\"");
     s.elastostatic_stress = rigid_stress == "elastostatic";
+    const std::string integration = r.text("deformable_integration", "explicit");
+    if (integration != "explicit" && integration != "implicit")
+      r.fail("deformable_integration must be \"explicit\" (central differences at the element step) or \"implicit\" "
+             "(each deformable grain implicit in its corotated frame, at the contact step), not \"" + integration + "\"");
+    s.implicit_grains = integration == "implicit";
     s.contact = r.flag("contact", true);
     s.frame_interval = r.non_negative("frame_interval", 0);
     s.series_interval = r.non_negative("series_interval", 0);
@@ -562,7 +567,32 @@ void check_selective_mass_scaling(const std::string& file, const Scene& s) {
                        "' has no damping; give it damping, stiffness_damping or local_damping, or drop element_step_target");
 }
 
+/// Implicit grains take mass-proportional damping alone so far, and have no element step for
+/// selective mass scaling to lift.
+void check_implicit_grains(const std::string& file, const Scene& s) {
+  if (!s.implicit_grains) return;
+  const std::string why = ": [run] deformable_integration = \"implicit\" takes mass-proportional damping only so far, ";
+  if (s.stiffness_damping > 0 || s.local_damping > 0)
+    throw UsageError(file + why + "and [run] sets stiffness_damping or local_damping; set them to 0 (or integrate explicitly)");
+  for (const StageSpec& st : s.stages)
+    if (st.stiffness_damping.value_or(0) > 0 || st.local_damping.value_or(0) > 0)
+      throw UsageError(file + why + "and stage '" + st.name +
+                       "' sets stiffness_damping or local_damping; set them to 0 (or integrate explicitly)");
+  if (s.element_step_target > 0)
+    throw UsageError(file + ": [run] element_step_target (selective mass scaling) lifts the element step, which implicit "
+                            "grains do not have; drop it or set deformable_integration = \"explicit\"");
+}
+
 }  // namespace
+
+bool Scene::has_deformable_grains() const {
+  for (const GrainSpec& g : grains)
+    if (g.kind != GrainKind::rigid) return true;
+  if (!model) return false;
+  if (model->deformable) return true;
+  if (model->kind) return *model->kind != GrainKind::rigid;
+  return std::any_of(model->model->grains.begin(), model->model->grains.end(), [](const Grain& g) { return g.kind != GrainKind::rigid; });
+}
 
 double Scene::total_duration() const {
   double t = 0;
@@ -599,6 +629,7 @@ Scene parse_scene(const std::filesystem::path& path, const std::filesystem::path
   parse_stages(root, file, platen_names, s);
   if (!parse_triaxial_table(root, top, file, duration, s)) finish_stages(file, duration, s);
   check_selective_mass_scaling(file, s);
+  check_implicit_grains(file, s);
   return s;
 }
 }  // namespace

@@ -71,6 +71,11 @@ std::vector<double> contact_masses(const Model& model, std::span<const double> l
   return mass;
 }
 
+void check_implicit_damping(const SolverOptions& options) {
+  if (options.implicit_grains && (options.stiffness_damping > 0 || options.local_damping > 0))
+    throw UsageError("implicit grains take mass-proportional damping only so far; set stiffness and local damping to 0");
+}
+
 }  // namespace
 
 double damped_critical_step(double critical, double beta) {
@@ -107,10 +112,9 @@ Solver::Solver(const Model& model, const SolverOptions& options)
                                  options.stiffness_damping, options.local_damping));
   if (!(options.rigid_contact_nodes >= 1))
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
-  if (options.implicit_grains && (options.stiffness_damping > 0 || options.local_damping > 0))
-    throw UsageError("implicit grains take mass-proportional damping only so far; set stiffness and local damping to 0");
+  check_implicit_damping(options);
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes, options.implicit_grains);
-  if (options.implicit_grains) implicit_.resize(grains), implicit_strain_.assign(grains, 0.0);
+  if (options.implicit_grains) implicit_.resize(grains);
   if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, contact_mass_, options.contact);
   if (contact_ && options.elastostatic_stress) contact_->record_node_forces(true);
 }
@@ -140,6 +144,7 @@ void Solver::refresh_masses(std::span<const std::uint32_t> grains) {
       for (std::uint32_t v = grain.node_begin; v < grain.node_end; ++v) mass_[v] += added_mass_[v];
     bodies_[g] = body_properties(m, g);
     if (grain.kind == GrainKind::rigid) inverse_inertia_[g] = bodies_[g].inertia.inverse();
+    if (!implicit_.empty()) implicit_[g].reset();  // factored with the old masses
   }
   contact_mass_ = contact_masses(m, mass_, bodies_, options_.rigid_contact_nodes, options_.implicit_grains);
   if (contact_) contact_->set_node_masses(contact_mass_);
@@ -187,6 +192,20 @@ std::vector<double> Solver::element_critical_steps() const {
     steps[e] = k * element_min_altitude(*model_, e) / dilatational_wave_speed(m);
   }
   return steps;
+}
+
+void Solver::set_stiffness_damping(double beta) {
+  SolverOptions next = options_;
+  next.stiffness_damping = beta;
+  check_implicit_damping(next);
+  options_ = next;
+}
+
+void Solver::set_local_damping(double local) {
+  SolverOptions next = options_;
+  next.local_damping = local;
+  check_implicit_damping(next);
+  options_ = next;
 }
 
 StepLimits Solver::time_step_limits(double stiffness_damping) const {
@@ -284,7 +303,8 @@ StepReport Solver::step(double dt) {
     if (grain.kind == GrainKind::rigid || (!roles.empty() && roles[g] != GrainRole::owned)) continue;
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) force_[i].setZero();
     if (options_.implicit_grains) {  // its elastic forces are inside its implicit step
-      if (!implicit_[g] || implicit_[g]->time_step() != dt) implicit_[g] = std::make_unique<ImplicitGrain>(m, g, mass_, dt);
+      if (!implicit_[g] || implicit_[g]->time_step() != dt || implicit_[g]->damping() != options_.damping)
+        implicit_[g] = std::make_unique<ImplicitGrain>(m, g, mass_, dt, options_.damping);
       continue;
     }
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
@@ -441,35 +461,38 @@ StepReport Solver::step(double dt) {
 void Solver::step_implicit_grain(std::size_t g, double dt, const Eigen::Vector3d& g_acc, double& kinetic, double& damped,
                                  double& gravity_work, double& strain, char& bad) {
   const Grain& grain = model_->grains[g];
-  // The forces besides the elastic ones: contact (in force_), gravity and mass-proportional damping
-  // from the last half step's velocity (explicit in the damping alone).
+  // The forces besides the elastic and damping ones: contact (in force_) and gravity.
   std::vector<Eigen::Vector3d> f(grain.node_end - grain.node_begin);
   double kinetic_before = 0;
   for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
     const double mi = mass_[i];
-    f[i - grain.node_begin] = force_[i] + mi * g_acc - options_.damping * mi * state_.v[i];
+    f[i - grain.node_begin] = force_[i] + mi * g_acc;
     kinetic_before += 0.5 * mi * state_.v[i].squaredNorm();
   }
-  const std::vector<Eigen::Vector3d> x_before(state_.x.begin() + grain.node_begin, state_.x.begin() + grain.node_end);
-  const double strain_before = implicit_strain_[g];
-  strain = implicit_[g]->step(std::span<Eigen::Vector3d>(state_.x).subspan(grain.node_begin, f.size()),
-                              std::span<Eigen::Vector3d>(state_.v).subspan(grain.node_begin, f.size()), f);
-  implicit_strain_[g] = strain;
-  // The books: what entered the grain (the work of contact and gravity over the step) less what it
-  // gained (kinetic and strain energy) was lost, to the mass damping and to what backward Euler takes
-  // out of the stiff modes (dissipated). Contact books its side itself, gravity is external work.
-  double entered = 0;
+  const std::vector<Eigen::Vector3d> v_before(state_.v.begin() + grain.node_begin, state_.v.begin() + grain.node_end);
+  const ImplicitGrain::StrainEnergies strain_energies =
+      implicit_[g]->step(std::span<Eigen::Vector3d>(state_.x).subspan(grain.node_begin, f.size()),
+                         std::span<Eigen::Vector3d>(state_.v).subspan(grain.node_begin, f.size()), f);
+  // The books as the explicit grains keep them (leapfrog's): kinetic energy and work at the mean of
+  // the step's two velocities, strain energy at the step's start. Over a step the rigid motion is
+  // leapfrog's, so the work of a force at its mean velocity is exactly what the end velocities'
+  // kinetic energy gains; what entered (contact and gravity) less what the grain gained was lost, to
+  // the mass damping and to what backward Euler takes out of the stiff modes. Contact books its side
+  // itself, gravity is external work.
+  double entered = 0, kinetic_after = 0;
   kinetic = 0;
   gravity_work = 0;
   for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
     const double mi = mass_[i];
-    const Eigen::Vector3d dx = state_.x[i] - x_before[i - grain.node_begin];
-    entered += (force_[i] + mi * g_acc).dot(dx);
-    gravity_work += mi * g_acc.dot(dx);
-    kinetic += 0.5 * mi * state_.v[i].squaredNorm();
+    const Eigen::Vector3d v_mean = 0.5 * (v_before[i - grain.node_begin] + state_.v[i]);
+    entered += dt * (force_[i] + mi * g_acc).dot(v_mean);
+    gravity_work += dt * mi * g_acc.dot(v_mean);
+    kinetic += 0.5 * mi * v_mean.squaredNorm();
+    kinetic_after += 0.5 * mi * state_.v[i].squaredNorm();
     if (!finite(state_.x[i])) bad = 1;
   }
-  damped = entered - (kinetic - kinetic_before) - (strain - strain_before);
+  strain = strain_energies.start;
+  damped = entered - (kinetic_after - kinetic_before) - (strain_energies.end - strain_energies.start);
 }
 
 void Solver::check_health(const Energies& e) const {
@@ -567,7 +590,8 @@ std::vector<Eigen::Matrix3d> Solver::love_weber_stresses() const {
   const Model& m = *model_;
   std::vector<Eigen::Matrix3d> out(m.grains.size(), Eigen::Matrix3d::Zero());
   // A deformable grain's contact and boundary forces are what the step added to force_ beside
-  // minus its internal forces, f = force_ + f_int, at the positions x_n = x - dt v where they acted.
+  // minus its internal forces, f = force_ + f_int, at the positions x_n = x - dt v where they acted
+  // (an implicit grain's internal forces are inside its step: force_ holds the others alone).
   std::vector<Eigen::Vector3d> then, internal;
   if (last_dt_ > 0) then.resize(m.nodes.size()), internal.resize(m.nodes.size());
   std::vector<Eigen::Vector3d> points;
@@ -590,7 +614,7 @@ std::vector<Eigen::Matrix3d> Solver::love_weber_stresses() const {
       centroid += mass_[i] * then[i], mass += mass_[i];
     }
     centroid /= mass;
-    elements_.add_internal_forces(then, grain.element_begin, grain.element_end, internal);  // -f_int
+    if (!options_.implicit_grains) elements_.add_internal_forces(then, grain.element_begin, grain.element_end, internal);  // -f_int
     Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
     for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i)
       moment += (then[i] - centroid) * (force_[i] - internal[i]).transpose();

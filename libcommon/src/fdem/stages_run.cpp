@@ -19,6 +19,7 @@ SolverOptions solver_options(const Scene& scene) {
   options.rigid_contact_nodes = scene.rigid_contact_nodes;
   options.contact.enabled = scene.contact;
   options.elastostatic_stress = scene.elastostatic_stress;
+  options.implicit_grains = scene.implicit_grains;
   return options;
 }
 
@@ -111,6 +112,7 @@ nlohmann::json run_parameters(const Scene& scene, const std::string& scene_path,
            {{"mass_proportional", scene.damping},
             {"stiffness_proportional", scene.stiffness_damping},
             {"local", scene.local_damping}}},
+          {"deformable_integration", scene.implicit_grains ? "implicit" : "explicit"},
           {"selective_mass_scaling",
            {{"target_step", em.target_step},
             {"step_before", em.step_before},

@@ -401,6 +401,8 @@ void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, c
                                   where, what));
   };
   if (scene.elastostatic_stress) throw one_rank("[run] rigid_stress = \"elastostatic\"");
+  if (scene.implicit_grains && scene.has_deformable_grains())
+    throw one_rank("[run] deformable_integration = \"implicit\" with deformable grains");
 }
 
 std::unique_ptr<DistributedRun> split_over_ranks(const Session& session, fdem::Solver& solver) {

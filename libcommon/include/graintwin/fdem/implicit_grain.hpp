@@ -9,10 +9,13 @@
 // How: the grain's best-fit rotation R about its mass centre c (shape matching: the polar factor of
 // sum_i m_i (x_i - c)(X_i - C)^T) carries its rigid motion; in that frame its strain is small, so its
 // elastic forces are the reference small-strain stiffness K on the displacement u = R^T (x - c) - (X - C).
-// One step of h, with R held over it (backward Euler in velocity, stiffness warping):
-//   (M + h^2 K) w' = M w + h (R^T f - K u),   w = R^T v,   v' = R w',   x' = x + h v'
-// M the lumped node masses (the same in any frame), f the node forces besides the elastic ones
-// (contact, gravity, damping). M + h^2 K is factored once for a step h. Unconditionally stable for
+// One step of h, with R held over it (backward Euler in velocity, stiffness warping), with
+// mass-proportional damping alpha inside the step:
+//   ((1 + alpha h) M + h^2 K) w' = M w + h (R^T f - K u),   w = R^T v,   v' = R w',   x' = x + h v'
+// M the lumped node masses (the same in any frame), f the node forces besides the elastic and
+// damping ones (contact, gravity). The matrix is factored once for a step h and a damping alpha.
+// Damping inside the step matters: taken from the last step's velocities, it would feed a mode that
+// flips sign every step (a grain pressed by many contact nodes at once) instead of damping it. Unconditionally stable for
 // the elastic modes, which it damps where omega h >> 1 (the stiff ones a quasi-static test does not
 // resolve) and leaves nearly undamped where omega h << 1; a rigid motion (K u = 0) moves as it would
 // by x' = x + h v'. At rest under loads f it holds K u = R^T f: the small-strain static state.
@@ -29,33 +32,39 @@ namespace graintwin::fdem {
 class ImplicitGrain {
  public:
   /// Grain `grain` of `model` (4- or 10-node elements, its material's E and nu) with the lumped
-  /// `node_mass` (kg, one per model node), for steps of `dt` (s, > 0). Throws DataError naming the
-  /// grain when it has no elements or mass, or M + dt^2 K is not positive definite.
-  ImplicitGrain(const Model& model, std::size_t grain, std::span<const double> node_mass, double dt);
+  /// `node_mass` (kg, one per model node), for steps of `dt` (s, > 0) under mass-proportional
+  /// `damping` (1/s, >= 0). Throws DataError naming the grain when it has no elements or mass, or
+  /// the step's matrix is not positive definite.
+  ImplicitGrain(const Model& model, std::size_t grain, std::span<const double> node_mass, double dt, double damping = 0);
 
-  /// The grain's best-fit rotation at node positions `x` (the model's node array).
+  /// Node arrays below are the grain's own: its node_count() nodes, in the model's order.
+  /// The grain's best-fit rotation at its node positions `x`.
   Eigen::Matrix3d rotation(std::span<const Eigen::Vector3d> x) const;
-  /// One step of dt: the grain's nodes in `x` and `v` (the model's arrays; v at the half step) move
-  /// under the forces `f` on them (the model's array, N, without the elastic ones). Returns the
-  /// strain energy after the step, 1/2 u^T K u (J).
-  double step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const;
-  /// The body-frame displacement u = R^T (x - c) - (X - C) of each node of the grain, m.
+  /// The strain energy 1/2 u^T K u (J) before and after one step.
+  struct StrainEnergies {
+    double start = 0, end = 0;
+  };
+  /// One step of dt: the grain's nodes at `x` moving at `v` (at the half step) move under the forces
+  /// `f` on them (N, without the elastic ones).
+  StrainEnergies step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const;
+  /// The body-frame displacement u = R^T (x - c) - (X - C) of each node of the grain at `x`, m.
   std::vector<Eigen::Vector3d> displacement(std::span<const Eigen::Vector3d> x) const;
 
   double time_step() const { return dt_; }
+  double damping() const { return damping_; }
   std::size_t node_count() const { return node_count_; }
 
  private:
   /// The mass centre of the grain's nodes in `x`.
   Eigen::Vector3d centre(std::span<const Eigen::Vector3d> x) const;
 
-  std::size_t node_begin_ = 0, node_count_ = 0;
-  double dt_ = 0;
+  std::size_t node_count_ = 0;
+  double dt_ = 0, damping_ = 0;
   std::vector<double> mass_;                 ///< per local node, kg
   std::vector<Eigen::Vector3d> reference_;   ///< X - C per local node, m
   double total_mass_ = 0;
   Eigen::SparseMatrix<double> stiffness_;    ///< K, full (both triangles), local dofs
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor_;  ///< M + dt^2 K
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor_;  ///< (1 + damping dt) M + dt^2 K
 };
 
 }  // namespace graintwin::fdem

@@ -127,6 +127,9 @@ struct Scene {
   /// [run] rigid_stress = "elastostatic": rigid grains' element stresses from their elastostatic state
   /// (SolverOptions::elastostatic_stress); "love_weber", the default: their Love-Weber grain stress only.
   bool elastostatic_stress = false;
+  /// [run] deformable_integration = "implicit": deformable grains stepped implicitly in their
+  /// corotated frames, past their element step (SolverOptions::implicit_grains); "explicit", the default.
+  bool implicit_grains = false;
   double time_step = 0;                   ///< s; 0 = the stable limit times time_step_fraction
   /// The automatic step's share of the stable limit, in (0, 1]: a few per cent less is the smallest
   /// perturbation of a run, which shows how far its chaotic outcome scatters (docs/fdemrun.md).
@@ -151,6 +154,9 @@ struct Scene {
   /// Most steps a run may take, estimated before it starts (check_step_ceiling); [run] max_steps.
   double max_steps = 1e7;
   double total_duration() const;
+  /// Whether the built model will hold a deformable grain (the model file's, as [model] kind or
+  /// [model.deformable] leave them, or a primitive's).
+  bool has_deformable_grains() const;
   /// The largest stiffness damping of the run and its stages, s: the one the time step must allow for.
   double largest_stiffness_damping() const;
   /// Index in the built model of primitive grain k (the model file's grains come first).

@@ -242,8 +242,10 @@ class Solver {
   void set_damping(double alpha) { options_.damping = alpha; }
   /// Sets the stiffness-proportional damping beta, s, and the local damping (stages change them
   /// between steps; the time step must allow for the largest beta, time_step_limits(beta)).
-  void set_stiffness_damping(double beta) { options_.stiffness_damping = beta; }
-  void set_local_damping(double local) { options_.local_damping = local; }
+  /// Stiffness-proportional and local damping (refused with implicit grains, which take
+  /// mass-proportional damping only).
+  void set_stiffness_damping(double beta);
+  void set_local_damping(double local);
   /// Stops every grain: node velocities and rigid bodies' momenta to zero (the forming procedure
   /// stops the grains before the membrane replaces the wall).
   void stop_grains();
@@ -387,9 +389,8 @@ class Solver {
   std::vector<Eigen::Matrix3d> inverse_inertia_;  ///< per grain, reference axes
   std::unique_ptr<ContactModel> contact_;
   /// Per deformable grain with options.implicit_grains, its implicit stepper for the last step's dt
-  /// (made again when dt changes), and its strain energy after the last step (J).
+  /// (made again when dt changes).
   std::vector<std::unique_ptr<ImplicitGrain>> implicit_;
-  std::vector<double> implicit_strain_;
   Boundary* boundary_ = nullptr;
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
   /// Per node, the last step's forces on deformable grains (a rigid grain's nodes hold none).

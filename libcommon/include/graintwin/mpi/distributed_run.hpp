@@ -162,7 +162,8 @@ class DistributedRun final : public fdem::RankShare {
 };
 
 /// What a scene asks for that runs on one rank only, refused (UsageError naming `where`, the scene
-/// file) on several ranks before the model is built: [run] rigid_stress = "elastostatic".
+/// file) on several ranks before the model is built: [run] rigid_stress = "elastostatic", and
+/// deformable_integration = "implicit" where the model holds deformable grains.
 /// Nothing on one rank.
 void check_runs_across_ranks(const Session& session, const fdem::Scene& scene, const std::string& where);
 
