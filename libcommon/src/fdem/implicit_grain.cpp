@@ -98,11 +98,14 @@ ImplicitGrain::StrainEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, 
     v[i] = R * w.segment<3>(static_cast<Eigen::Index>(3 * i));
     x[i] += dt_ * v[i];
   }
-  const Eigen::Vector3d c_new = centre(x);
-  const Eigen::Matrix3d R_new = rotation(x);
-  for (std::size_t i = 0; i < node_count_; ++i)
-    u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R_new.transpose() * (x[i] - c_new) - reference_[i];
-  energies.end = 0.5 * u.dot(stiffness_ * u);
+  // The strain energy after the step, of u' = u + h w (R held; K does not see the rigid part of w),
+  // without another product with K: h^2 K w = rhs - (1 + alpha h) M w from the solve itself.
+  double w_Kw = 0;
+  for (std::size_t i = 0; i < node_count_; ++i) {
+    const auto k = static_cast<Eigen::Index>(3 * i);
+    w_Kw += w.segment<3>(k).dot(rhs.segment<3>(k) - (1 + damping_ * dt_) * mass_[i] * w.segment<3>(k));
+  }
+  energies.end = energies.start + dt_ * w.dot(Ku) + 0.5 * w_Kw;
   return energies;
 }
 

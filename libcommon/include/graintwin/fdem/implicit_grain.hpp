@@ -40,7 +40,8 @@ class ImplicitGrain {
   /// Node arrays below are the grain's own: its node_count() nodes, in the model's order.
   /// The grain's best-fit rotation at its node positions `x`.
   Eigen::Matrix3d rotation(std::span<const Eigen::Vector3d> x) const;
-  /// The strain energy 1/2 u^T K u (J) before and after one step.
+  /// The strain energy 1/2 u^T K u (J) before and after one step (after: with the step's R, which
+  /// differs from the next step's fit by the rotation's second order).
   struct StrainEnergies {
     double start = 0, end = 0;
   };
