@@ -9,15 +9,10 @@ the reference over eps_1 in [0, 6 %], against the run's CPU time; chart
 docs/img/fdem_triaxial_fidelity.png. Part `boundary`: the latex membrane 0.3 / 0.6 / 1.0 mm thick and
 the rigid servo wall, at the pipeline's rate: stress ratio and volumetric strain against axial
 strain and the deformed shape (the membrane's inner radius against height at the end); chart
-docs/img/fdem_triaxial_boundary.png. Part `grains`: rigid grains against the model's own deformable
-10-node meshes at the pipeline's rate. At the grains' own stiffness the 10-node twin takes about 340
-times the steps of the rigid one (its smallest elements set a 4.9e-10 s step); its grains are made
-1000 times softer instead (Young's modulus only: the contact penalties, density and friction stay),
-which bounds the effect of deformability from above (real grains deform 1000 times less) at a
-thirtieth of the steps; chart docs/img/fdem_triaxial_grains.png.
+docs/img/fdem_triaxial_boundary.png. (Rigid against deformable grains: bench/fdem_fidelity_bench.py.)
 Prints the tables and rewrites the `fdem_triaxial` section of docs/benchmarks.md.
 
-usage: bench/fdem_triaxial_bench.py [--build DIR] [--model FILE] [--work DIR] [--part all|fidelity|boundary|grains]
+usage: bench/fdem_triaxial_bench.py [--build DIR] [--model FILE] [--work DIR] [--part all|fidelity|boundary]
                                     [--jobs N] [--reuse]
   --build DIR  CMake build folder holding bin/fdemrun (default: build)
   --model FILE the kind=fdem_model to test (default: runs/sand_small/model.h5; make -f Makefile.pipeline mesh)
@@ -50,43 +45,25 @@ TARGET = 0.06
 PIPELINE_RATE = "1e-2"  # pipelines/scenes/triaxial.toml
 REFERENCE = "rate_1e-3"
 REPLICATE = "replicate_1e-2_2threads"
-DEFORMABLE = "tet10_softened"
 
 
-GRAIN_SOFTENING = 1000  # part grains: the deformable grains' Young's modulus over the model's
 
-
-def scene(shear_inertial_number, boundary="membrane", thickness=None, rigid=True, materials=""):
-    """The pipeline's scene (pipelines/scenes/triaxial.toml) with the knobs of one run; rigid=False keeps
-    the model file's own grain kinds (shapes2mesh's 10-node meshes on sand_small)."""
-    lines = ["[run]", "damping = 2000", "[model]"] + (['kind = "rigid"'] if rigid else []) + [
+def scene(shear_inertial_number, boundary="membrane", thickness=None):
+    """The pipeline's scene (pipelines/scenes/triaxial.toml) with the knobs of one run."""
+    lines = ["[run]", "damping = 2000", "[model]", 'kind = "rigid"',
              "[triaxial]", f'boundary = "{boundary}"',
              "servo_inertial_number = 1e-2", f"shear_inertial_number = {shear_inertial_number}",
              f"target_axial_strain = {TARGET}", "frame_strains = [0.03]"]
     if thickness is not None:
         lines.append(f"membrane_thickness = {thickness}")
-    return "\n".join(lines) + "\n" + materials
-
-
-def softened_materials(model):
-    """[[materials]] tables replacing the model's materials by the same ones GRAIN_SOFTENING times softer."""
-    out = []
-    with h5py.File(model, "r") as f:
-        m = f["materials"]
-        for k in range(len(m["name"])):
-            name = m["name"][k].decode() if isinstance(m["name"][k], bytes) else str(m["name"][k])
-            keys = {key: float(m[key][k]) for key in ("density", "young", "poisson", "friction", "normal_penalty",
-                                                      "tangential_penalty", "damping_ratio")}
-            keys["young"] /= GRAIN_SOFTENING
-            out.append("[[materials]]\n" + f'name = "{name}"\n' + "".join(f"{key} = {v!r}\n" for key, v in keys.items()))
-    return "\n".join(out)
+    return "\n".join(lines) + "\n"
 
 
 BOUNDARIES = [(f"rate_{PIPELINE_RATE}", "membrane 0.3 mm"), ("membrane_0.6mm", "membrane 0.6 mm"),
               ("membrane_1.0mm", "membrane 1.0 mm"), ("wall", "rigid servo wall")]
 
 
-def runs(part, model):
+def runs(part):
     fidelity = {f"rate_{i}": scene(i) for i in ("1e-3", "3e-3", "1e-2", "3e-2")}
     # The same run on 2 threads: the solver sums per grain in grain order, so the results must be
     # the same as on one thread (a granular sample's dynamics is chaotic: any other summation order
@@ -96,11 +73,9 @@ def runs(part, model):
     boundary = {f"membrane_{t}mm": scene(PIPELINE_RATE, thickness=f"{t}e-3") for t in ("0.6", "1.0")}
     boundary["wall"] = scene(PIPELINE_RATE, boundary="wall")
     boundary_part = {**boundary, f"rate_{PIPELINE_RATE}": fidelity[f"rate_{PIPELINE_RATE}"]}
-    grains = {DEFORMABLE: scene(PIPELINE_RATE, rigid=False, materials=softened_materials(model)),
-              f"rate_{PIPELINE_RATE}": fidelity[f"rate_{PIPELINE_RATE}"]}
     # The longest runs first, so that side by side they do not end alone.
-    everything = {DEFORMABLE: grains[DEFORMABLE], REFERENCE: fidelity[REFERENCE], **fidelity, **boundary}
-    return {"fidelity": fidelity, "boundary": boundary_part, "grains": grains, "all": everything}[part]
+    everything = {REFERENCE: fidelity[REFERENCE], **fidelity, **boundary}
+    return {"fidelity": fidelity, "boundary": boundary_part, "all": everything}[part]
 
 
 def run_all(todo, fdemrun, model, work, jobs, reuse):
@@ -265,61 +240,12 @@ def boundary_table(results, cpu):
             "eps_v at 6 % (%) |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows))
 
 
-GRAIN_RUNS = [(f"rate_{PIPELINE_RATE}", "rigid (pipeline)"), (DEFORMABLE, f"10-node, E / {GRAIN_SOFTENING}")]
-
-
-def grains_table(results, cpu):
-    grid = np.linspace(0, TARGET, 121)
-    rigid = results[f"rate_{PIPELINE_RATE}"]
-    mean_ratio = np.mean(on_grid(rigid, "stress_ratio", grid))
-    rows = []
-    for name, label in GRAIN_RUNS:
-        if name not in results:
-            continue
-        r = results[name]
-        p = r["parameters"]
-        rms = "reference" if name == f"rate_{PIPELINE_RATE}" else "{:.2f} | {:.3f}".format(*rms_differences(r, rigid, grid, mean_ratio))
-        if rms == "reference":
-            rms = "reference | reference"
-        rows.append(f"| {label} | {p.get('time_step', math.nan):.3g} | {p['triaxial']['shear_steps']} | {cpu[name]:.0f} | "
-                    f"{np.max(r['stress_ratio']):.3f} | {100 * r['volumetric_strain'][-1]:.2f} | {rms} | "
-                    f"{np.max(r['kinetic_ratio']):.3g} |")
-    return ("| grains | time step (s) | shear steps | CPU s (whole run) | peak sigma_1/sigma_3 | eps_v at 6 % (%) | "
-            "RMS difference of sigma_1/sigma_3 from rigid (% of mean) | of eps_v (% strain) | max kinetic / elastic |\n"
-            "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows))
-
-
-def grains_chart(results, cpu, path):
-    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.2), dpi=110)
-    present = [(n, label) for n, label in GRAIN_RUNS if n in results]
-    for name, label in present:
-        r = results[name]
-        a.plot(100 * r["axial_strain"], r["stress_ratio"], label=label, lw=1)
-        b.plot(100 * r["axial_strain"], 100 * r["volumetric_strain"], label=label, lw=1)
-    c.bar(range(len(present)), [cpu[n] for n, _ in present], color="tab:gray")
-    c.set_xticks(range(len(present)), [label.replace(", ", ",\n") for _, label in present], fontsize=8)
-    c.set_ylabel("CPU time of the whole run (s)")
-    c.set_title("Cost")
-    a.set_xlabel("axial strain eps_1 (%)")
-    a.set_ylabel("sigma_1 / sigma_3")
-    a.set_title("Stress ratio: rigid against deformable grains")
-    b.set_xlabel("axial strain eps_1 (%)")
-    b.set_ylabel("volumetric strain eps_v (%, compression +)")
-    b.set_title("Volumetric strain")
-    for ax in (a, b):
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    c.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    fig.savefig(path)
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--build", default=os.path.join(SOURCE, "build"))
     p.add_argument("--model", default=os.path.join(SOURCE, "runs", "sand_small", "model.h5"))
     p.add_argument("--work", default=os.path.join(SOURCE, "bench", "out", "fdem_triaxial"))
-    p.add_argument("--part", default="all", choices=("all", "fidelity", "boundary", "grains"))
+    p.add_argument("--part", default="all", choices=("all", "fidelity", "boundary"))
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--reuse", action="store_true")
     p.add_argument("--publish-only", action="store_true")
@@ -330,10 +256,10 @@ def main():
     if not os.path.exists(a.model):
         sys.exit(f"fdem_triaxial_bench: {a.model} is missing; run make -f Makefile.pipeline mesh first or pass --model")
     os.makedirs(a.work, exist_ok=True)
-    todo = runs(a.part, a.model)
+    todo = runs(a.part)
     cpu, failed = ({}, []) if a.publish_only else run_all(todo, fdemrun, a.model, a.work, a.jobs, a.reuse)
     # Tables and charts of every run in WORK, so parts measured separately publish together.
-    done = {n for n in runs("all", a.model) if os.path.exists(os.path.join(a.work, n + ".h5"))}
+    done = {n for n in runs("all") if os.path.exists(os.path.join(a.work, n + ".h5"))}
     results = {n: read(os.path.join(a.work, n + ".h5")) for n in done}
     for n in done - set(cpu):
         path = os.path.join(a.work, n + ".cpu")
@@ -354,14 +280,6 @@ def main():
         boundary_chart(results, os.path.join(SOURCE, "docs", "img", "fdem_triaxial_boundary.png"))
         text += (f"### Boundary: membrane thickness and the rigid wall (I = {PIPELINE_RATE})\n\n" + boundary_table(results, cpu) +
                  "\n\n![boundary](img/fdem_triaxial_boundary.png)\n\n")
-    if DEFORMABLE not in results:
-        text += ("### Grains: rigid against deformable 10-node\n\nNot measured: the deformable run (10-node meshes "
-                 f"{GRAIN_SOFTENING} times softer) has no results in WORK; its cost when it was stopped is in "
-                 "[fdem_triaxial.md](fdem_triaxial.md), section Fidelity of the simulate stage.\n\n")
-    elif f"rate_{PIPELINE_RATE}" in results:
-        grains_chart(results, cpu, os.path.join(SOURCE, "docs", "img", "fdem_triaxial_grains.png"))
-        text += (f"### Grains: rigid against deformable 10-node (I = {PIPELINE_RATE}; the 10-node grains {GRAIN_SOFTENING} times softer, "
-                 "contact penalties kept)\n\n" + grains_table(results, cpu) + "\n\n![grains](img/fdem_triaxial_grains.png)\n\n")
     print(text)
     publish("fdem_triaxial", text)
     if failed:
