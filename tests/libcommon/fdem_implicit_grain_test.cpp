@@ -116,7 +116,7 @@ TEST(ImplicitGrain, ASpinningBoxKeepsItsShapeAndItsSpin) {
   const Vector3d L0 = spin();
   const double k0 = kinetic(mass, v);
   double strain = 0;
-  for (int n = 0; n < 2000; ++n) strain = grain.step(x, v, f).end;  // 2 rad about the axis
+  for (int n = 0; n < 2000; ++n) strain = grain.step(x, v, f).strain_end;  // 2 rad about the axis
   EXPECT_LT((spin() - L0).norm(), 0.02 * L0.norm());
   EXPECT_NEAR(kinetic(mass, v), k0, 0.03 * k0);
   EXPECT_LT(strain, 1e-3 * k0) << "the box keeps its shape while it turns";
@@ -136,7 +136,7 @@ TEST(ImplicitGrain, NeverGainsEnergyFarBeyondTheElementStep) {
   const std::vector<Vector3d> f(model.nodes.size(), Vector3d::Zero());
   double energy = kinetic(mass, v), strain = 0;
   for (int n = 0; n < 300; ++n) {
-    strain = grain.step(x, v, f).end;
+    strain = grain.step(x, v, f).strain_end;
     const double now = kinetic(mass, v) + strain;
     ASSERT_LE(now, energy * (1 + 1e-9)) << "step " << n;
     energy = now;

@@ -79,7 +79,8 @@ std::vector<Eigen::Vector3d> ImplicitGrain::displacement(std::span<const Eigen::
   return u;
 }
 
-ImplicitGrain::StrainEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const {
+ImplicitGrain::StepEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v,
+                                                std::span<const Eigen::Vector3d> f, const Eigen::Vector3d& gravity) const {
   const Eigen::Vector3d c = centre(x);
   const Eigen::Matrix3d R = rotation(x);
   const auto dofs = static_cast<Eigen::Index>(3 * node_count_);
@@ -87,26 +88,30 @@ ImplicitGrain::StrainEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, 
   for (std::size_t i = 0; i < node_count_; ++i)
     u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R.transpose() * (x[i] - c) - reference_[i];
   const Eigen::VectorXd Ku = stiffness_ * u;
-  StrainEnergies energies;
-  energies.start = 0.5 * u.dot(Ku);
+  StepEnergies e;
+  e.strain_start = 0.5 * u.dot(Ku);
   for (std::size_t i = 0; i < node_count_; ++i) {
     const auto k = static_cast<Eigen::Index>(3 * i);
-    rhs.segment<3>(k) = mass_[i] * (R.transpose() * v[i]) + dt_ * (R.transpose() * f[i] - Ku.segment<3>(k));
+    rhs.segment<3>(k) = mass_[i] * (R.transpose() * v[i]) + dt_ * (R.transpose() * (f[i] + mass_[i] * gravity) - Ku.segment<3>(k));
   }
   const Eigen::VectorXd w = factor_.solve(rhs);
-  for (std::size_t i = 0; i < node_count_; ++i) {
-    v[i] = R * w.segment<3>(static_cast<Eigen::Index>(3 * i));
-    x[i] += dt_ * v[i];
-  }
-  // The strain energy after the step, of u' = u + h w (R held; K does not see the rigid part of w),
-  // without another product with K: h^2 K w = rhs - (1 + alpha h) M w from the solve itself.
   double w_Kw = 0;
   for (std::size_t i = 0; i < node_count_; ++i) {
     const auto k = static_cast<Eigen::Index>(3 * i);
+    const Eigen::Vector3d v_end = R * w.segment<3>(k), v_mean = 0.5 * (v[i] + v_end);
+    e.kinetic_start += 0.5 * mass_[i] * v[i].squaredNorm();
+    e.kinetic_end += 0.5 * mass_[i] * v_end.squaredNorm();
+    e.kinetic_mean += 0.5 * mass_[i] * v_mean.squaredNorm();
+    e.work += dt_ * (f[i] + mass_[i] * gravity).dot(v_mean);
+    e.gravity_work += dt_ * mass_[i] * gravity.dot(v_mean);
+    // For the strain energy after the step without another product with K: h^2 K w = rhs - (1 + alpha h) M w.
     w_Kw += w.segment<3>(k).dot(rhs.segment<3>(k) - (1 + damping_ * dt_) * mass_[i] * w.segment<3>(k));
+    v[i] = v_end;
+    x[i] += dt_ * v_end;
   }
-  energies.end = energies.start + dt_ * w.dot(Ku) + 0.5 * w_Kw;
-  return energies;
+  // Of u' = u + h w (R held; K does not see the rigid part of w).
+  e.strain_end = e.strain_start + dt_ * w.dot(Ku) + 0.5 * w_Kw;
+  return e;
 }
 
 }  // namespace graintwin::fdem

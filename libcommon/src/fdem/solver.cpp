@@ -460,39 +460,19 @@ StepReport Solver::step(double dt) {
 
 void Solver::step_implicit_grain(std::size_t g, double dt, const Eigen::Vector3d& g_acc, double& kinetic, double& damped,
                                  double& gravity_work, double& strain, char& bad) {
+  // The forces besides the elastic, damping and gravity ones are contact's, in force_. Contact books
+  // its side itself, gravity is external work; the grain books what it lost.
   const Grain& grain = model_->grains[g];
-  // The forces besides the elastic and damping ones: contact (in force_) and gravity.
-  std::vector<Eigen::Vector3d> f(grain.node_end - grain.node_begin);
-  double kinetic_before = 0;
-  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
-    const double mi = mass_[i];
-    f[i - grain.node_begin] = force_[i] + mi * g_acc;
-    kinetic_before += 0.5 * mi * state_.v[i].squaredNorm();
-  }
-  const std::vector<Eigen::Vector3d> v_before(state_.v.begin() + grain.node_begin, state_.v.begin() + grain.node_end);
-  const ImplicitGrain::StrainEnergies strain_energies =
-      implicit_[g]->step(std::span<Eigen::Vector3d>(state_.x).subspan(grain.node_begin, f.size()),
-                         std::span<Eigen::Vector3d>(state_.v).subspan(grain.node_begin, f.size()), f);
-  // The books as the explicit grains keep them (leapfrog's): kinetic energy and work at the mean of
-  // the step's two velocities, strain energy at the step's start. Over a step the rigid motion is
-  // leapfrog's, so the work of a force at its mean velocity is exactly what the end velocities'
-  // kinetic energy gains; what entered (contact and gravity) less what the grain gained was lost, to
-  // the mass damping and to what backward Euler takes out of the stiff modes. Contact books its side
-  // itself, gravity is external work.
-  double entered = 0, kinetic_after = 0;
-  kinetic = 0;
-  gravity_work = 0;
-  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i) {
-    const double mi = mass_[i];
-    const Eigen::Vector3d v_mean = 0.5 * (v_before[i - grain.node_begin] + state_.v[i]);
-    entered += dt * (force_[i] + mi * g_acc).dot(v_mean);
-    gravity_work += dt * mi * g_acc.dot(v_mean);
-    kinetic += 0.5 * mi * v_mean.squaredNorm();
-    kinetic_after += 0.5 * mi * state_.v[i].squaredNorm();
+  const std::size_t nodes = grain.node_end - grain.node_begin;
+  const ImplicitGrain::StepEnergies e = implicit_[g]->step(std::span<Eigen::Vector3d>(state_.x).subspan(grain.node_begin, nodes),
+                                                           std::span<Eigen::Vector3d>(state_.v).subspan(grain.node_begin, nodes),
+                                                           std::span<const Eigen::Vector3d>(force_).subspan(grain.node_begin, nodes), g_acc);
+  for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i)
     if (!finite(state_.x[i])) bad = 1;
-  }
-  strain = strain_energies.start;
-  damped = entered - (kinetic_after - kinetic_before) - (strain_energies.end - strain_energies.start);
+  kinetic = e.kinetic_mean;
+  gravity_work = e.gravity_work;
+  strain = e.strain_start;
+  damped = e.lost();
 }
 
 void Solver::check_health(const Energies& e) const {

@@ -40,14 +40,25 @@ class ImplicitGrain {
   /// Node arrays below are the grain's own: its node_count() nodes, in the model's order.
   /// The grain's best-fit rotation at its node positions `x`.
   Eigen::Matrix3d rotation(std::span<const Eigen::Vector3d> x) const;
-  /// The strain energy 1/2 u^T K u (J) before and after one step (after: with the step's R, which
-  /// differs from the next step's fit by the rotation's second order).
-  struct StrainEnergies {
-    double start = 0, end = 0;
+  /// One step's energies (J), booked as leapfrog books them: kinetic energy and work at the mean of
+  /// the step's two velocities.
+  struct StepEnergies {
+    double strain_start = 0;  ///< 1/2 u^T K u before the step
+    /// after it, with the step's R (which differs from the next step's fit by the rotation's second order)
+    double strain_end = 0;
+    double kinetic_start = 0, kinetic_end = 0;  ///< at the step's first and last velocities
+    double kinetic_mean = 0;                    ///< at their mean
+    double work = 0;                            ///< of f and gravity, at the mean velocities
+    double gravity_work = 0;                    ///< of gravity alone
+    /// What entered less what the grain gained: lost to the damping and to backward Euler.
+    double lost() const { return work - (kinetic_end - kinetic_start) - (strain_end - strain_start); }
   };
   /// One step of dt: the grain's nodes at `x` moving at `v` (at the half step) move under the forces
-  /// `f` on them (N, without the elastic ones).
-  StrainEnergies step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f) const;
+  /// `f` on them (N, without the elastic and gravity ones) and the acceleration of `gravity` (m/s^2).
+  /// Over a step the rigid motion is leapfrog's, so the work of a force at its mean velocity is
+  /// exactly what the end velocities' kinetic energy gains.
+  StepEnergies step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f,
+                    const Eigen::Vector3d& gravity = Eigen::Vector3d::Zero()) const;
   /// The body-frame displacement u = R^T (x - c) - (X - C) of each node of the grain at `x`, m.
   std::vector<Eigen::Vector3d> displacement(std::span<const Eigen::Vector3d> x) const;
 
