@@ -60,7 +60,7 @@ TEST(ImplicitGrain, ABoxPressedAtBothEndsSettlesToTheStaticShortening) {
     const fdem::Model model = box(kind);
     const std::vector<double> mass = fdem::lumped_masses(model);
     const double dt = 25 * element_step(model);
-    const fdem::ImplicitGrain grain(model, 0, mass, dt);
+    fdem::ImplicitGrain grain(model, 0, mass, dt);
     // Consistent loads of a uniform traction are not equal shares; the shortening of the box's
     // length between its end faces' mean planes is p L / E for any loads of total p A on each face.
     std::vector<Vector3d> f(model.nodes.size(), Vector3d::Zero());
@@ -100,7 +100,7 @@ TEST(ImplicitGrain, ASpinningBoxKeepsItsShapeAndItsSpin) {
   const std::vector<double> mass = fdem::lumped_masses(model);
   const double dt = 1e-6;  // omega dt = 1e-3, far beyond the element step
   ASSERT_GT(dt, 10 * element_step(model));
-  const fdem::ImplicitGrain grain(model, 0, mass, dt);
+  fdem::ImplicitGrain grain(model, 0, mass, dt);
   const Vector3d omega(300, 600, 800);  // rad/s, tip speeds about 1 m/s
   std::vector<Vector3d> x = model.nodes, v(model.nodes.size());
   for (std::size_t i = 0; i < x.size(); ++i) v[i] = omega.cross(x[i]);
@@ -128,7 +128,7 @@ TEST(ImplicitGrain, ASpinningBoxKeepsItsShapeAndItsSpin) {
 TEST(ImplicitGrain, NeverGainsEnergyFarBeyondTheElementStep) {
   const fdem::Model model = box(fdem::GrainKind::tet10);
   const std::vector<double> mass = fdem::lumped_masses(model);
-  const fdem::ImplicitGrain grain(model, 0, mass, 100 * element_step(model));
+  fdem::ImplicitGrain grain(model, 0, mass, 100 * element_step(model));
   std::mt19937_64 rng(3);
   std::normal_distribution<double> noise(0.0, 0.1);  // m/s per component, every node its own
   std::vector<Vector3d> x = model.nodes, v(model.nodes.size());

@@ -34,25 +34,19 @@ ImplicitGrain::ImplicitGrain(const Model& model, std::size_t grain, std::span<co
 
   const Lame lame = lame_constants(model.materials.at(g.material));
   const std::vector<Eigen::Triplet<double>> lower = grain_stiffness_lower(model, grain, lame);
-  const auto dofs = static_cast<Eigen::Index>(3 * node_count_);
-  std::vector<Eigen::Triplet<double>> full = lower;  // K u needs both triangles
-  for (const Eigen::Triplet<double>& t : lower)
-    if (t.row() != t.col()) full.emplace_back(t.col(), t.row(), t.value());
-  stiffness_.resize(dofs, dofs);
-  stiffness_.setFromTriplets(full.begin(), full.end());
+  stiffness_ = SymmetricNodeBlocks(node_count_, lower);
   std::vector<Eigen::Triplet<double>> system;
   system.reserve(lower.size() + 3 * node_count_);
   for (const Eigen::Triplet<double>& t : lower) system.emplace_back(t.row(), t.col(), dt * dt * t.value());
   for (std::size_t i = 0; i < node_count_; ++i)
     for (int k = 0; k < 3; ++k)
       system.emplace_back(static_cast<int>(3 * i + k), static_cast<int>(3 * i + k), (1 + damping * dt) * mass_[i]);
-  Eigen::SparseMatrix<double> A(dofs, dofs);
-  A.setFromTriplets(system.begin(), system.end());
-  factor_.compute(A);  // reads the lower triangle
-  if (factor_.info() != Eigen::Success || !(factor_.vectorD().minCoeff() > 0))
+  factor_ = NodeBlockLdlt(node_count_, system);
+  if (!factor_.positive_definite())
     throw DataError(fmt::format("implicit grain: (1 + damping dt) M + dt^2 K of {} is not positive definite (an inverted element or a "
                                 "node without mass); mesh the grain again.",
                                 name()));
+  for (Eigen::VectorXd* v : {&u_, &Ku_, &rhs_, &w_}) v->resize(static_cast<Eigen::Index>(3 * node_count_));
 }
 
 Eigen::Vector3d ImplicitGrain::centre(std::span<const Eigen::Vector3d> x) const {
@@ -80,21 +74,21 @@ std::vector<Eigen::Vector3d> ImplicitGrain::displacement(std::span<const Eigen::
 }
 
 ImplicitGrain::StepEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v,
-                                                std::span<const Eigen::Vector3d> f, const Eigen::Vector3d& gravity) const {
+                                                std::span<const Eigen::Vector3d> f, const Eigen::Vector3d& gravity) {
   const Eigen::Vector3d c = centre(x);
   const Eigen::Matrix3d R = rotation(x);
-  const auto dofs = static_cast<Eigen::Index>(3 * node_count_);
-  Eigen::VectorXd u(dofs), rhs(dofs);
+  Eigen::VectorXd &u = u_, &Ku = Ku_, &rhs = rhs_, &w = w_;
+  const auto all = [](Eigen::VectorXd& a) { return std::span<double>(a.data(), static_cast<std::size_t>(a.size())); };
   for (std::size_t i = 0; i < node_count_; ++i)
     u.segment<3>(static_cast<Eigen::Index>(3 * i)) = R.transpose() * (x[i] - c) - reference_[i];
-  const Eigen::VectorXd Ku = stiffness_ * u;
+  stiffness_.multiply(all(u), all(Ku));
   StepEnergies e;
   e.strain_start = 0.5 * u.dot(Ku);
   for (std::size_t i = 0; i < node_count_; ++i) {
     const auto k = static_cast<Eigen::Index>(3 * i);
     rhs.segment<3>(k) = mass_[i] * (R.transpose() * v[i]) + dt_ * (R.transpose() * (f[i] + mass_[i] * gravity) - Ku.segment<3>(k));
   }
-  const Eigen::VectorXd w = factor_.solve(rhs);
+  factor_.solve(all(rhs), all(w));
   double w_Kw = 0;
   for (std::size_t i = 0; i < node_count_; ++i) {
     const auto k = static_cast<Eigen::Index>(3 * i);

@@ -1,6 +1,6 @@
 #pragma once
 // A deformable grain stepped implicitly in its corotated frame: the way past the element time step
-// (docs/fdemrun.md, implicit grains; a library piece, not yet a choice of fdemrun's scenes).
+// (docs/fdemrun.md, implicit grains; [run] deformable_integration = "implicit").
 //
 // Why: quartz grains of 10-node elements need a step some 340 times shorter than the rigid twin's
 // contact step (their element wave speed over their smallest altitude), while under quasi-static
@@ -20,12 +20,12 @@
 // resolve) and leaves nearly undamped where omega h << 1; a rigid motion (K u = 0) moves as it would
 // by x' = x + h v'. At rest under loads f it holds K u = R^T f: the small-strain static state.
 #include <Eigen/Core>
-#include <Eigen/SparseCholesky>
 #include <cstddef>
 #include <span>
 #include <vector>
 
 #include "graintwin/fdem/model.hpp"
+#include "graintwin/fdem/node_blocks.hpp"
 
 namespace graintwin::fdem {
 
@@ -57,8 +57,9 @@ class ImplicitGrain {
   /// `f` on them (N, without the elastic and gravity ones) and the acceleration of `gravity` (m/s^2).
   /// Over a step the rigid motion is leapfrog's, so the work of a force at its mean velocity is
   /// exactly what the end velocities' kinetic energy gains.
+  /// Keeps its workspace between calls: one grain steps on one thread at a time.
   StepEnergies step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f,
-                    const Eigen::Vector3d& gravity = Eigen::Vector3d::Zero()) const;
+                    const Eigen::Vector3d& gravity = Eigen::Vector3d::Zero());
   /// The body-frame displacement u = R^T (x - c) - (X - C) of each node of the grain at `x`, m.
   std::vector<Eigen::Vector3d> displacement(std::span<const Eigen::Vector3d> x) const;
 
@@ -75,8 +76,9 @@ class ImplicitGrain {
   std::vector<double> mass_;                 ///< per local node, kg
   std::vector<Eigen::Vector3d> reference_;   ///< X - C per local node, m
   double total_mass_ = 0;
-  Eigen::SparseMatrix<double> stiffness_;    ///< K, full (both triangles), local dofs
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor_;  ///< (1 + damping dt) M + dt^2 K
+  SymmetricNodeBlocks stiffness_;  ///< K, local dofs
+  NodeBlockLdlt factor_;           ///< of (1 + damping dt) M + dt^2 K
+  Eigen::VectorXd u_, Ku_, rhs_, w_;  ///< the step's workspace (local dofs)
 };
 
 }  // namespace graintwin::fdem
