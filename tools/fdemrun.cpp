@@ -216,7 +216,11 @@ nlohmann::json grain_kinds_json(const Scene& scene, const Model& model) {
 
 void log_schedule(const Scene& scene, const Model& model, const RunSchedule& s) {
   const std::array<std::size_t, 3> kinds = grain_kind_counts(model);
-  spdlog::info("grains: {} rigid, {} tet4, {} tet10{}{}", kinds[0], kinds[1], kinds[2],
+  const bool split = scene.model && scene.model->kind == GrainKind::tet4;
+  spdlog::info("grains: {} rigid, {} tet4, {} tet10{}{}{}", kinds[0], kinds[1], kinds[2],
+               split ? fmt::format("; the model file's 10-node elements split into 4-node ones on their nodes ([model] kind){}",
+                                   kinds[2] > 0 ? " but where a split would invert a curved element (those grains keep 10 nodes)" : "")
+                     : std::string(),
                scene.model && scene.model->deformable
                    ? fmt::format("; the model file's deformable ones ({}) picked by {}", scene.model->deformable->grains.size(),
                                  scene.model->deformable->rule)

@@ -157,6 +157,18 @@ point = [0, 0, -2e-3]
   EXPECT_EQ(o.sample->radius, 4e-3);
   EXPECT_EQ(o.sample->z_max, 2e-3);  // the other keys stay the file's
   for (const Grain& g : o.grains) EXPECT_EQ(g.kind, GrainKind::rigid);
+
+  // kind = "tet4": the 10-node grain split into 4-node elements on its own nodes, the other kept.
+  const auto linear = write_text(dir, "linear.toml", "[run]\nduration = 1e-6\n[model]\nfile = \"grains.h5\"\nkind = \"tet4\"\n");
+  const Model l = build_model(read_scene(linear));
+  ASSERT_EQ(l.grains.size(), 2u);
+  for (const Grain& g : l.grains) EXPECT_EQ(g.kind, GrainKind::tet4);
+  EXPECT_EQ(l.nodes, file_model.nodes);
+  EXPECT_EQ(l.triangles, file_model.triangles);
+  EXPECT_EQ(l.grains[0].element_end - l.grains[0].element_begin, file_model.grains[0].element_end - file_model.grains[0].element_begin);
+  EXPECT_EQ(l.grains[1].element_end - l.grains[1].element_begin,
+            8 * (file_model.grains[1].element_end - file_model.grains[1].element_begin));
+  EXPECT_TRUE(read_scene(linear).has_deformable_grains());
 }
 
 // The shapes' names are one table for the scene reader and its messages: each names one shape.
@@ -175,7 +187,7 @@ TEST(FdemScene, BadModelAndShapeTablesFailWithTheFix) {
   write_model_file(dir / "grains.h5", file_model, {"test"});
   const auto scene = [&](const std::string& body) { return write_text(dir, "bad.toml", "[run]\nduration = 1e-6\n" + body); };
   EXPECT_NE(error_of(scene("[model]\nfile = \"nope.h5\"\n")).find("does not exist"), std::string::npos);
-  EXPECT_NE(error_of(scene("[model]\nfile = \"grains.h5\"\nkind = \"tet10\"\n")).find("kind may only be"), std::string::npos);
+  EXPECT_NE(error_of(scene("[model]\nfile = \"grains.h5\"\nkind = \"tet10\"\n")).find("kind may be \"rigid\" or \"tet4\""), std::string::npos);
   EXPECT_NE(error_of(scene("[model]\nfile = \"grains.h5\"\n[[grains]]\nsize = [1e-3, 1e-3, 1e-3]\nlabel = 3\n"))
                 .find("label 3 is used twice"),
             std::string::npos);

@@ -1,11 +1,14 @@
 // fdem/ elements, masses and primitive grains: the patch test (a linear displacement field gives
 // uniform strain and exactly balanced internal forces), zero stress under large rigid rotations,
-// HRZ lumping of 10-node tetrahedra, exact mass properties, closed outward box surfaces.
+// HRZ lumping of 10-node tetrahedra, exact mass properties, closed outward box surfaces; 10-node
+// grains split into 4-node ones on their own nodes keep their nodes, surface, volume and mass, and a
+// grain whose split would invert a curved element's part keeps its 10 nodes.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numeric>
+#include <set>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/element.hpp"
@@ -230,6 +233,79 @@ TEST(FdemElements, InvertedElementIsRefusedWithItsName) {
   } catch (const DataError& e) {
     EXPECT_NE(e.message().find("element 0 (grain label 7) is inverted"), std::string::npos) << e.message();
   }
+}
+
+TEST(FdemElements, TenNodeGrainsSplitIntoEightFourNodeOnesOnTheirNodes) {
+  // A sheared 10-node box beside a 4-node one: the split keeps every node, the surface triangles
+  // (the 10-node faces' quarters are the split elements' boundary), the volume and the mass, and
+  // every part lies on its parent's nodes with a positive orientation.
+  TetMesh mesh = box_mesh(Eigen::Vector3d(2e-3, 1e-3, 1.5e-3), 0.5e-3);
+  Eigen::Matrix3d A;
+  A << 1.0, 0.3, -0.2, 0.1, 0.8, 0.4, -0.25, 0.05, 1.3;
+  for (Eigen::Vector3d& X : mesh.nodes) X = A * X;
+  Model m;
+  add_grain(m, mesh, Eigen::Vector3d::Zero(), GrainKind::tet10, 0, 1);
+  add_grain(m, box_mesh(Eigen::Vector3d(1e-3, 1e-3, 1e-3), 0.5e-3), Eigen::Vector3d(5e-3, 0, 0), GrainKind::rigid, 0, 2);
+  const Model before = m;
+  const auto mass_before = lumped_masses(before);
+  split_into_linear_grains(m);
+  EXPECT_EQ(m.nodes, before.nodes);
+  EXPECT_EQ(m.triangles, before.triangles);
+  const std::size_t tens = before.grains[0].element_end - before.grains[0].element_begin;
+  const std::size_t fours = before.grains[1].element_end - before.grains[1].element_begin;
+  ASSERT_EQ(m.element_count(), 8 * tens + fours);
+  for (std::size_t g = 0; g < 2; ++g) {
+    const Grain& grain = m.grains[g];
+    EXPECT_EQ(grain.kind, GrainKind::tet4);
+    double volume = 0, volume_before = 0;
+    std::vector<std::uint32_t> elements;
+    for (std::uint32_t e = grain.element_begin; e < grain.element_end; ++e) {
+      ASSERT_EQ(m.nodes_of(e), 4u);
+      EXPECT_EQ(m.element_grain[e], g);
+      EXPECT_GT(element_volume(m, e), 0) << "element " << e;
+      volume += element_volume(m, e);
+      elements.insert(elements.end(), m.element_nodes.begin() + m.element_offset[e], m.element_nodes.begin() + m.element_offset[e + 1]);
+    }
+    for (std::uint32_t e = before.grains[g].element_begin; e < before.grains[g].element_end; ++e) volume_before += element_volume(before, e);
+    EXPECT_NEAR(volume, volume_before, 1e-12 * volume_before);
+    // The split elements' own boundary is the grain's surface, triangle for triangle.
+    const auto boundary = boundary_triangles(4, elements);
+    const auto sorted = [](std::array<std::uint32_t, 3> t) { return std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end()), t; };
+    std::set<std::array<std::uint32_t, 3>> a, b;
+    for (const auto& t : boundary) a.insert(sorted(t));
+    for (std::uint32_t t = grain.triangle_begin; t < grain.triangle_end; ++t) b.insert(sorted(m.triangles[t]));
+    EXPECT_EQ(a, b) << "grain " << g;
+  }
+  // Each 10-node element's eight parts use only its own nodes.
+  for (std::size_t e = 0; e < tens; ++e) {
+    const std::set<std::uint32_t> parent(before.element_nodes.begin() + before.element_offset[e],
+                                         before.element_nodes.begin() + before.element_offset[e + 1]);
+    for (std::size_t k = 8 * e; k < 8 * e + 8; ++k)
+      for (std::uint32_t i = m.element_offset[k]; i < m.element_offset[k + 1]; ++i) EXPECT_TRUE(parent.count(m.element_nodes[i]));
+  }
+  const auto mass = lumped_masses(m);
+  const double total = std::accumulate(mass_before.begin(), mass_before.end(), 0.0);
+  EXPECT_NEAR(std::accumulate(mass.begin(), mass.end(), 0.0), total, 1e-12 * total);
+  for (double v : mass) EXPECT_GT(v, 0);
+}
+
+TEST(FdemElements, AGrainWhoseSplitWouldInvertACurvedElementKeepsItsTenNodes) {
+  // Grain 0's mid-edge node of one edge pushed past the edge's end: its corner parts turn inside
+  // out, so it keeps its 10-node elements; grain 1 beside it is split.
+  Model m = box_model(GrainKind::tet10, {0.5e-3, 0.5e-3, 0.5e-3}, 0.5e-3);
+  add_grain(m, box_mesh({0.5e-3, 0.5e-3, 0.5e-3}, 0.5e-3), Eigen::Vector3d(2e-3, 0, 0), GrainKind::tet10, 0, 8);
+  const std::uint32_t* n = m.element_nodes.data() + m.element_offset[2];
+  m.nodes[n[4]] = m.nodes[n[1]] + 0.5 * (m.nodes[n[1]] - m.nodes[n[0]]);
+  const Model before = m;
+  EXPECT_EQ(split_into_linear_grains(m), std::vector<std::uint32_t>{0});
+  EXPECT_EQ(m.grains[0].kind, GrainKind::tet10);
+  EXPECT_EQ(m.grains[1].kind, GrainKind::tet4);
+  const std::uint32_t tens = before.grains[0].element_end;
+  ASSERT_EQ(m.grains[0].element_end, tens);
+  EXPECT_TRUE(std::equal(m.element_nodes.begin(), m.element_nodes.begin() + m.element_offset[tens], before.element_nodes.begin()));
+  EXPECT_EQ(m.grains[1].element_begin, tens);
+  EXPECT_EQ(m.grains[1].element_end - m.grains[1].element_begin, 8 * (before.grains[1].element_end - before.grains[1].element_begin));
+  EXPECT_EQ(m.element_offset.back(), m.element_nodes.size());
 }
 
 INSTANTIATE_TEST_SUITE_P(Fdem, Kinds, ::testing::Values(GrainKind::tet4, GrainKind::tet10),

@@ -2,8 +2,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -166,6 +168,105 @@ std::uint32_t append_grain_elements(Model& model, std::span<const Eigen::Vector3
   g.triangle_end = static_cast<std::uint32_t>(model.triangles.size());
   model.grains.push_back(g);
   return grain_index;
+}
+
+namespace {
+
+// A 10-node element's eight linear parts, as local node indices (mid-edge node 4 + k on edge
+// kTet10Edges[k]: 01, 12, 20, 30, 32, 31).
+constexpr std::array<std::array<int, 4>, 4> kCornerTets{{{0, 4, 6, 7}, {4, 1, 5, 9}, {6, 5, 2, 8}, {7, 9, 8, 3}}};
+// The inner octahedron's three diagonals (its opposite mid-edge nodes), each with the equator of
+// the other four in cyclic order (p, q, p', q' for the other two opposite pairs).
+struct Diagonal {
+  int a, b;
+  std::array<int, 4> equator;
+};
+constexpr std::array<Diagonal, 3> kDiagonals{{{4, 8, {5, 6, 7, 9}}, {5, 7, {4, 6, 8, 9}}, {6, 9, {4, 5, 8, 7}}}};
+
+double signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+  return (b - a).cross(c - a).dot(d - a) / 6.0;
+}
+
+/// Element e's eight positively oriented linear parts (local node indices into its 10), or nothing
+/// when a corner part is inverted or no diagonal of the inner octahedron gives four valid parts.
+std::optional<std::array<std::array<int, 4>, 8>> linear_parts(const Model& model, std::size_t e) {
+  const std::uint32_t* n = model.element_nodes.data() + model.element_offset[e];
+  const auto at = [&](int local) -> const Eigen::Vector3d& { return model.nodes[n[local]]; };
+  std::array<std::array<int, 4>, 8> parts;
+  for (int k = 0; k < 4; ++k) {
+    const auto& t = kCornerTets[k];
+    if (!(signed_volume(at(t[0]), at(t[1]), at(t[2]), at(t[3])) > 0)) return std::nullopt;
+    parts[k] = t;
+  }
+  // The diagonal whose four parts share one orientation; the shortest if several do.
+  const Diagonal* best = nullptr;
+  double best_length = 0;
+  bool best_positive = true;
+  for (const Diagonal& d : kDiagonals) {
+    int positive = 0, negative = 0;
+    for (int k = 0; k < 4; ++k) {
+      const double v = signed_volume(at(d.a), at(d.b), at(d.equator[k]), at(d.equator[(k + 1) % 4]));
+      positive += v > 0;
+      negative += v < 0;
+    }
+    const double length = (at(d.a) - at(d.b)).norm();
+    if ((positive == 4 || negative == 4) && (!best || length < best_length)) {
+      best = &d;
+      best_length = length;
+      best_positive = positive == 4;
+    }
+  }
+  if (!best) return std::nullopt;
+  const int a = best_positive ? best->a : best->b, b = best_positive ? best->b : best->a;
+  for (int k = 0; k < 4; ++k) parts[4 + k] = {a, b, best->equator[k], best->equator[(k + 1) % 4]};
+  return parts;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> split_into_linear_grains(Model& model) {
+  std::vector<std::uint32_t> element_nodes, element_offset{0}, element_grain, kept;
+  element_nodes.reserve(model.element_nodes.size() * 32 / 10);
+  for (std::uint32_t g = 0; g < model.grains.size(); ++g) {
+    Grain& grain = model.grains[g];
+    const auto begin = static_cast<std::uint32_t>(element_grain.size());
+    const std::size_t nodes_at = element_nodes.size();
+    bool split = true;
+    for (std::uint32_t e = grain.element_begin; e < grain.element_end && split; ++e) {
+      const std::uint32_t* n = model.element_nodes.data() + model.element_offset[e];
+      if (model.nodes_of(e) == 4) {
+        element_nodes.insert(element_nodes.end(), n, n + 4);
+        continue;
+      }
+      const auto parts = linear_parts(model, e);
+      split = parts.has_value();
+      if (split)
+        for (const auto& t : *parts)
+          for (int k : t) element_nodes.push_back(n[k]);
+    }
+    element_nodes.resize(split ? element_nodes.size() : nodes_at);
+    if (!split) {
+      kept.push_back(g);
+      for (std::uint32_t e = grain.element_begin; e < grain.element_end; ++e) {
+        element_nodes.insert(element_nodes.end(), model.element_nodes.begin() + model.element_offset[e],
+                             model.element_nodes.begin() + model.element_offset[e + 1]);
+        element_offset.push_back(static_cast<std::uint32_t>(element_nodes.size()));
+        element_grain.push_back(g);
+      }
+    } else {
+      for (std::size_t at = nodes_at; at < element_nodes.size(); at += 4) {
+        element_offset.push_back(static_cast<std::uint32_t>(at + 4));
+        element_grain.push_back(g);
+      }
+      grain.kind = GrainKind::tet4;
+    }
+    grain.element_begin = begin;
+    grain.element_end = static_cast<std::uint32_t>(element_grain.size());
+  }
+  model.element_nodes = std::move(element_nodes);
+  model.element_offset = std::move(element_offset);
+  model.element_grain = std::move(element_grain);
+  return kept;
 }
 
 }  // namespace graintwin::fdem

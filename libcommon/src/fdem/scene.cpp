@@ -205,14 +205,15 @@ void parse_model(toml::table& root, const Table& top, const std::filesystem::pat
       source.model = std::make_shared<const Model>(read_model_file(source.path));
     }
     if (t.has("kind")) {
-      if (parse_kind(t) != GrainKind::rigid)
-        t.fail("kind may only be \"rigid\" (a mesh keeps its own element order); leave it out to keep the file's kinds");
-      source.kind = GrainKind::rigid;
+      source.kind = parse_kind(t);
+      if (*source.kind == GrainKind::tet10)
+        t.fail("kind may be \"rigid\" or \"tet4\" (10-node elements split into 4-node ones on their nodes); for 10-node grains "
+               "leave it out to keep the file's kinds, from a mesh of shapes2mesh --order 2");
     }
     if (t.has("deformable")) {
       const toml::table* deformable = (*model)["deformable"].as_table();
       if (!deformable) t.fail("deformable must be a [model.deformable] table");
-      if (source.kind) t.fail("kind = \"rigid\" and [model.deformable] contradict each other; keep one");
+      if (source.kind) t.fail("kind and [model.deformable] contradict each other; keep one");
       const std::string name = source.path.empty() ? std::string("the model") : source.path.filename().string();
       source.deformable = parse_deformable(*deformable, file + ": [model.deformable]", path, *source.model, name, d2min);
     }

@@ -18,8 +18,9 @@ Model build_model(const Scene& scene, const CurvedGrainMesher& mesh_curved) {
   Model m;
   if (scene.model) {
     m = *scene.model->model;
-    if (scene.model->kind)
-      for (Grain& g : m.grains) g.kind = *scene.model->kind;
+    if (scene.model->kind == GrainKind::rigid)
+      for (Grain& g : m.grains) g.kind = GrainKind::rigid;
+    if (scene.model->kind == GrainKind::tet4) split_into_linear_grains(m);
     if (const auto& deformable = scene.model->deformable) {
       // The picked grains deform with their mesh's element order (also where the file models them
       // rigid), the others are rigid.

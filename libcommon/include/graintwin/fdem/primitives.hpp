@@ -1,7 +1,8 @@
 #pragma once
 // Grains for scenes that do not come from CT: a box meshed directly (structured, exact geometry),
 // and the shared step that turns any 4-node tetrahedral mesh into a model grain (10-node promotion
-// by mid-edge nodes, outward surface triangles). Spheres and ellipsoids go through gmsh (mesh/).
+// by mid-edge nodes, outward surface triangles); and the way back, 10-node grains split into
+// 4-node ones on the same nodes. Spheres and ellipsoids go through gmsh (mesh/).
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -41,5 +42,15 @@ std::vector<std::array<std::uint32_t, 3>> boundary_triangles(int nodes_per_eleme
 std::uint32_t append_grain_elements(Model& model, std::span<const Eigen::Vector3d> nodes, int nodes_per_element,
                                     std::span<const std::uint32_t> elements, GrainKind kind, std::uint32_t material,
                                     std::uint32_t label);
+
+/// Every grain of `model` made a 4-node one on its own nodes: each 10-node element becomes eight
+/// 4-node ones (a tetrahedron at each corner and the inner octahedron cut along the diagonal that
+/// leaves its four tetrahedra positively oriented, the shortest of those), grains of 4-node elements
+/// keep theirs, and the grains become `GrainKind::tet4`. Nodes and surface triangles are untouched
+/// (a 10-node grain's surface is already its faces' quarters), so contact sees the same surface;
+/// the volume is that of the straight parts (a curved element's bulge is lost). Element order
+/// within a grain: the parent's, its eight parts in turn. A grain with a curved element that has no
+/// split without an inverted part keeps its 10-node elements and kind; their indices are returned.
+std::vector<std::uint32_t> split_into_linear_grains(Model& model);
 
 }  // namespace graintwin::fdem

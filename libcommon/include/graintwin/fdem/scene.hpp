@@ -79,7 +79,9 @@ using D2minByLabel = std::function<std::map<std::uint32_t, double>(const std::fi
 struct ModelSource {
   std::filesystem::path path;           ///< empty for a model given in memory
   std::shared_ptr<const Model> model;   ///< as read; build_model copies it
-  std::optional<GrainKind> kind;        ///< every grain of the file modelled as this (only rigid: a mesh keeps its order)
+  /// Every grain of the file modelled as this: rigid, or tet4 (10-node elements split into 4-node ones
+  /// on their own nodes, split_into_linear_grains).
+  std::optional<GrainKind> kind;
   std::optional<DeformableSelection> deformable;  ///< only these grains deformable, the rest rigid
 };
 
