@@ -1,5 +1,6 @@
 // The contact model's near-node lists: per grain pair, the surface nodes of each grain within
-// reach of the other's surface, kept between rigid grains while the pair moves less than the skin.
+// reach of the other's surface, kept between rigid or framed grains while the pair moves less than
+// the skin.
 #include "contact_state.hpp"
 
 namespace graintwin::fdem {
@@ -15,28 +16,30 @@ void ContactModel::State::collect_near_nodes(std::uint32_t from, std::uint32_t t
   const Eigen::Vector3d& centre = sphere_centre[to];
   const double sphere_reach2 = (sphere_radius[to] + reach) * (sphere_radius[to] + reach);
   SurfaceTrees::Nearest near;
-  const bool rigid_pair = pose[from].rigid && pose[to].rigid;
+  const bool framed_pair = (pose[from].rigid || pose[from].framed) && (pose[to].rigid || pose[to].framed);
   for (std::uint32_t node : surface(from)) {
     const Eigen::Vector3d p = position(node, from, x);
     if (!box.contains(p) || (p - centre).squaredNorm() > sphere_reach2 || !nearest(to, p, reach, x, near)) continue;
     const bool inside = (near.closest.point - p).dot(pseudonormal(near.triangle, near.closest.feature, x)) > 0;
     out.push_back({node, near.triangle, trees.reference_positions()[node],
-                   rigid_pair && !inside ? std::sqrt(near.distance2) : 0.0});
+                   framed_pair && !inside ? std::sqrt(near.distance2) : 0.0});
   }
-  if (rigid_pair)  // nearest first; stable, so the order is the same on every run
+  if (framed_pair)  // nearest first; stable, so the order is the same on every run
     std::stable_sort(out.begin(), out.end(), [](const NearNode& a, const NearNode& b) { return a.clearance < b.clearance; });
 }
 
 double ContactModel::State::relative_motion(std::uint32_t from, std::uint32_t to, const RigidPose& f0,
                                             const RigidPose& t0) const {
   const RigidPose &f = pose[from], &t = pose[to];
-  if (!(f.rigid && t.rigid && f0.rigid && t0.rigid)) return std::numeric_limits<double>::infinity();
+  const auto framed = [](const RigidPose& p) { return p.rigid || p.framed; };
+  if (!(framed(f) && framed(t) && framed(f0) && framed(t0))) return std::numeric_limits<double>::infinity();
   const Eigen::Matrix3d turn = t.rotation.transpose() * f.rotation - t0.rotation.transpose() * f0.rotation;
   const Eigen::Vector3d shift =
       t.rotation.transpose() * (f.translation - t.translation) - t0.rotation.transpose() * (f0.translation - t0.translation);
   const double slack = kRigidRoundOff * (reference_radius[from] + reference_centre[from].norm() +
                                          reference_radius[to] + reference_centre[to].norm());
-  return turn.norm() * reference_radius[from] + (turn * reference_centre[from] + shift).norm() + slack;
+  return turn.norm() * reference_radius[from] + (turn * reference_centre[from] + shift).norm() + slack + f.deviation +
+         f0.deviation + t.deviation + t0.deviation;
 }
 
 std::array<double, 2> ContactModel::State::pair_motion(std::size_t k) const {

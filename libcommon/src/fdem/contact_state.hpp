@@ -92,9 +92,9 @@ struct NearNode {
   /// other grain's body frame, so the prefilters read the list in order instead of the node's
   /// scattered current position (a cache miss per listed node: half of grain_hits by perf).
   Eigen::Vector3d reference = Eigen::Vector3d::Zero();
-  /// Between two rigid grains: the node's distance outside the other grain at the build (0 when
-  /// inside). The lists are sorted by it, and a step reads a list only up to the relative motion
-  /// of the pair since the build: a node farther out cannot have reached the other surface.
+  /// Between two rigid or framed grains: the node's distance outside the other grain at the build
+  /// (0 when inside). The lists are sorted by it, and a step reads a list only up to the relative
+  /// motion of the pair since the build: a node farther out cannot have reached the other surface.
   double clearance = 0;
 };
 
@@ -215,11 +215,12 @@ struct ContactModel::State {
   std::vector<std::array<std::vector<NearNode>, 2>> near_nodes;
   /// Per listed node of near_nodes (same layout): its search memo (used between rigid grains).
   std::vector<std::array<std::vector<SearchMemo>, 2>> memos;
-  /// Per grain pair: the poses of a and b when its lists were built. Between two rigid grains the
-  /// lists stay valid while the pair's relative motion since then is below the skin (a node then
-  /// farther than max_penetration + skin from the other surface is still beyond max_penetration),
-  /// whatever the other grains do: they outlive the broad phase's rebuilds and are rebuilt alone
-  /// when the pair has moved that much. Other pairs' lists are rebuilt with the broad phase.
+  /// Per grain pair: the poses of a and b when its lists were built. Between two rigid or framed
+  /// grains the lists stay valid while the pair's relative motion since then is below the skin (a
+  /// node then farther than max_penetration + skin from the other surface is still beyond
+  /// max_penetration), whatever the other grains do: they outlive the broad phase's rebuilds and are
+  /// rebuilt alone when the pair has moved that much. Other pairs' lists are rebuilt with the broad
+  /// phase.
   std::vector<std::array<RigidPose, 2>> list_pose;
   double memo_margin = 0;  ///< m of SearchMemo
   /// Per grain: a sphere around its surface this step (centre, radius), a tighter prefilter than
@@ -478,10 +479,17 @@ struct ContactModel::State {
     }
     trees.refit(g, x);
     const Eigen::Vector3d c = 0.5 * (box.lo + box.hi);
-    double reach2 = 0;
-    for (std::uint32_t node : surface(g)) reach2 = std::max(reach2, (x[node] - c).squaredNorm());
+    double reach2 = 0, deviation2 = 0;
+    const RigidPose& frame = this->pose[g];
+    const auto& X = trees.reference_positions();
+    for (std::uint32_t node : surface(g)) {
+      reach2 = std::max(reach2, (x[node] - c).squaredNorm());
+      if (frame.framed) deviation2 = std::max(deviation2, (x[node] - frame.rotation * X[node] - frame.translation).squaredNorm());
+    }
     sphere_centre[g] = c;
     sphere_radius[g] = std::sqrt(reach2);
+    // Round-off as for a rigid grain's pose: the frame's bound stays a bound.
+    if (frame.framed) this->pose[g].deviation = std::sqrt(deviation2) + kRigidRoundOff * (reference_radius[g] + box.hi.cwiseAbs().maxCoeff());
     return check_moved && moved_nodes(g, x);
   }
 
@@ -511,10 +519,11 @@ struct ContactModel::State {
   void collect_near_nodes(std::uint32_t from, std::uint32_t to, double reach, std::span<const Eigen::Vector3d> x,
                           std::vector<NearNode>& out) const;
 
-  /// How far any surface node of rigid grain `from` can have moved in rigid grain `to`'s body frame
-  /// since both were at poses f0 and t0 (infinity unless all four poses are rigid): with the map
-  /// q = A X + b of reference positions X into `to`'s frame, |dA| r + |dA c + db| for the reference
-  /// sphere (c, r) of `from`, plus round-off.
+  /// How far any surface node of grain `from` can have moved relative to grain `to`'s surface, in
+  /// `to`'s body frame, since both were at poses f0 and t0 (infinity unless all four poses are rigid
+  /// or framed): with the map q = A X + b of reference positions X into `to`'s frame, |dA| r + |dA c
+  /// + db| for the reference sphere (c, r) of `from`, plus round-off, plus the four poses' deviations
+  /// (a framed grain's nodes and surface lie that far from where its frame puts them).
   double relative_motion(std::uint32_t from, std::uint32_t to, const RigidPose& f0, const RigidPose& t0) const;
 
   /// The relative motion of pair k's grains since its lists were built, seen from each side's
@@ -530,7 +539,7 @@ struct ContactModel::State {
   std::size_t build_pair_lists(std::size_t k, std::span<const Eigen::Vector3d> x);
 
   /// Lists whose pair moved `motion` (pair_motion) since they were built still hold: both grains
-  /// rigid and moved less than the skin relative to each other.
+  /// rigid or framed and moved less than the skin relative to each other.
   bool lists_hold(const std::array<double, 2>& motion) const { return motion[0] < skin && motion[1] < skin; }
 
   /// Replaces the broad phase's pairs by `pairs` (sorted) at positions x: a rigid pair that stays

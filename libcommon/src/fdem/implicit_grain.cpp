@@ -29,8 +29,8 @@ ImplicitGrain::ImplicitGrain(const Model& model, std::size_t grain, std::span<co
     first += mass_.back() * model.nodes[g.node_begin + i];
   }
   if (!(total_mass_ > 0)) throw DataError(fmt::format("implicit grain: {} has no mass; check its material's density.", name()));
-  const Eigen::Vector3d centre = first / total_mass_;
-  for (std::size_t i = 0; i < node_count_; ++i) reference_.push_back(model.nodes[g.node_begin + i] - centre);
+  reference_centre_ = first / total_mass_;
+  for (std::size_t i = 0; i < node_count_; ++i) reference_.push_back(model.nodes[g.node_begin + i] - reference_centre_);
 
   const Lame lame = lame_constants(model.materials.at(g.material));
   const std::vector<Eigen::Triplet<double>> lower = grain_stiffness_lower(model, grain, lame);
@@ -49,34 +49,28 @@ ImplicitGrain::ImplicitGrain(const Model& model, std::size_t grain, std::span<co
   for (Eigen::VectorXd* v : {&u_, &Ku_, &rhs_, &w_}) v->resize(static_cast<Eigen::Index>(3 * node_count_));
 }
 
-Eigen::Vector3d ImplicitGrain::centre(std::span<const Eigen::Vector3d> x) const {
+ImplicitGrain::Frame ImplicitGrain::frame(std::span<const Eigen::Vector3d> x) const {
   Eigen::Vector3d first = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < node_count_; ++i) first += mass_[i] * x[i];
-  return first / total_mass_;
-}
-
-Eigen::Matrix3d ImplicitGrain::rotation(std::span<const Eigen::Vector3d> x) const {
-  const Eigen::Vector3d c = centre(x);
+  const Eigen::Vector3d c = first / total_mass_;
   Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
   for (std::size_t i = 0; i < node_count_; ++i) moment += mass_[i] * (x[i] - c) * reference_[i].transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(moment, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();  // a proper rotation, also for a flattened grain
   flip(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
-  return svd.matrixU() * flip * svd.matrixV().transpose();
+  return {svd.matrixU() * flip * svd.matrixV().transpose(), c};
 }
 
 std::vector<Eigen::Vector3d> ImplicitGrain::displacement(std::span<const Eigen::Vector3d> x) const {
-  const Eigen::Vector3d c = centre(x);
-  const Eigen::Matrix3d R = rotation(x);
+  const auto [R, c] = frame(x);
   std::vector<Eigen::Vector3d> u(node_count_);
   for (std::size_t i = 0; i < node_count_; ++i) u[i] = R.transpose() * (x[i] - c) - reference_[i];
   return u;
 }
 
 ImplicitGrain::StepEnergies ImplicitGrain::step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v,
-                                                std::span<const Eigen::Vector3d> f, const Eigen::Vector3d& gravity) {
-  const Eigen::Vector3d c = centre(x);
-  const Eigen::Matrix3d R = rotation(x);
+                                                std::span<const Eigen::Vector3d> f, const Eigen::Vector3d& gravity, const Frame* at) {
+  const auto [R, c] = at ? *at : frame(x);
   Eigen::VectorXd &u = u_, &Ku = Ku_, &rhs = rhs_, &w = w_;
   const auto all = [](Eigen::VectorXd& a) { return std::span<double>(a.data(), static_cast<std::size_t>(a.size())); };
   for (std::size_t i = 0; i < node_count_; ++i)

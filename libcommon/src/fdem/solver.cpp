@@ -114,7 +114,10 @@ Solver::Solver(const Model& model, const SolverOptions& options)
     throw UsageError("rigid_contact_nodes must be at least 1 (the nodes of a rigid grain assumed to touch at once)");
   check_implicit_damping(options);
   contact_mass_ = contact_masses(model, mass_, bodies_, options.rigid_contact_nodes, options.implicit_grains);
-  if (options.implicit_grains) implicit_.resize(grains);
+  if (options.implicit_grains) {
+    implicit_.resize(grains);
+    implicit_frames_.resize(grains);
+  }
   if (options.contact.enabled) contact_ = std::make_unique<ContactModel>(model, contact_mass_, options.contact);
   if (contact_ && options.elastostatic_stress) contact_->record_node_forces(true);
 }
@@ -305,6 +308,7 @@ StepReport Solver::step(double dt) {
     if (options_.implicit_grains) {  // its elastic forces are inside its implicit step
       if (!implicit_[g] || implicit_[g]->time_step() != dt || implicit_[g]->damping() != options_.damping)
         implicit_[g] = std::make_unique<ImplicitGrain>(m, g, mass_, dt, options_.damping);
+      implicit_frames_[g] = implicit_[g]->frame(std::span<const Eigen::Vector3d>(state_.x).subspan(grain.node_begin, grain.node_end - grain.node_begin));
       continue;
     }
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);
@@ -318,10 +322,16 @@ StepReport Solver::step(double dt) {
   StepReport report;
   if (share_) contact_->set_grain_roles(roles);
   if (contact_) {
-    // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0).
+    // Contact places rigid grains' nodes and surface trees by their body motion: x = c + R (X - c0);
+    // implicit grains give their best-fit frames, which let their pairs' near-node lists last.
     poses_.resize(grains);
-    for (std::size_t g = 0; g < grains; ++g)
-      if (m.grains[g].kind == GrainKind::rigid) poses_[g] = pose_of(g);
+    for (std::size_t g = 0; g < grains; ++g) {
+      if (m.grains[g].kind == GrainKind::rigid) {
+        poses_[g] = pose_of(g);
+      } else if (!implicit_.empty() && implicit_[g]) {
+        poses_[g] = RigidPose::of_frame(implicit_frames_[g].rotation, implicit_frames_[g].centre, implicit_[g]->reference_centre());
+      }
+    }
     report.contact = contact_->add_forces(state_.x, state_.v, state_.platens, dt, force_, poses_);
     times_.node_contacts += report.contact.node_contacts;
     times_.node_checks += report.contact.node_checks;
@@ -466,7 +476,8 @@ void Solver::step_implicit_grain(std::size_t g, double dt, const Eigen::Vector3d
   const std::size_t nodes = grain.node_end - grain.node_begin;
   const ImplicitGrain::StepEnergies e = implicit_[g]->step(std::span<Eigen::Vector3d>(state_.x).subspan(grain.node_begin, nodes),
                                                            std::span<Eigen::Vector3d>(state_.v).subspan(grain.node_begin, nodes),
-                                                           std::span<const Eigen::Vector3d>(force_).subspan(grain.node_begin, nodes), g_acc);
+                                                           std::span<const Eigen::Vector3d>(force_).subspan(grain.node_begin, nodes), g_acc,
+                                                           &implicit_frames_[g]);
   for (std::uint32_t i = grain.node_begin; i < grain.node_end; ++i)
     if (!finite(state_.x[i])) bad = 1;
   kinetic = e.kinetic_mean;

@@ -50,20 +50,34 @@ struct PlatenState {
 /// centre + rotation (X - reference_centre) and moves at velocity + angular_velocity x rotation (X -
 /// reference_centre); its surface tree is placed at rotation X + translation (translation = centre - rotation
 /// reference_centre). Contact reads a rigid grain's nodes from its pose, never from the node arrays.
+/// A deformable grain may give its best-fit frame instead (`framed`, of_frame: an implicit grain's,
+/// whose nodes stay within a strain's worth of it): its nodes are still read from the node arrays,
+/// but the frame lets its pairs' near-node lists outlive the broad phase as a rigid pair's do.
 struct RigidPose {
   bool rigid = false;  ///< false: a deformable grain (its trees are refitted to its nodes)
+  bool framed = false;  ///< a deformable grain with the best-fit frame below (rotation, translation, centres)
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();       ///< m
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();            ///< m, the body's centroid now
   Eigen::Vector3d reference_centre = Eigen::Vector3d::Zero();  ///< m, the centroid in the reference
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< m/s, of the centroid
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< rad/s, world axes
+  /// m, of a framed grain, set by the contact model: how far its surface nodes lie from where the
+  /// frame puts their reference positions, at most.
+  double deviation = 0;
 
   /// The pose of a body with centroid `centre` (reference `reference_centre`) turned by `rotation`.
   static RigidPose of_body(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& centre,
                            const Eigen::Vector3d& reference_centre, const Eigen::Vector3d& velocity = Eigen::Vector3d::Zero(),
                            const Eigen::Vector3d& angular_velocity = Eigen::Vector3d::Zero()) {
-    return {true, rotation, centre - rotation * reference_centre, centre, reference_centre, velocity, angular_velocity};
+    return {true, false, rotation, centre - rotation * reference_centre, centre, reference_centre, velocity, angular_velocity};
+  }
+  /// The best-fit frame of a deformable grain: its nodes near centre + rotation (X - reference_centre).
+  static RigidPose of_frame(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& centre, const Eigen::Vector3d& reference_centre) {
+    RigidPose frame = of_body(rotation, centre, reference_centre);
+    frame.rigid = false;
+    frame.framed = true;
+    return frame;
   }
   /// How fast the node with reference position X moves.
   Eigen::Vector3d velocity_of(const Eigen::Vector3d& X) const { return velocity + angular_velocity.cross(arm(X)); }

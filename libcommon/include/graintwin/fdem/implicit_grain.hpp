@@ -38,8 +38,15 @@ class ImplicitGrain {
   ImplicitGrain(const Model& model, std::size_t grain, std::span<const double> node_mass, double dt, double damping = 0);
 
   /// Node arrays below are the grain's own: its node_count() nodes, in the model's order.
-  /// The grain's best-fit rotation at its node positions `x`.
-  Eigen::Matrix3d rotation(std::span<const Eigen::Vector3d> x) const;
+  /// The grain's best-fit frame at node positions `x`: its node with reference position X lies near
+  /// centre + rotation (X - reference_centre()), centre the mass centre of its nodes.
+  struct Frame {
+    Eigen::Matrix3d rotation;
+    Eigen::Vector3d centre;
+  };
+  Frame frame(std::span<const Eigen::Vector3d> x) const;
+  /// The mass centre of the grain's nodes at the model's positions, m.
+  const Eigen::Vector3d& reference_centre() const { return reference_centre_; }
   /// One step's energies (J), booked as leapfrog books them: kinetic energy and work at the mean of
   /// the step's two velocities.
   struct StepEnergies {
@@ -57,9 +64,10 @@ class ImplicitGrain {
   /// `f` on them (N, without the elastic and gravity ones) and the acceleration of `gravity` (m/s^2).
   /// Over a step the rigid motion is leapfrog's, so the work of a force at its mean velocity is
   /// exactly what the end velocities' kinetic energy gains.
-  /// Keeps its workspace between calls: one grain steps on one thread at a time.
+  /// `at`: frame(x), when the caller has it already. Keeps its workspace between calls: one grain
+  /// steps on one thread at a time.
   StepEnergies step(std::span<Eigen::Vector3d> x, std::span<Eigen::Vector3d> v, std::span<const Eigen::Vector3d> f,
-                    const Eigen::Vector3d& gravity = Eigen::Vector3d::Zero());
+                    const Eigen::Vector3d& gravity = Eigen::Vector3d::Zero(), const Frame* at = nullptr);
   /// The body-frame displacement u = R^T (x - c) - (X - C) of each node of the grain at `x`, m.
   std::vector<Eigen::Vector3d> displacement(std::span<const Eigen::Vector3d> x) const;
 
@@ -68,13 +76,11 @@ class ImplicitGrain {
   std::size_t node_count() const { return node_count_; }
 
  private:
-  /// The mass centre of the grain's nodes in `x`.
-  Eigen::Vector3d centre(std::span<const Eigen::Vector3d> x) const;
-
   std::size_t node_count_ = 0;
   double dt_ = 0, damping_ = 0;
   std::vector<double> mass_;                 ///< per local node, kg
   std::vector<Eigen::Vector3d> reference_;   ///< X - C per local node, m
+  Eigen::Vector3d reference_centre_;         ///< C, m
   double total_mass_ = 0;
   SymmetricNodeBlocks stiffness_;  ///< K, local dofs
   NodeBlockLdlt factor_;           ///< of (1 + damping dt) M + dt^2 K

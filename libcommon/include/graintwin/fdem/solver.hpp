@@ -391,6 +391,9 @@ class Solver {
   /// Per deformable grain with options.implicit_grains, its implicit stepper for the last step's dt
   /// (made again when dt changes).
   std::vector<std::unique_ptr<ImplicitGrain>> implicit_;
+  /// Per implicit grain, scratch: its best-fit frame at this step's positions (its step's, and its
+  /// pose for contact).
+  std::vector<ImplicitGrain::Frame> implicit_frames_;
   Boundary* boundary_ = nullptr;
   double runaway_floor_ = 0;                   ///< J: energy below it is never a runaway (round-off)
   /// Per node, the last step's forces on deformable grains (a rigid grain's nodes hold none).
@@ -406,7 +409,7 @@ class Solver {
   /// The last step's time step (0 before the first): with the half-step velocities it gives the
   /// positions where force_ acted, for the Love-Weber stress of deformable grains.
   double last_dt_ = 0;
-  std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion for contact
+  std::vector<RigidPose> poses_;               ///< per grain, scratch: rigid grains' motion, implicit ones' frames, for contact
   std::vector<Eigen::Vector3d> platen_force_;  ///< per platen, last step
   std::vector<double> platen_stiffness_;       ///< per platen, last step, N/m
   StepTimes times_;
