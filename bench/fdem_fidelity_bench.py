@@ -6,7 +6,9 @@ kind and the model file's element order changed.
 Cases: `rigid` (the pipeline's scene as it is); `rigid_replicate` (the same at 0.98 of the stable
 step: the smallest perturbation, so its difference from `rigid` is the chaos floor of one packing);
 `tet10` (the model's own 10-node grains, the scene's `kind` line taken out); `tet4` (the same
-grains meshed by shapes2mesh with the pipeline's options and `order = 1`); `mixed` (a fifth of the
+model with `kind = "tet4"`: each 10-node element split into eight 4-node ones on its own nodes, so the
+same nodes and contact surface); `tet4_remeshed` (the same grains meshed again by shapes2mesh with
+the pipeline's options and `order = 1`, whose volume target for flat facets makes the mesh finer); `mixed` (a fifth of the
 grains deformable, 10-node: the most loaded ones after consolidation, from the rigid run's first
 frame; the rest rigid). Deformable grains are integrated as the scene says (deformable_integration).
 
@@ -23,7 +25,7 @@ usage: bench/fdem_fidelity_bench.py [--series NAME] [--build DIR] [--work DIR] [
   --series NAME   the pipeline's series whose model, scans and shapes to use (default sand_small)
   --build DIR     CMake build folder holding bin/fdemrun, bin/fdem2forces, bin/shapes2mesh (default build)
   --work DIR      scratch folder for scenes, models, results and logs (default bench/out/fdem_fidelity)
-  --cases LIST    which cases to run (default all: rigid,rigid_replicate,tet10,mixed,tet4)
+  --cases LIST    which cases to run (default all: rigid,rigid_replicate,tet10,mixed,tet4,tet4_remeshed)
   --jobs N        runs side by side, one thread each (default 1: CPU times are then comparable)
   --reuse         keep results already in WORK instead of running them again
   --publish-only  run nothing: the table and chart of the results already in WORK"""
@@ -50,7 +52,7 @@ from fdem_triaxial_bench import on_grid, read  # noqa: E402
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(SOURCE, "pipelines", "scenes", "triaxial.toml")
 PARAMS = os.path.join(SOURCE, "pipelines", "params")
-CASES = ("rigid", "rigid_replicate", "tet10", "mixed", "tet4")
+CASES = ("rigid", "rigid_replicate", "tet10", "mixed", "tet4", "tet4_remeshed")
 REFERENCE = "tet10"
 MIXED_SHARE = 0.2
 RIGID_LINE = 'kind = "rigid"'
@@ -70,8 +72,10 @@ def scene_of(case, work):
         return text
     if case == "rigid_replicate":
         return text.replace("[run]\n", "[run]\ntime_step_fraction = 0.98\n", 1)
-    if case in ("tet10", "tet4"):
+    if case in ("tet10", "tet4_remeshed"):
         return text.replace(RIGID_LINE, "# kind: the model file's own")
+    if case == "tet4":
+        return text.replace(RIGID_LINE, 'kind = "tet4"  # the model file\'s 10-node elements split into 4-node ones on their nodes')
     if case == "mixed":
         rule = ("[model.deformable]\n" 'rule = "most_loaded"\n' f'file = "{os.path.join(work, "rigid.h5")}"\n'
                 f"frame = 0\nshare = {MIXED_SHARE}\n")
@@ -80,17 +84,21 @@ def scene_of(case, work):
 
 
 def model_of(case, series, work):
-    return os.path.join(work, "model_tet4.h5") if case == "tet4" else os.path.join(SOURCE, "runs", series, "model.h5")
+    return remeshed_model(work) if case == "tet4_remeshed" else os.path.join(SOURCE, "runs", series, "model.h5")
 
 
-def make_tet4_model(build, series, work):
+def remeshed_model(work):
+    return os.path.join(work, "model_tet4_remeshed.h5")
+
+
+def make_remeshed_tet4_model(build, series, work):
     """The pipeline's mesh stage again with order = 1 (shapes2mesh's own volume target then sizes the elements)."""
-    out = os.path.join(work, "model_tet4.h5")
+    out = remeshed_model(work)
     scan = os.path.join(SOURCE, "runs", series, "scan_000")
     cmd = [os.path.join(build, "bin", "shapes2mesh"), os.path.join(scan, "shapes.h5"), os.path.join(scan, "labels.h5"), out,
            "--config", os.path.join(PARAMS, "shapes2mesh.toml"), "--order", "1", "--force"]
     print("running", " ".join(cmd), flush=True)
-    with open(os.path.join(work, "model_tet4.log"), "w") as log:
+    with open(os.path.join(work, "model_tet4_remeshed.log"), "w") as log:
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=log)
 
 
@@ -151,6 +159,7 @@ def measure(work, case):
         r["normal_force"] = np.sort(np.abs(fn) / np.mean(np.abs(fn)))
         r["steps"] = int(f["series/step"][-1])
         r["kinds"] = kinds
+        r["elements"] = f["elements/element"].shape[0]
     with h5py.File(os.path.join(work, case + "_forces.h5"), "r") as f:
         r["q"] = dict(zip(f["grains/label"][:].tolist(), f["grains/q"][:, -1].tolist()))
         r["pearson_r"] = float(f["windows/pearson_r"][0])
@@ -196,7 +205,8 @@ def table(results, cpu):
         if case == "rigid_replicate" and "rigid" in results:
             d = against(r, results["rigid"])
         diff = (f"{d['ratio']:.1f} % | {d['eps_v']:.2f} % | {d['ks']:.3f} | {d['q']:.1f} %" if d else "reference | | | ")
-        rows.append(f"| {case} | {kinds_text(r['kinds'])} | {r['steps']} | {cpu.get(case, math.nan):.0f} | "
+        elements = f" ({r['elements']} elements)" if r["elements"] else ""  # a rigid run's results hold no element stresses
+        rows.append(f"| {case} | {kinds_text(r['kinds'])}{elements} | {r['steps']} | {cpu.get(case, math.nan):.0f} | "
                     f"{cpu.get(case, math.nan) / rigid_cpu:.1f} | {np.max(r['stress_ratio']):.3f} | {r['stress_ratio'][-1]:.3f} | "
                     f"{100 * r['volumetric_strain'][-1]:.2f} % | {diff} | {r['pearson_r']:.2f} |")
     return "\n".join(rows)
@@ -258,8 +268,8 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     cpu, failed = {}, []
     if not a.publish_only:
-        if "tet4" in cases and not (a.reuse and os.path.exists(os.path.join(a.work, "model_tet4.h5"))):
-            make_tet4_model(a.build, a.series, a.work)
+        if "tet4_remeshed" in cases and not (a.reuse and os.path.exists(remeshed_model(a.work))):
+            make_remeshed_tet4_model(a.build, a.series, a.work)
         cpu, failed = run_cases(cases, a)
     results = {c: measure(a.work, c) for c in CASES if os.path.exists(os.path.join(a.work, c + "_forces.h5"))}
     for c in results:
