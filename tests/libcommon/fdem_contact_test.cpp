@@ -887,6 +887,39 @@ TEST(RigidLoad, TorqueIsTheSumOfArmsCrossForces) {
   EXPECT_LT((load.torque() - torque).norm(), 1e-14);
 }
 
+TEST(ContactModel, ABallOnAnImplicitGrainPressesItsFootprint) {
+  // A membrane ball pressed into a face of a deformable cube: on a plain deformable grain its force
+  // acts on one triangle's corners; on an implicit (framed) grain it is shared by the surface nodes
+  // within the ball's radius of the contact point, by area and nearness (a stiff ball on three nodes
+  // of a quasi-static grain is unstable). The same total force either way, balancing the ball's.
+  Model m;
+  const double side = 0.5e-3, radius = 0.1e-3;
+  add_grain(m, box_mesh({side, side, side}, side / 8), Eigen::Vector3d::Zero(), GrainKind::tet4, 0, 1);
+  const std::vector<Eigen::Vector3d> centre{Eigen::Vector3d(0.01e-3, -0.02e-3, 0.5 * side + radius - 1e-6)}, still = zeros(1);
+  const BallContactOptions balls{radius, 1e-8, 0.3};
+  const Eigen::Vector3d touched(centre[0].x(), centre[0].y(), 0.5 * side);
+  for (const bool framed : {false, true}) {
+    ContactModel contact(m, unit_masses(m), {});
+    const std::vector<RigidPose> poses{framed ? RigidPose::of_frame(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero())
+                                              : RigidPose{}};
+    auto f = zeros(m.nodes.size()), ball_force = zeros(1), ball_moment = zeros(1);
+    contact.add_forces(m.nodes, zeros(m.nodes.size()), {}, 1e-9, f, poses);
+    add_ball_contacts(contact.add_ball_forces(m.nodes, zeros(m.nodes.size()), centre, still, still, balls, 1e-9, f), ball_force, ball_moment);
+    ASSERT_GT(ball_force[0].z(), 0);
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    std::size_t pressed = 0;
+    for (std::size_t n = 0; n < m.nodes.size(); ++n) {
+      if (f[n].isZero()) continue;
+      ++pressed;
+      total += f[n];
+      EXPECT_LT((m.nodes[n] - touched).norm(), framed ? radius : side / 8 * 1.5) << "node " << n;
+    }
+    EXPECT_LT((total + ball_force[0]).norm(), 1e-12 * ball_force[0].norm());
+    if (framed) EXPECT_GE(pressed, 6u);
+    else EXPECT_LE(pressed, 3u);
+  }
+}
+
 TEST(ContactModel, RigidGrainsNodesComeFromTheirPosesAndTheirForcesGoToTheirLoads) {
   // With poses, a rigid grain's nodes are placed by its pose: the node arrays may hold anything
   // (here NaN), the grain, platen, wall and ball forces must be those of nodes placed in the arrays,

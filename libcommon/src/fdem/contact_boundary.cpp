@@ -147,7 +147,17 @@ std::span<const BallContact> ContactModel::add_ball_forces(std::span<const Eigen
       const Eigen::Vector3d face = s.normal_of(near.triangle, x).normalized();
       hit.normal = dist > 1e-12 * r ? Eigen::Vector3d((inside ? 1.0 : -1.0) * d / dist) : face;
       const Eigen::Vector3d w = near.closest.weights;
-      const Eigen::Vector3d surface_velocity = s.surface_velocity(near.triangle, w, v);
+      Eigen::Vector3d surface_velocity = s.surface_velocity(near.triangle, w, v);
+      // On an implicit grain the ball presses its footprint: its force on one triangle's corners
+      // against the grain's quasi-static local give made the explicit contact unstable.
+      std::vector<std::pair<std::uint32_t, double>> spread;
+      if (s.pose[g].framed) {
+        s.ball_footprint(near.triangle, near.closest.point, r, x, spread);
+        if (!spread.empty()) {
+          surface_velocity.setZero();
+          for (const auto& [node, share] : spread) surface_velocity += share * v[node];
+        }
+      }
       const Eigen::Vector3d contact_velocity = ball_velocity[b] + ball_spin[b].cross(-r * hit.normal);
       const Material& m = s.material_of(g);
       hit.law = node_contact_force(contact_law(m.normal_penalty, m.tangential_penalty, area, balls.mass, m.damping_ratio,
@@ -157,7 +167,8 @@ std::span<const BallContact> ContactModel::add_ball_forces(std::span<const Eigen
       hit.grain = g;
       hit.triangle = near.triangle;
       hit.weights = w;
-      out.push_back(hit);
+      hit.spread = std::move(spread);
+      out.push_back(std::move(hit));
     }
     std::sort(out.begin(), out.end(), [](const BallHit& p, const BallHit& q) { return p.grain < q.grain; });
   }
@@ -167,16 +178,54 @@ std::span<const BallContact> ContactModel::add_ball_forces(std::span<const Eigen
       const Eigen::Vector3d& force = h.law.force;
       if (s.pose[h.grain].rigid) {
         s.loads[h.grain].add(s.surface_arm(h.triangle, h.weights), -force);
+        s.record(kNoNode, h.triangle, h.weights, force);
+      } else if (!h.spread.empty()) {
+        for (const auto& [node, share] : h.spread) f[node] -= share * force;
+        if (s.record_node_forces)
+          for (const auto& [node, share] : h.spread) s.node_forces[node] -= share * force;
       } else {
         const auto& tri = s.triangles[h.triangle];
         for (int k = 0; k < 3; ++k) f[tri[k]] -= h.weights[k] * force;
+        s.record(kNoNode, h.triangle, h.weights, force);
       }
-      s.record(kNoNode, h.triangle, h.weights, force);
       s.ball_contacts.push_back({b, h.grain, force, (-r * h.normal).cross(force - h.law.normal_force * h.normal),
                                  h.law.spring, h.law.elastic_energy, h.law.dissipated, h.overlap});
     }
   set_ball_history(s.ball_contacts);
   return s.ball_contacts;
+}
+
+void ContactModel::State::ball_footprint(std::uint32_t t, const Eigen::Vector3d& at, double radius,
+                                         std::span<const Eigen::Vector3d> x,
+                                         std::vector<std::pair<std::uint32_t, double>>& out) const {
+  out.clear();
+  // Triangles reached over the surface from t while one of their corners lies within the radius.
+  std::vector<std::uint32_t> reached{t};
+  const auto within = [&](std::uint32_t node) { return (x[node] - at).squaredNorm() < radius * radius; };
+  for (std::size_t k = 0; k < reached.size(); ++k) {
+    const auto& corners = triangles[reached[k]];
+    if (!within(corners[0]) && !within(corners[1]) && !within(corners[2])) continue;
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t across = neighbour[reached[k]][e];
+      if (across != kNoTriangle && std::find(reached.begin(), reached.end(), across) == reached.end()) reached.push_back(across);
+    }
+    for (std::uint32_t node : corners)
+      if (within(node) && std::none_of(out.begin(), out.end(), [&](const auto& o) { return o.first == node; }))
+        out.emplace_back(node, 0.0);
+  }
+  double total = 0;
+  for (auto& [node, share] : out) {
+    double area = 0;
+    for (std::uint32_t k = node_triangle_offset[node]; k < node_triangle_offset[node + 1]; ++k) area += triangle_area[node_triangles[k]] / 3;
+    share = area * (1 - (x[node] - at).norm() / radius);
+    total += share;
+  }
+  if (!(total > 0)) {
+    out.clear();
+    return;
+  }
+  for (auto& [node, share] : out) share /= total;
+  std::sort(out.begin(), out.end());
 }
 
 void ContactModel::set_ball_history(std::span<const BallContact> contacts) {

@@ -157,6 +157,10 @@ struct BallHistoryEntry {
 struct BallHit {
   std::uint32_t grain = 0, triangle = 0;
   Eigen::Vector3d weights = Eigen::Vector3d::Zero();
+  /// On an implicit (framed) grain: the surface nodes under the ball's footprint and their shares of
+  /// its force, summing to 1 (ContactModel::State::ball_footprint); else empty, and the force acts
+  /// on the triangle's corners by `weights`.
+  std::vector<std::pair<std::uint32_t, double>> spread;
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, the direction the ball is pushed
   double overlap = 0;
   NodeContactForce law;
@@ -576,6 +580,13 @@ struct ContactModel::State {
   /// when the centre lies outside the grain at least `ball_radius` from it (no contact either way).
   bool ball_nearest(BallCandidate& candidate, const Eigen::Vector3d& c, double radius, double ball_radius,
                     std::span<const Eigen::Vector3d> x, SurfaceTrees::Nearest& near) const;
+
+  /// The surface nodes of triangle t's grain within `radius` of the point `at` on t, reached over
+  /// the surface from t, with shares of a force pressed there (into `out`, by node index; the shares
+  /// sum to 1): each node's reference area times (1 - distance / radius). Empty when no corner of t
+  /// lies within the radius.
+  void ball_footprint(std::uint32_t t, const Eigen::Vector3d& at, double radius, std::span<const Eigen::Vector3d> x,
+                      std::vector<std::pair<std::uint32_t, double>>& out) const;
 
   /// Nodes of grain key.a behind `platen`, with their forces.
   void platen_hits(const Candidate& key, const PlatenState& platen, std::span<const Eigen::Vector3d> x,

@@ -81,9 +81,10 @@ struct SolverOptions {
   /// Deformable grains are stepped implicitly in their corotated frame (fdem::ImplicitGrain): their
   /// elements no longer limit the step, and contact sees each of their nodes as it sees a rigid
   /// grain's (the body's effective mass over rigid_contact_nodes), since over such a step the stiff
-  /// grain answers a contact as a whole. An experiment so far: not a scene option; mass damping only
-  /// (UsageError with stiffness or local damping); its energy books do not close yet and its strain
-  /// energy is not in checkpoints (docs/fdemrun.md, implicit grains).
+  /// grain answers a contact as a whole; their best-fit frames go to contact as framed poses, and
+  /// membrane balls press their footprints. The scene's [run] deformable_integration = "implicit";
+  /// mass damping only (UsageError with stiffness or local damping); no state beyond positions and
+  /// velocities (docs/fdemrun.md, implicit grains).
   bool implicit_grains = false;
 };
 
