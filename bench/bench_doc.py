@@ -2,6 +2,8 @@
 <!-- bench:NAME --> and <!-- /bench:NAME --> (appended when it is not there yet)."""
 import json
 import os
+import platform
+import sys
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -26,3 +28,20 @@ def finish(name, text, run_dir, results, publish_it=True):
         json.dump(results, f, indent=1)
     if publish_it:
         publish(name, text)
+
+
+def cpu_model():
+    """The machine's CPU model (/proc/cpuinfo), for a section's header."""
+    try:
+        return next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.machine()
+
+
+def publish_runs(name, text, failed):
+    """A bench of several runs ends: prints and publishes its text, then exits non-zero naming the
+    runs that did not finish, if any."""
+    print(text)
+    publish(name, text)
+    if failed:
+        sys.exit(f"{name}: {', '.join(failed)} did not finish; the others were published")

@@ -18,7 +18,6 @@ import argparse
 import csv
 import math
 import os
-import platform
 import shutil
 import subprocess
 import sys
@@ -26,7 +25,7 @@ import time
 from datetime import date
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_doc import publish  # noqa: E402
+from bench_doc import cpu_model, publish  # noqa: E402
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -194,7 +193,7 @@ def main():
         sys.exit(f"fdem_crosscheck: --reuse needs {ours_csv} from an earlier run; run without --reuse")
     theirs = {name: run_liggghts(name, case, a.work) for name, case in CASES.items()}
     text_table, times = table(read_ours(ours_csv), theirs)
-    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.machine())
+    cpu = cpu_model()
     text = ("## fdemrun against LIGGGHTS: Chung & Ooi (2011) sphere impacts\n\n"
             "Tests 1 (two glass spheres R = 10 mm at +-10 m/s), 2 (Al-alloy sphere R = 0.1 m at 0.2 m/s on a rigid wall), "
             "6 (the same with spin about y, mu = 0.4) and 7 (two such spheres spinning so their contact points move "

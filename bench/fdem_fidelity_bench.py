@@ -32,7 +32,6 @@ usage: bench/fdem_fidelity_bench.py [--series NAME] [--build DIR] [--work DIR] [
 import argparse
 import math
 import os
-import platform
 import subprocess
 import sys
 import time
@@ -46,7 +45,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_doc import publish  # noqa: E402
+from bench_doc import cpu_model, publish_runs  # noqa: E402
 from fdem_triaxial_bench import on_grid, read  # noqa: E402
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -271,25 +270,26 @@ def main():
         if "tet4_remeshed" in cases and not (a.reuse and os.path.exists(remeshed_model(a.work))):
             make_remeshed_tet4_model(a.build, a.series, a.work)
         cpu, failed = run_cases(cases, a)
+        with open(os.path.join(a.work, "jobs"), "w") as f:  # what the runs' CPU times were measured under
+            f.write(str(a.jobs))
     results = {c: measure(a.work, c) for c in CASES if os.path.exists(os.path.join(a.work, c + "_forces.h5"))}
     for c in results:
         path = os.path.join(a.work, c + ".cpu")
         if c not in cpu and os.path.exists(path):
             cpu[c] = float(open(path).read())
     chart(results, cpu, os.path.join(SOURCE, "docs", "img", "fdem_fidelity.png"))
-    machine = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.machine())
+    machine = cpu_model()
+    jobs_path = os.path.join(a.work, "jobs")
+    jobs = open(jobs_path).read().strip() if os.path.exists(jobs_path) else str(a.jobs)
     text = ("## Fidelity of the grains: rigid, tet4, tet10 and mixed twins\n\n"
             f"The FDEM twin of {a.series} (runs/{a.series}/model.h5), `pipelines/scenes/triaxial.toml` with only its "
             "[model] kind and the model file's element order changed (cases in `bench/fdem_fidelity_bench.py`). "
             f"Differences are from the {REFERENCE} twin, the highest fidelity; rigid_replicate's from rigid (the chaos floor: "
             "the same run at 0.98 of its step). KS f_n: the Kolmogorov-Smirnov distance of the grain contacts' f_n / <f_n> in "
             "the last frame; q: each grain's deviatoric stress in the last frame (fdem2forces). One thread per run, "
-            f"{a.jobs} run(s) side by side, on {machine}, {os.cpu_count()} cores, {date.today()}.\n\n"
+            f"{jobs} run(s) side by side, on {machine}, {os.cpu_count()} cores, {date.today()}.\n\n"
             + table(results, cpu) + "\n\n![accuracy against cost](img/fdem_fidelity.png)\n\n")
-    print(text)
-    publish("fdem_fidelity", text)
-    if failed:
-        sys.exit(f"fdem_fidelity_bench: {', '.join(failed)} did not finish; the others were published")
+    publish_runs("fdem_fidelity", text, failed)
 
 
 if __name__ == "__main__":

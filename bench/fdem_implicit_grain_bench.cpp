@@ -1,5 +1,5 @@
 // fdem_implicit_grain_bench: what stepping deformable grains implicitly in their corotated frame
-// (fdem::ImplicitGrain) would cost against the explicit elements fdemrun steps now, on the
+// (fdem::ImplicitGrain, [run] deformable_integration = "implicit") costs against explicit elements, on the
 // pipeline's 10-node twins of sand_small (ctsynth grains) and the real soil crop. Per grain: the
 // factorisation of M + h^2 K once, one implicit step (rotation, K u, the solve) and one explicit
 // element-force pass (ElasticElements::add_internal_forces). The explicit twin steps at fdemrun's
@@ -7,18 +7,23 @@
 // its grains rigid); the cost per simulated microsecond is each one's time a grain-step over its
 // step. The grains' contact is left out of both (the same per step, and the implicit twin takes
 // far fewer steps). Whether explicit penalty contact stays stable on implicit grains at that step is
-// fdem_implicit_grain_test's question (a box on a platen: stable at 70 element steps).
+// fdem_implicit_grain_test's question (a box on a platen: stable at 70 element steps). The step's
+// LDL^T solve in 3 x 3 node blocks (fdem::NodeBlockLdlt) is also timed against Eigen's
+// SimplicialLDLT on the same matrix and right-hand side, and their answers compared.
 //   fdem_implicit_grain_bench [--quick]   (--quick: 20 grains of sand_small)
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <numeric>
 
+#include <Eigen/SparseCholesky>
+
 #include <fmt/format.h>
 
 #include "graintwin/core/error.hpp"
 #include "graintwin/fdem/element.hpp"
 #include "graintwin/fdem/implicit_grain.hpp"
+#include "graintwin/fdem/node_blocks.hpp"
 #include "graintwin/fdem/model_file.hpp"
 #include "graintwin/fdem/solver.hpp"
 #include "harness.hpp"
@@ -69,7 +74,7 @@ int main(int argc, char** argv) try {
     const double contact_step = fdem::Solver(rigid, fdem::SolverOptions{}).time_step_limits().contact_stable;
     const std::vector<double> mass = fdem::lumped_masses(deformable);
     const fdem::ElasticElements elements(deformable);
-    std::vector<double> factor, implicit, explicit_forces, sizes;
+    std::vector<double> factor, implicit, explicit_forces, sizes, eigen_solve, block_solve;
     const std::size_t grains = quick ? std::min<std::size_t>(20, model.grains.size()) : model.grains.size();
     std::vector<Eigen::Vector3d> x = deformable.nodes, v(deformable.nodes.size(), Eigen::Vector3d::Zero()),
                                  f(deformable.nodes.size(), Eigen::Vector3d::Zero());
@@ -85,6 +90,27 @@ int main(int argc, char** argv) try {
                       std::span<const Eigen::Vector3d>(f).subspan(grain.node_begin, n));
       }));
       explicit_forces.push_back(bench::best_seconds(5, [&] { elements.add_internal_forces(x, grain.element_begin, grain.element_end, f); }));
+      // The step's solve against Eigen's SimplicialLDLT (AMD, scalar) on the same matrix and right-hand side.
+      std::vector<Eigen::Triplet<double>> system = fdem::grain_stiffness_lower(deformable, g, fdem::lame_constants(deformable.materials[grain.material]));
+      for (auto& t : system) t = Eigen::Triplet<double>(t.row(), t.col(), contact_step * contact_step * t.value());
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) system.emplace_back(static_cast<int>(3 * i + k), static_cast<int>(3 * i + k), mass[grain.node_begin + i]);
+      const auto dofs = static_cast<Eigen::Index>(3 * n);
+      Eigen::SparseMatrix<double> lower(dofs, dofs);
+      lower.setFromTriplets(system.begin(), system.end());
+      const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> eigen(lower);
+      const fdem::NodeBlockLdlt blocks(n, system);
+      const Eigen::VectorXd rhs = Eigen::VectorXd::Random(dofs);
+      Eigen::VectorXd by_eigen(dofs), by_blocks(dofs);
+      eigen_solve.push_back(bench::best_seconds(5, [&] { by_eigen = eigen.solve(rhs); }));
+      block_solve.push_back(bench::best_seconds(5, [&] {
+        blocks.solve({rhs.data(), static_cast<std::size_t>(dofs)}, {by_blocks.data(), static_cast<std::size_t>(dofs)});
+      }));
+      if (!((by_blocks - by_eigen).norm() <= 1e-9 * by_eigen.norm())) {
+        std::cerr << fmt::format("{}: grain {}: the block solve differs from Eigen's by {:.3g} (relative)\n", name, g,
+                                 (by_blocks - by_eigen).norm() / by_eigen.norm());
+        return 1;
+      }
       std::fill(f.begin() + grain.node_begin, f.begin() + grain.node_end, Eigen::Vector3d::Zero());
       if ((g + 1) % 50 == 0) std::cerr << fmt::format("{}: {} of {} grains\n", name, g + 1, grains);
     }
@@ -92,9 +118,11 @@ int main(int argc, char** argv) try {
     const std::string note = fmt::format(
         "{} grains of median {:.0f} 10-node elements (of {}); steps: explicit {:.3g} s, implicit {:.3g} s ({:.0f} x); per grain: "
         "factorisation {:.3g} ms once, implicit step {:.3g} us, explicit element forces {:.3g} us; per simulated us: explicit "
-        "{:.3g} ms, implicit {:.3g} ms: {:.1f} x cheaper",
+        "{:.3g} ms, implicit {:.3g} ms: {:.1f} x cheaper; the step's LDL^T solve {:.3g} us in 3 x 3 node blocks against {:.3g} us "
+        "by Eigen's SimplicialLDLT ({:.2f} x faster, the same answer to 1e-9)",
         sizes.size(), median(sizes), grains, element_step, contact_step, contact_step / element_step, 1e3 * median(factor), 1e6 * median(implicit),
-        1e6 * median(explicit_forces), 1e3 * per_us_explicit, 1e3 * per_us_implicit, per_us_explicit / per_us_implicit);
+        1e6 * median(explicit_forces), 1e3 * per_us_explicit, 1e3 * per_us_implicit, per_us_explicit / per_us_implicit, 1e6 * median(block_solve),
+        1e6 * median(eigen_solve), median(eigen_solve) / median(block_solve));
     std::cout << name << ": " << note << "\n";
     const auto measured = static_cast<double>(sizes.size());
     report.add({name, "explicit elements (fdemrun now)", per_us_explicit * measured, 0, note});

@@ -24,7 +24,6 @@ import argparse
 import json
 import math
 import os
-import platform
 import subprocess
 import sys
 import time
@@ -38,7 +37,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_doc import publish  # noqa: E402
+from bench_doc import cpu_model, publish_runs  # noqa: E402
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TARGET = 0.06
@@ -264,7 +263,7 @@ def main():
     for n in done - set(cpu):
         path = os.path.join(a.work, n + ".cpu")
         cpu[n] = float(open(path).read()) if os.path.exists(path) else math.nan
-    machine = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.machine())
+    machine = cpu_model()
     text = ("## fdemrun triaxial test: fidelity and boundary\n\n"
             "The FDEM twin of sand_small (310 grains from the first scan, shapes2mesh), rigid grains unless said, "
             "`pipelines/scenes/triaxial.toml` with one knob changed per run: consolidation to 300 kPa in the servo wall "
@@ -280,10 +279,7 @@ def main():
         boundary_chart(results, os.path.join(SOURCE, "docs", "img", "fdem_triaxial_boundary.png"))
         text += (f"### Boundary: membrane thickness and the rigid wall (I = {PIPELINE_RATE})\n\n" + boundary_table(results, cpu) +
                  "\n\n![boundary](img/fdem_triaxial_boundary.png)\n\n")
-    print(text)
-    publish("fdem_triaxial", text)
-    if failed:
-        sys.exit(f"fdem_triaxial_bench: {', '.join(failed)} did not finish; the others were published")
+    publish_runs("fdem_triaxial", text, failed)
 
 
 if __name__ == "__main__":

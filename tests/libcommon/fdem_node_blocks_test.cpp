@@ -1,7 +1,7 @@
 // fdem/node_blocks: on a grain's stiffness matrix (a 10-node box, and its 4-node split) plus mass, the
 // block product equals Eigen's sparse product and the block LDL^T solve equals Eigen's SimplicialLDLT,
 // both to round-off; the solve may overwrite its right-hand side; an indefinite matrix reports it is
-// not positive definite; triplets above the diagonal or beyond the matrix are refused.
+// not positive definite, nor one holding a NaN; triplets above the diagonal or beyond the matrix are refused.
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCholesky>
@@ -89,6 +89,10 @@ TEST(NodeBlocks, AnIndefiniteMatrixIsNotPositiveDefinite) {
   std::vector<Triplet> lower = grain_stiffness_lower(model, 0, lame_constants(model.materials[0]));
   for (std::size_t i = 0; i < 3 * model.nodes.size(); ++i) lower.emplace_back(static_cast<int>(i), static_cast<int>(i), -1.0);
   EXPECT_FALSE(NodeBlockLdlt(model.nodes.size(), lower).positive_definite());
+  // A NaN entry (a node at NaN upstream) is not a factorisation either.
+  std::vector<Triplet> nan_entry = system_of(model, 1e-14);
+  nan_entry.emplace_back(0, 0, std::numeric_limits<double>::quiet_NaN());
+  EXPECT_FALSE(NodeBlockLdlt(model.nodes.size(), nan_entry).positive_definite());
 }
 
 TEST(NodeBlocks, TripletsOutsideTheLowerTriangleAreRefused) {

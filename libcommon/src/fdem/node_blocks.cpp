@@ -115,7 +115,7 @@ NodeBlockLdlt::NodeBlockLdlt(std::size_t nodes, std::span<const Triplet> lower) 
   Eigen::SparseMatrix<double> A(3 * n, 3 * n);
   A.setFromTriplets(ordered.begin(), ordered.end());
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> factor(A);
-  positive_definite_ = factor.info() == Eigen::Success && factor.vectorD().minCoeff() > 0;
+  positive_definite_ = factor.info() == Eigen::Success && factor.vectorD().allFinite() && factor.vectorD().minCoeff() > 0;
   if (!positive_definite_) return;
 
   inside_.assign(nodes, {0, 0, 0});

@@ -308,7 +308,8 @@ StepReport Solver::step(double dt) {
     if (options_.implicit_grains) {  // its elastic forces are inside its implicit step
       if (!implicit_[g] || implicit_[g]->time_step() != dt || implicit_[g]->damping() != options_.damping)
         implicit_[g] = std::make_unique<ImplicitGrain>(m, g, mass_, dt, options_.damping);
-      implicit_frames_[g] = implicit_[g]->frame(std::span<const Eigen::Vector3d>(state_.x).subspan(grain.node_begin, grain.node_end - grain.node_begin));
+      const std::span<const Eigen::Vector3d> x_grain(state_.x.data() + grain.node_begin, grain.node_end - grain.node_begin);
+      implicit_frames_[g] = implicit_[g]->frame(x_grain);
       continue;
     }
     strain[g] = elements_.add_internal_forces(state_.x, grain.element_begin, grain.element_end, force_);

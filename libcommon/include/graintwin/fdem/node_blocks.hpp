@@ -5,8 +5,8 @@
 //
 // Why blocks: a scalar sparse format stores an index with every number and updates one unknown at a
 // time; a 3 x 3 block shares one index among nine numbers and updates a node's three unknowns at
-// once. On the grains' stiffness matrices the LDL^T solve runs 2.6 times faster than Eigen's
-// SimplicialLDLT with the same fill (docs/fdemrun.md, implicit grains).
+// once. On the pipeline twins' grains the LDL^T solve runs 2.5-2.8 times faster than Eigen's
+// SimplicialLDLT (fdem_implicit_grain bench; docs/fdemrun.md, implicit grains).
 #include <Eigen/SparseCore>
 
 #include <array>
